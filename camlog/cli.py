@@ -1,0 +1,53 @@
+"""The ``camlog`` command line: each subcommand parses arguments and calls one function."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable, Sequence
+
+from recorder.errors import RecorderError
+from replay.errors import ReplayError
+
+#: subcommand name -> (one-line help, add-arguments function, run function)
+Command = tuple[str, Callable[[argparse.ArgumentParser], None], Callable[[argparse.Namespace], int]]
+
+
+def _commands() -> dict[str, Command]:
+    from camlog import cmd_info, cmd_record
+
+    return {
+        "record": ("simulate a scenario in MuJoCo and write its camera log", cmd_record.add_arguments, cmd_record.run),
+        "info": ("summarise a log: format, duration, topics, rates, encodings", cmd_info.add_arguments, cmd_info.run),
+    }
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="camlog",
+        description="Log-first record/replay toolchain for robot cameras.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for name, (summary, add_arguments, run) in _commands().items():
+        p = sub.add_parser(name, help=summary, description=summary[0].upper() + summary[1:] + ".")
+        add_arguments(p)
+        p.set_defaults(run=run)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point: known errors become one line on stderr and exit status 1."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.run(args))
+    except (ReplayError, RecorderError) as err:
+        print(f"camlog {args.command}: error: {err}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print(f"camlog {args.command}: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,58 @@
+"""camlog's log layer: typed camera messages, MCAP / rosbag2 / ROS1 logs, replay, export."""
+
+from ._version import VERSION
+from .errors import (
+    EncodingError,
+    LogFormatError,
+    LogReadError,
+    LogWriteError,
+    ReplayError,
+    TopicError,
+)
+from .formats import (
+    FORMATS,
+    LogReader,
+    LogWriter,
+    RawMessage,
+    Record,
+    TopicInfo,
+    open_reader,
+    open_writer,
+)
+from .messages import (
+    IMAGE_ENCODINGS,
+    CameraInfo,
+    CompressedImage,
+    Image,
+    Message,
+    PointStamped,
+    PoseStamped,
+    Text,
+)
+
+__version__ = VERSION
+
+__all__ = [
+    "FORMATS",
+    "IMAGE_ENCODINGS",
+    "CameraInfo",
+    "CompressedImage",
+    "EncodingError",
+    "Image",
+    "LogFormatError",
+    "LogReadError",
+    "LogReader",
+    "LogWriteError",
+    "LogWriter",
+    "Message",
+    "PointStamped",
+    "PoseStamped",
+    "RawMessage",
+    "Record",
+    "ReplayError",
+    "Text",
+    "TopicError",
+    "TopicInfo",
+    "open_reader",
+    "open_writer",
+]

@@ -1,0 +1,27 @@
+"""Exception tree of the log layer."""
+
+from __future__ import annotations
+
+
+class ReplayError(Exception):
+    """Base of every error raised by :mod:`replay`."""
+
+
+class LogFormatError(ReplayError):
+    """The path does not name a log in a known format, or the format is not supported."""
+
+
+class LogReadError(ReplayError):
+    """A log could not be read (missing, corrupt, truncated)."""
+
+
+class LogWriteError(ReplayError):
+    """A log could not be written (exists, unwritable, bad message)."""
+
+
+class EncodingError(ReplayError):
+    """An image encoding is not supported or the pixel buffer does not match it."""
+
+
+class TopicError(ReplayError):
+    """A requested topic does not exist in a log or has the wrong type."""

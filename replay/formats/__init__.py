@@ -1,0 +1,103 @@
+"""Log formats behind one interface, chosen by name or detected from the path."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from ..errors import LogFormatError, LogReadError
+from .base import LogReader, LogWriter, RawMessage, Record, TopicInfo
+from .mcap import McapLogReader, McapLogWriter, is_mcap
+from .rosbags_formats import Ros1LogReader, Ros1LogWriter, Rosbag2LogReader, Rosbag2LogWriter
+
+__all__ = [
+    "FORMATS",
+    "LogReader",
+    "LogWriter",
+    "RawMessage",
+    "Record",
+    "TopicInfo",
+    "detect_format",
+    "format_for_output",
+    "open_reader",
+    "open_writer",
+]
+
+ROS1_MAGIC = b"#ROSBAG V2.0"
+
+#: format name -> writer factory
+FORMATS: dict[str, Callable[..., LogWriter]] = {
+    "mcap": McapLogWriter,
+    "rosbag2": lambda path, **kw: Rosbag2LogWriter(path, storage="mcap", **kw),
+    "rosbag2-sqlite3": lambda path, **kw: Rosbag2LogWriter(path, storage="sqlite3", **kw),
+    "ros1": Ros1LogWriter,
+}
+
+READERS: dict[str, Callable[..., LogReader]] = {
+    "mcap": McapLogReader,
+    "rosbag2": Rosbag2LogReader,
+    "ros1": Ros1LogReader,
+}
+
+
+def detect_format(path: Path) -> str:
+    """Reader format name for an existing log path."""
+    if not path.exists():
+        raise LogReadError(f"{path} does not exist")
+    if path.is_dir():
+        if (path / "metadata.yaml").exists():
+            return "rosbag2"
+        mcaps = sorted(path.glob("*.mcap"))
+        hint = f" (it holds {mcaps[0].name}; open that file)" if mcaps else ""
+        raise LogFormatError(f"{path} is a directory without rosbag2 metadata.yaml{hint}")
+    try:
+        with path.open("rb") as f:
+            head = f.read(16)
+    except OSError as err:
+        raise LogReadError(f"cannot open {path}: {err.strerror}") from None
+    if is_mcap(path):
+        return "mcap"
+    if head.startswith(ROS1_MAGIC):
+        return "ros1"
+    if path.suffix == ".db3" and (path.parent / "metadata.yaml").exists():
+        return "rosbag2"
+    if not head:
+        raise LogReadError(f"{path} is empty")
+    raise LogFormatError(f"{path} is not a log camlog can read (MCAP, rosbag2 directory, ROS1 bag)")
+
+
+def open_reader(path: str | Path, *, recover: bool = False) -> LogReader:
+    """Open any supported log for streaming reads."""
+    path = Path(path)
+    fmt = detect_format(path)
+    if fmt == "rosbag2" and path.is_file():
+        path = path.parent
+    return READERS[fmt](path, recover=recover)
+
+
+def format_for_output(path: Path, fmt: str | None = None) -> str:
+    """Writer format from an explicit name or the output path's suffix."""
+    if fmt is not None:
+        if fmt not in FORMATS:
+            raise LogFormatError(f"unknown log format {fmt!r} (choose from {', '.join(FORMATS)})")
+        return fmt
+    match path.suffix:
+        case ".mcap":
+            return "mcap"
+        case ".bag":
+            return "ros1"
+        case "":
+            return "rosbag2"
+    raise LogFormatError(
+        f"cannot tell the log format from {path.name!r}: use .mcap, .bag, a directory name "
+        f"(rosbag2) or --format"
+    )
+
+
+def open_writer(
+    path: str | Path, *, fmt: str | None = None, overwrite: bool = False, **options: Any
+) -> LogWriter:
+    """Create a log writer; the output appears atomically when it is closed."""
+    path = Path(path)
+    return FORMATS[format_for_output(path, fmt)](path, overwrite=overwrite, **options)

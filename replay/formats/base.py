@@ -1,0 +1,243 @@
+"""The interface every log format implements, and atomic output paths."""
+
+from __future__ import annotations
+
+import os
+import shutil
+import sys
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from types import TracebackType
+from typing import Self
+
+from ..codec import deserialize, msgtype_of, serialize
+from ..errors import LogWriteError, ReplayError
+from ..messages import Message
+
+
+@dataclass(frozen=True, slots=True)
+class TopicInfo:
+    """One topic of a log: ROS 2 type name, message count, wire serialization."""
+
+    name: str
+    msgtype: str
+    count: int
+    serialization: str
+    msgdef: str = ""
+
+
+@dataclass(frozen=True, slots=True)
+class RawMessage:
+    """A serialized message as stored: bytes are CDR or ROS1 per ``serialization``."""
+
+    topic: str
+    msgtype: str
+    log_time_ns: int
+    data: bytes | memoryview
+    serialization: str
+
+
+@dataclass(frozen=True, slots=True)
+class Record:
+    """A decoded message with the topic and log time it was stored under."""
+
+    topic: str
+    log_time_ns: int
+    message: Message
+
+
+class LogReader:
+    """Streaming reader; subclasses implement :meth:`raw_messages` and fill the fields.
+
+    Time ranges are half-open: ``start_ns <= log_time < end_ns``.
+    """
+
+    format_name: str = ""
+
+    def __init__(self, path: Path) -> None:
+        self.path = path
+        self.topics: dict[str, TopicInfo] = {}
+        self.start_ns: int | None = None
+        self.end_ns: int | None = None
+        self.message_count = 0
+        self.metadata: dict[str, dict[str, str]] = {}
+        self.warnings: list[str] = []
+
+    def raw_messages(
+        self,
+        topics: Iterable[str] | None = None,
+        start_ns: int | None = None,
+        end_ns: int | None = None,
+    ) -> Iterator[RawMessage]:
+        """Serialized messages in log-time order, filtered by topic and time."""
+        raise NotImplementedError
+
+    def decode(self, raw: RawMessage) -> Message:
+        """Typed record of a raw message; errors name the log and topic."""
+        try:
+            return deserialize(raw.data, raw.msgtype, raw.serialization)
+        except ReplayError as err:
+            raise type(err)(f"{self.path}: topic {raw.topic}: {err}") from None
+
+    def messages(
+        self,
+        topics: Iterable[str] | None = None,
+        start_ns: int | None = None,
+        end_ns: int | None = None,
+    ) -> Iterator[Record]:
+        """Decoded messages in log-time order (topics must have camlog record types)."""
+        for raw in self.raw_messages(topics, start_ns, end_ns):
+            yield Record(raw.topic, raw.log_time_ns, self.decode(raw))
+
+    def close(self) -> None:
+        """Release file handles."""
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self, et: type[BaseException] | None, ev: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        self.close()
+
+
+class AtomicPath:
+    """A temporary sibling of ``final`` that replaces it only on :meth:`commit`.
+
+    A recording therefore never leaves a half-written file under its final name; the
+    temporary ``NAME.partial`` stays behind after a crash so that it can be recovered.
+    """
+
+    def __init__(self, final: Path, *, overwrite: bool) -> None:
+        self.final = final
+        if final.exists() and not overwrite:
+            raise LogWriteError(f"{final} exists (pass --overwrite to replace it)")
+        parent = final.parent
+        if not parent.is_dir():
+            raise LogWriteError(f"cannot write {final}: directory {parent} does not exist")
+        if not os.access(parent, os.W_OK):
+            raise LogWriteError(f"cannot write {final}: directory {parent} is not writable")
+        self.temp = parent / f"{final.name}.partial"
+        _remove(self.temp)
+
+    def commit(self) -> None:
+        if self.final.is_dir() and not self.final.is_symlink():
+            old = self.final.with_name(f"{self.final.name}.replaced")
+            _remove(old)
+            self.final.rename(old)
+            self.temp.rename(self.final)
+            _remove(old)
+        else:
+            os.replace(self.temp, self.final)
+
+    def discard(self) -> None:
+        _remove(self.temp)
+
+
+def _remove(path: Path) -> None:
+    if path.is_dir() and not path.is_symlink():
+        shutil.rmtree(path)
+    elif path.exists() or path.is_symlink():
+        path.unlink()
+
+
+class LogWriter:
+    """Writer base: typed messages are serialized here, formats store raw bytes.
+
+    Use as a context manager: the output appears under its final name only when the block
+    ends without an exception; otherwise the partial output is removed.
+    """
+
+    format_name: str = ""
+    serialization: str = ""
+
+    def __init__(self, path: Path, *, overwrite: bool = False) -> None:
+        self.path = path
+        self._atomic = AtomicPath(path, overwrite=overwrite)
+        self._types: dict[str, str] = {}
+        self.closed = False
+
+    @property
+    def temp_path(self) -> Path:
+        """Where the output is written until it is committed."""
+        return self._atomic.temp
+
+    def write(self, topic: str, message: Message, *, log_time_ns: int | None = None) -> None:
+        """Serialize and store a typed record; log time defaults to its header stamp."""
+        if log_time_ns is None:
+            stamp = getattr(message, "stamp_ns", None)
+            if stamp is None:
+                raise LogWriteError(f"{topic}: {type(message).__name__} needs log_time_ns")
+            log_time_ns = stamp
+        msgtype = msgtype_of(message)
+        self._check_type(topic, msgtype)
+        self._write(topic, msgtype, log_time_ns, serialize(message, self.serialization), "")
+
+    def write_raw(self, raw: RawMessage, *, msgdef: str = "") -> None:
+        """Store a raw message, converting between CDR and ROS1 when the formats differ."""
+        from ..codec import convert_serialization
+
+        self._check_type(raw.topic, raw.msgtype)
+        data = raw.data
+        if raw.serialization != self.serialization:
+            data = convert_serialization(data, raw.msgtype, raw.serialization, self.serialization)
+            msgdef = ""
+        self._write(raw.topic, raw.msgtype, raw.log_time_ns, data, msgdef)
+
+    def set_metadata(self, name: str, values: dict[str, str]) -> None:
+        """Attach named string metadata where the format can hold it."""
+
+    def _check_type(self, topic: str, msgtype: str) -> None:
+        known = self._types.setdefault(topic, msgtype)
+        if known != msgtype:
+            raise LogWriteError(f"{self.path}: topic {topic} has type {known}, not {msgtype}")
+
+    def _write(
+        self, topic: str, msgtype: str, log_time_ns: int, data: bytes | memoryview, msgdef: str
+    ) -> None:
+        raise NotImplementedError
+
+    def _finish(self) -> None:
+        raise NotImplementedError
+
+    def _abort(self) -> None:
+        """Release handles without finishing the file."""
+
+    def close(self) -> None:
+        """Finish the file and move it to its final name."""
+        if self.closed:
+            return
+        self.closed = True
+        try:
+            self._finish()
+            self._atomic.commit()
+        except OSError as err:
+            self._atomic.discard()
+            raise LogWriteError(f"cannot write {self.path}: {err.strerror or err}") from None
+
+    def abort(self) -> None:
+        """Drop the partial output."""
+        if self.closed:
+            return
+        self.closed = True
+        try:
+            self._abort()
+        finally:
+            self._atomic.discard()
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self, et: type[BaseException] | None, ev: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        if et is None:
+            self.close()
+        else:
+            self.abort()
+
+
+def warn(message: str) -> None:
+    """One warning line on stderr."""
+    print(f"camlog: warning: {message}", file=sys.stderr)

@@ -1,0 +1,317 @@
+"""MCAP files with ROS 2 (CDR) or ROS1 messages, through the ``mcap`` package.
+
+Files are written chunked and zstd-compressed with a summary section so that rerun,
+Foxglove and ``ros2 bag`` open them. A file without summary (a recording that was killed)
+is read by streaming through its records up to the last complete chunk.
+"""
+
+from __future__ import annotations
+
+import heapq
+import struct
+from collections.abc import Iterable, Iterator
+from pathlib import Path
+from typing import IO, Any
+
+from mcap.exceptions import McapError
+from mcap.reader import SeekingReader
+from mcap.records import Channel, Chunk, DataEnd, Footer, Message, Schema
+from mcap.stream_reader import StreamReader, breakup_chunk
+from mcap.writer import CompressionType, Writer
+
+from .._version import VERSION
+from ..codec import CDR, ROS1, ros2_typestore
+from ..errors import LogReadError, LogWriteError
+from .base import LogReader, LogWriter, RawMessage, TopicInfo
+
+MAGIC = b"\x89MCAP0\r\n"
+ENCODINGS = {"cdr": CDR, "ros1": ROS1}
+#: exceptions that mean "the bytes ran out or are not MCAP" while streaming
+_DAMAGE = (McapError, EOFError, struct.error, ValueError, MemoryError, IndexError, KeyError)
+
+
+def normalize_msgtype(name: str) -> str:
+    """``sensor_msgs/Image`` (ROS1 spelling) -> ``sensor_msgs/msg/Image``."""
+    parts = name.split("/")
+    return f"{parts[0]}/msg/{parts[1]}" if len(parts) == 2 else name
+
+
+def is_mcap(path: Path) -> bool:
+    """True if ``path`` is a file starting with the MCAP magic."""
+    try:
+        with path.open("rb") as f:
+            return f.read(len(MAGIC)) == MAGIC
+    except OSError:
+        return False
+
+
+class McapLogReader(LogReader):
+    """Reader for one MCAP file; ``recover`` reads everything before damage."""
+
+    format_name = "mcap"
+
+    def __init__(self, path: Path, *, recover: bool = False) -> None:
+        super().__init__(path)
+        try:
+            self._file: IO[bytes] = path.open("rb")
+        except OSError as err:
+            raise LogReadError(f"cannot open {path}: {err.strerror}") from None
+        self._recover = recover
+        self._summary: Any = None
+        self._valid_until: int | None = None  # streaming: stop before this byte offset
+        self._channels: dict[int, tuple[str, str, str]] = {}  # id -> topic, msgtype, encoding
+        try:
+            self._open()
+        except BaseException:
+            self._file.close()
+            raise
+
+    def _open(self) -> None:
+        if self._file.read(len(MAGIC)) != MAGIC:
+            raise LogReadError(f"{self.path} is not an MCAP file (bad magic)")
+        summary = None
+        if not self._recover:
+            try:
+                summary = SeekingReader(self._file, validate_crcs=True).get_summary()
+            except _DAMAGE:
+                summary = None
+        if summary is not None and summary.chunk_indexes and summary.statistics is not None:
+            self._summary = summary
+            self._load_summary(summary)
+        else:
+            self._scan()
+        for name, meta in self._iter_metadata():
+            self.metadata[name] = meta
+
+    def _iter_metadata(self) -> Iterator[tuple[str, dict[str, str]]]:
+        if self._summary is None:
+            return iter(())
+        try:
+            reader = SeekingReader(self._file)
+            return iter([(m.name, dict(m.metadata)) for m in reader.iter_metadata()])
+        except _DAMAGE:
+            return iter(())
+
+    def _add_channel(self, channel: Channel, schemas: dict[int, Schema]) -> None:
+        schema = schemas.get(channel.schema_id)
+        msgtype = normalize_msgtype(schema.name) if schema else ""
+        encoding = ENCODINGS.get(channel.message_encoding, channel.message_encoding)
+        self._channels[channel.id] = (channel.topic, msgtype, encoding)
+        msgdef = schema.data.decode(errors="replace") if schema else ""
+        if channel.topic not in self.topics:
+            self.topics[channel.topic] = TopicInfo(channel.topic, msgtype, 0, encoding, msgdef)
+
+    def _load_summary(self, summary: Any) -> None:
+        for channel in summary.channels.values():
+            self._add_channel(channel, summary.schemas)
+        counts: dict[str, int] = {}
+        for cid, count in summary.statistics.channel_message_counts.items():
+            topic = self._channels[cid][0]
+            counts[topic] = counts.get(topic, 0) + count
+        for topic, info in self.topics.items():
+            self.topics[topic] = _with_count(info, counts.get(topic, 0))
+        self.message_count = summary.statistics.message_count
+        if self.message_count:
+            self.start_ns = summary.statistics.message_start_time
+            self.end_ns = summary.statistics.message_end_time
+
+    def _scan(self) -> None:
+        """Stream the whole file once to learn topics, counts and where damage begins."""
+        counts: dict[str, int] = {}
+        start = end = None
+        for message in self._stream_messages(learn=True):
+            topic = self._channels[message.channel_id][0]
+            counts[topic] = counts.get(topic, 0) + 1
+            start = message.log_time if start is None else min(start, message.log_time)
+            end = message.log_time if end is None else max(end, message.log_time)
+        for topic, info in self.topics.items():
+            self.topics[topic] = _with_count(info, counts.get(topic, 0))
+        self.message_count = sum(counts.values())
+        self.start_ns, self.end_ns = start, end
+
+    def _stream_messages(self, *, learn: bool = False) -> Iterator[Message]:
+        """Messages in file order (sorted within each chunk), stopping at damage."""
+        self._file.seek(0)
+        stream = StreamReader(self._file, skip_magic=False, validate_crcs=True)
+        schemas: dict[int, Schema] = {}
+        records = stream.records
+        offset = 0
+        while True:
+            if self._valid_until is not None and not learn and offset >= self._valid_until:
+                return
+            try:
+                record = next(records)
+            except StopIteration:
+                if learn:
+                    self._note_damage(offset, "file ends before its footer (truncated)")
+                return
+            except _DAMAGE as err:
+                if learn:
+                    self._note_damage(offset, _describe(err))
+                return
+            offset = self._file.tell()
+            if isinstance(record, Schema):
+                schemas[record.id] = record
+            elif isinstance(record, Channel):
+                if learn:
+                    self._add_channel(record, schemas)
+            elif isinstance(record, Chunk):
+                try:
+                    inner = list(breakup_chunk(record, validate_crc=True))
+                except _DAMAGE as err:
+                    if learn:
+                        self._note_damage(offset, _describe(err))
+                    return
+                for sub in inner:
+                    if isinstance(sub, Schema):
+                        schemas[sub.id] = sub
+                    elif isinstance(sub, Channel) and learn:
+                        self._add_channel(sub, schemas)
+                yield from sorted(
+                    (m for m in inner if isinstance(m, Message)), key=lambda m: m.log_time
+                )
+            elif isinstance(record, Message):
+                yield record
+            elif isinstance(record, DataEnd | Footer):
+                return
+
+    def _note_damage(self, offset: int, why: str) -> None:
+        self._valid_until = offset
+        size = self.path.stat().st_size
+        if offset >= size or "truncated" in why or self._recover:
+            self.warnings.append(
+                f"{self.path} is incomplete ({why} at byte {offset} of {size}); "
+                "reading the messages before it"
+            )
+            return
+        raise LogReadError(
+            f"{self.path} is corrupt at byte {offset} of {size} ({why}); "
+            "use --recover to read the messages before the damage"
+        )
+
+    def raw_messages(
+        self,
+        topics: Iterable[str] | None = None,
+        start_ns: int | None = None,
+        end_ns: int | None = None,
+    ) -> Iterator[RawMessage]:
+        wanted = None if topics is None else set(topics)
+        if self._summary is not None:
+            reader = SeekingReader(self._file, validate_crcs=True)
+            try:
+                for _schema, channel, message in reader.iter_messages(
+                    topics=None if wanted is None else sorted(wanted),
+                    start_time=start_ns,
+                    end_time=end_ns,
+                    log_time_order=True,
+                ):
+                    topic, msgtype, encoding = self._channels[channel.id]
+                    yield RawMessage(topic, msgtype, message.log_time, message.data, encoding)
+            except _DAMAGE as err:
+                raise LogReadError(
+                    f"{self.path} is corrupt ({_describe(err)}); "
+                    "use --recover to read the messages before the damage"
+                ) from None
+            return
+        for message in self._merge_in_time(self._stream_messages()):
+            topic, msgtype, encoding = self._channels[message.channel_id]
+            if wanted is not None and topic not in wanted:
+                continue
+            if start_ns is not None and message.log_time < start_ns:
+                continue
+            if end_ns is not None and message.log_time >= end_ns:
+                continue
+            yield RawMessage(topic, msgtype, message.log_time, message.data, encoding)
+
+    @staticmethod
+    def _merge_in_time(messages: Iterator[Message], window: int = 64) -> Iterator[Message]:
+        """Restore log-time order across nearby chunks with a bounded buffer."""
+        heap: list[tuple[int, int, Message]] = []
+        for index, message in enumerate(messages):
+            heapq.heappush(heap, (message.log_time, index, message))
+            if len(heap) > window:
+                yield heapq.heappop(heap)[2]
+        while heap:
+            yield heapq.heappop(heap)[2]
+
+    def close(self) -> None:
+        self._file.close()
+
+
+def _with_count(info: TopicInfo, count: int) -> TopicInfo:
+    return TopicInfo(info.name, info.msgtype, count, info.serialization, info.msgdef)
+
+
+def _describe(err: BaseException) -> str:
+    text = str(err).strip().splitlines()[0] if str(err).strip() else ""
+    return f"{type(err).__name__}: {text}" if text else type(err).__name__
+
+
+COMPRESSION = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
+
+
+class McapLogWriter(LogWriter):
+    """Writer for one MCAP file with ``ros2msg`` schemas and CDR messages."""
+
+    format_name = "mcap"
+    serialization = CDR
+
+    def __init__(
+        self,
+        path: Path,
+        *,
+        overwrite: bool = False,
+        compression: str = "zstd",
+        chunk_size: int = 4 * 1024 * 1024,
+    ) -> None:
+        super().__init__(path, overwrite=overwrite)
+        if compression not in COMPRESSION:
+            raise LogWriteError(f"unknown MCAP compression {compression!r}")
+        try:
+            self._file = self.temp_path.open("wb")
+        except OSError as err:
+            raise LogWriteError(f"cannot write {path}: {err.strerror}") from None
+        self._writer = Writer(
+            self._file,
+            chunk_size=chunk_size,
+            compression=COMPRESSION[compression],
+        )
+        self._writer.start(profile="ros2", library=f"camlog {VERSION}")
+        self._schemas: dict[str, int] = {}
+        self._channels: dict[str, int] = {}
+        self._sequence: dict[int, int] = {}
+
+    def _channel(self, topic: str, msgtype: str, msgdef: str) -> int:
+        channel = self._channels.get(topic)
+        if channel is not None:
+            return channel
+        schema = self._schemas.get(msgtype)
+        if schema is None:
+            if not msgdef:
+                try:
+                    msgdef, _ = ros2_typestore().generate_msgdef(msgtype, ros_version=2)
+                except Exception as err:  # rosbags raises several types for unknown names
+                    raise LogWriteError(f"{topic}: no message definition for {msgtype}") from err
+            schema = self._writer.register_schema(msgtype, "ros2msg", msgdef.encode())
+            self._schemas[msgtype] = schema
+        channel = self._writer.register_channel(topic, "cdr", schema)
+        self._channels[topic] = channel
+        return channel
+
+    def _write(
+        self, topic: str, msgtype: str, log_time_ns: int, data: bytes | memoryview, msgdef: str
+    ) -> None:
+        channel = self._channel(topic, msgtype, msgdef)
+        sequence = self._sequence.get(channel, 0)
+        self._sequence[channel] = sequence + 1
+        self._writer.add_message(channel, log_time_ns, bytes(data), log_time_ns, sequence)
+
+    def set_metadata(self, name: str, values: dict[str, str]) -> None:
+        self._writer.add_metadata(name, values)
+
+    def _finish(self) -> None:
+        self._writer.finish()
+        self._file.close()
+
+    def _abort(self) -> None:
+        self._file.close()

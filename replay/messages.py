@@ -1,0 +1,198 @@
+"""Typed records for the camera message kinds camlog reads and writes.
+
+Every record carries ``stamp_ns`` (header stamp, integer nanoseconds) and ``frame_id``.
+Pixels and matrices are numpy arrays with their shape documented on the field.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+
+from .errors import EncodingError
+
+F64 = npt.NDArray[np.float64]
+
+#: encoding -> (numpy dtype, channels)
+IMAGE_ENCODINGS: dict[str, tuple[np.dtype[np.generic], int]] = {
+    "rgb8": (np.dtype(np.uint8), 3),
+    "bgr8": (np.dtype(np.uint8), 3),
+    "rgba8": (np.dtype(np.uint8), 4),
+    "bgra8": (np.dtype(np.uint8), 4),
+    "mono8": (np.dtype(np.uint8), 1),
+    "8UC1": (np.dtype(np.uint8), 1),
+    "8UC3": (np.dtype(np.uint8), 3),
+    "mono16": (np.dtype(np.uint16), 1),
+    "16UC1": (np.dtype(np.uint16), 1),
+}
+
+
+@dataclass(frozen=True, slots=True)
+class Image:
+    """Raw image (``sensor_msgs/msg/Image``).
+
+    ``pixels`` is ``(H, W)`` for one-channel encodings and ``(H, W, C)`` otherwise, with the
+    dtype the encoding implies (uint8 or uint16), channels in encoding order.
+    """
+
+    stamp_ns: int
+    frame_id: str
+    encoding: str
+    pixels: npt.NDArray[np.generic]
+
+    def __post_init__(self) -> None:
+        check_pixels(self.encoding, self.pixels)
+
+    @property
+    def width(self) -> int:
+        return int(self.pixels.shape[1])
+
+    @property
+    def height(self) -> int:
+        return int(self.pixels.shape[0])
+
+
+@dataclass(frozen=True, slots=True)
+class CompressedImage:
+    """Compressed image (``sensor_msgs/msg/CompressedImage``); ``format`` is e.g. ``jpeg``."""
+
+    stamp_ns: int
+    frame_id: str
+    format: str
+    data: bytes
+
+
+@dataclass(frozen=True, slots=True)
+class CameraInfo:
+    """Camera model (``sensor_msgs/msg/CameraInfo``), OpenCV conventions.
+
+    ``k`` (3, 3) intrinsics, ``d`` (N,) distortion for ``distortion_model``, ``r`` (3, 3)
+    rectification rotation, ``p`` (3, 4) projection of the rectified camera.
+    """
+
+    stamp_ns: int
+    frame_id: str
+    width: int
+    height: int
+    distortion_model: str
+    d: F64
+    k: F64
+    r: F64 = field(default_factory=lambda: np.eye(3))
+    p: F64 = field(default_factory=lambda: np.zeros((3, 4)))
+    binning_x: int = 0
+    binning_y: int = 0
+    roi: tuple[int, int, int, int, bool] = (0, 0, 0, 0, False)
+
+    def __post_init__(self) -> None:
+        for name, shape in (("k", (3, 3)), ("r", (3, 3)), ("p", (3, 4))):
+            value = np.asarray(getattr(self, name), dtype=np.float64)
+            if value.shape != shape:
+                raise ValueError(f"CameraInfo.{name} must have shape {shape}, got {value.shape}")
+            object.__setattr__(self, name, value)
+        object.__setattr__(self, "d", np.asarray(self.d, dtype=np.float64).reshape(-1))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, CameraInfo):
+            return NotImplemented
+        return (
+            (self.stamp_ns, self.frame_id, self.width, self.height, self.distortion_model)
+            == (other.stamp_ns, other.frame_id, other.width, other.height, other.distortion_model)
+            and all(
+                np.array_equal(getattr(self, n), getattr(other, n)) for n in ("d", "k", "r", "p")
+            )
+            and (self.binning_x, self.binning_y, tuple(self.roi))
+            == (other.binning_x, other.binning_y, tuple(other.roi))
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+
+@dataclass(frozen=True, slots=True)
+class PoseStamped:
+    """Pose (``geometry_msgs/msg/PoseStamped``) of a child frame in ``frame_id``.
+
+    ``position_m`` (3,); ``orientation_xyzw`` (4,) unit quaternion in ROS order.
+    """
+
+    stamp_ns: int
+    frame_id: str
+    position_m: F64
+    orientation_xyzw: F64
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "position_m", np.asarray(self.position_m, dtype=np.float64))
+        object.__setattr__(
+            self, "orientation_xyzw", np.asarray(self.orientation_xyzw, dtype=np.float64)
+        )
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, PoseStamped):
+            return NotImplemented
+        return (
+            (self.stamp_ns, self.frame_id) == (other.stamp_ns, other.frame_id)
+            and np.array_equal(self.position_m, other.position_m)
+            and np.array_equal(self.orientation_xyzw, other.orientation_xyzw)
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+
+@dataclass(frozen=True, slots=True)
+class PointStamped:
+    """Point (``geometry_msgs/msg/PointStamped``); ``point`` (3,) in ``frame_id`` units."""
+
+    stamp_ns: int
+    frame_id: str
+    point: F64
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "point", np.asarray(self.point, dtype=np.float64))
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, PointStamped):
+            return NotImplemented
+        return (self.stamp_ns, self.frame_id) == (other.stamp_ns, other.frame_id) and bool(
+            np.array_equal(self.point, other.point)
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
+
+@dataclass(frozen=True, slots=True)
+class Text:
+    """Plain string (``std_msgs/msg/String``), used for scenario specs and summaries."""
+
+    data: str
+
+
+Message = Image | CompressedImage | CameraInfo | PoseStamped | PointStamped | Text
+
+#: typed record -> ROS 2 type name
+MSGTYPES: dict[type, str] = {
+    Image: "sensor_msgs/msg/Image",
+    CompressedImage: "sensor_msgs/msg/CompressedImage",
+    CameraInfo: "sensor_msgs/msg/CameraInfo",
+    PoseStamped: "geometry_msgs/msg/PoseStamped",
+    PointStamped: "geometry_msgs/msg/PointStamped",
+    Text: "std_msgs/msg/String",
+}
+
+
+def check_pixels(encoding: str, pixels: npt.NDArray[np.generic]) -> None:
+    """Raise :class:`EncodingError` unless ``pixels`` has the dtype and channels of ``encoding``."""
+    if encoding not in IMAGE_ENCODINGS:
+        raise EncodingError(
+            f"unsupported image encoding {encoding!r} "
+            f"(supported: {', '.join(sorted(IMAGE_ENCODINGS))})"
+        )
+    dtype, channels = IMAGE_ENCODINGS[encoding]
+    shape_ok = pixels.ndim == 2 if channels == 1 else (
+        pixels.ndim == 3 and pixels.shape[2] == channels
+    )
+    if pixels.dtype != dtype or not shape_ok:
+        raise EncodingError(
+            f"pixels {pixels.dtype}{list(pixels.shape)} do not match encoding {encoding!r} "
+            f"({dtype}, {channels} channel(s))"
+        )
