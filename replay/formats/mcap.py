@@ -8,11 +8,13 @@ is read by streaming through its records up to the last complete chunk.
 from __future__ import annotations
 
 import heapq
+import inspect
 import struct
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import IO, Any
 
+import zstandard
 from mcap.exceptions import McapError
 from mcap.reader import SeekingReader
 from mcap.records import Channel, Chunk, DataEnd, Footer, Message, Schema
@@ -26,8 +28,23 @@ from .base import LogReader, LogWriter, RawMessage, TopicInfo
 
 MAGIC = b"\x89MCAP0\r\n"
 ENCODINGS = {"cdr": CDR, "ros1": ROS1}
+#: names of mcap's half-open time bounds (newer mcap deprecates start_time / end_time)
+_TIME_BOUNDS = (
+    ("starting_at", "ending_before")
+    if "starting_at" in inspect.signature(SeekingReader.iter_messages).parameters
+    else ("start_time", "end_time")
+)
 #: exceptions that mean "the bytes ran out or are not MCAP" while streaming
-_DAMAGE = (McapError, EOFError, struct.error, ValueError, MemoryError, IndexError, KeyError)
+_DAMAGE = (
+    McapError,
+    zstandard.ZstdError,
+    EOFError,
+    struct.error,
+    ValueError,
+    MemoryError,
+    IndexError,
+    KeyError,
+)
 
 
 def normalize_msgtype(name: str) -> str:
@@ -72,8 +89,8 @@ class McapLogReader(LogReader):
         summary = None
         if not self._recover:
             try:
-                summary = SeekingReader(self._file, validate_crcs=True).get_summary()
-            except _DAMAGE:
+                summary = self._seeking_reader().get_summary()
+            except (*_DAMAGE, OSError):  # OSError: too short to seek to a footer
                 summary = None
         if summary is not None and summary.chunk_indexes and summary.statistics is not None:
             self._summary = summary
@@ -87,10 +104,15 @@ class McapLogReader(LogReader):
         if self._summary is None:
             return iter(())
         try:
-            reader = SeekingReader(self._file)
+            reader = self._seeking_reader()
             return iter([(m.name, dict(m.metadata)) for m in reader.iter_metadata()])
         except _DAMAGE:
             return iter(())
+
+    def _seeking_reader(self) -> SeekingReader:
+        # SeekingReader checks the magic at the current position
+        self._file.seek(0)
+        return SeekingReader(self._file, validate_crcs=True)
 
     def _add_channel(self, channel: Channel, schemas: dict[int, Schema]) -> None:
         schema = schemas.get(channel.schema_id)
@@ -132,10 +154,11 @@ class McapLogReader(LogReader):
     def _stream_messages(self, *, learn: bool = False) -> Iterator[Message]:
         """Messages in file order (sorted within each chunk), stopping at damage."""
         self._file.seek(0)
-        stream = StreamReader(self._file, skip_magic=False, validate_crcs=True)
+        # emit_chunks: whole chunks, so that damage is found per chunk and offsets are exact
+        stream = StreamReader(self._file, skip_magic=False, emit_chunks=True, validate_crcs=True)
         schemas: dict[int, Schema] = {}
         records = stream.records
-        offset = 0
+        offset = len(MAGIC)
         while True:
             if self._valid_until is not None and not learn and offset >= self._valid_until:
                 return
@@ -143,11 +166,18 @@ class McapLogReader(LogReader):
                 record = next(records)
             except StopIteration:
                 if learn:
-                    self._note_damage(offset, "file ends before its footer (truncated)")
+                    self._note_damage(offset, "file ends before its footer", truncated=True)
                 return
             except _DAMAGE as err:
                 if learn:
-                    self._note_damage(offset, _describe(err))
+                    # a record that runs into the end of the file was cut, not corrupted
+                    size = self.path.stat().st_size
+                    at_end = self._file.tell() >= size
+                    why = _describe(err)
+                    if at_end:
+                        cut = offset < size
+                        why = "file ends inside a record" if cut else "file ends before its footer"
+                    self._note_damage(offset, why, truncated=at_end)
                 return
             offset = self._file.tell()
             if isinstance(record, Schema):
@@ -160,7 +190,7 @@ class McapLogReader(LogReader):
                     inner = list(breakup_chunk(record, validate_crc=True))
                 except _DAMAGE as err:
                     if learn:
-                        self._note_damage(offset, _describe(err))
+                        self._note_damage(offset, _describe(err), truncated=False)
                     return
                 for sub in inner:
                     if isinstance(sub, Schema):
@@ -175,10 +205,10 @@ class McapLogReader(LogReader):
             elif isinstance(record, DataEnd | Footer):
                 return
 
-    def _note_damage(self, offset: int, why: str) -> None:
+    def _note_damage(self, offset: int, why: str, *, truncated: bool) -> None:
         self._valid_until = offset
         size = self.path.stat().st_size
-        if offset >= size or "truncated" in why or self._recover:
+        if truncated or offset >= size or self._recover:
             self.warnings.append(
                 f"{self.path} is incomplete ({why} at byte {offset} of {size}); "
                 "reading the messages before it"
@@ -197,13 +227,14 @@ class McapLogReader(LogReader):
     ) -> Iterator[RawMessage]:
         wanted = None if topics is None else set(topics)
         if self._summary is not None:
-            reader = SeekingReader(self._file, validate_crcs=True)
+            start_name, end_name = _TIME_BOUNDS
+            bounds = {start_name: start_ns, end_name: end_ns}
             try:
+                reader = self._seeking_reader()
                 for _schema, channel, message in reader.iter_messages(
                     topics=None if wanted is None else sorted(wanted),
-                    start_time=start_ns,
-                    end_time=end_ns,
                     log_time_order=True,
+                    **bounds,
                 ):
                     topic, msgtype, encoding = self._channels[channel.id]
                     yield RawMessage(topic, msgtype, message.log_time, message.data, encoding)

@@ -1,0 +1,54 @@
+"""When each camera takes a frame: its rate, phase, jitter and dropped frames."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .scenario import CameraSpec
+
+
+@dataclass(frozen=True)
+class Shot:
+    """Camera ``camera_index`` takes its ``frame_index``-th frame at ``t_s`` (sim time)."""
+
+    t_s: float
+    camera_index: int
+    frame_index: int
+
+
+def camera_times(
+    camera: CameraSpec, frame_count: int, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """Times ``(N,)`` in s of the kept frames and the indices ``(M,)`` of dropped ones.
+
+    Jitter is Gaussian, clipped to 40 % of the frame period so that frames never swap order.
+    """
+    period = 1.0 / camera.rate_hz
+    ideal = camera.phase_s + np.arange(frame_count) * period
+    jitter = np.zeros(frame_count)
+    if camera.jitter_s > 0:
+        jitter = np.clip(rng.normal(0.0, camera.jitter_s, frame_count), -0.4 * period,
+                         0.4 * period)
+    dropped = np.zeros(frame_count, dtype=bool)
+    if camera.drop_probability > 0:
+        dropped = rng.uniform(size=frame_count) < camera.drop_probability
+        dropped[0] = False
+    times = np.maximum(ideal + jitter, 0.0)
+    return times[~dropped], np.flatnonzero(dropped)
+
+
+def schedule(
+    cameras: tuple[CameraSpec, ...], frame_count: int, rngs: list[np.random.Generator]
+) -> tuple[list[Shot], dict[int, np.ndarray]]:
+    """All shots in time order (cameras in spec order at equal times), and drops per camera."""
+    shots: list[Shot] = []
+    drops: dict[int, np.ndarray] = {}
+    for index, (camera, rng) in enumerate(zip(cameras, rngs, strict=True)):
+        times, dropped = camera_times(camera, frame_count, rng)
+        kept = np.setdiff1d(np.arange(frame_count), dropped)
+        shots += [Shot(float(t), index, int(k)) for t, k in zip(times, kept, strict=True)]
+        drops[index] = dropped
+    shots.sort(key=lambda s: (s.t_s, s.camera_index))
+    return shots, drops

@@ -1,0 +1,240 @@
+"""Record a scenario: render every camera frame and write images, camera_info and truth.
+
+Rendering runs on the calling thread; warping, noise, serialization and writing run on a
+worker thread behind a bounded queue so that they overlap rendering.
+"""
+
+from __future__ import annotations
+
+import json
+import queue
+import threading
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from tqdm import tqdm
+
+from replay import CameraInfo, Image, PoseStamped, Text, open_writer
+from replay._version import VERSION
+from replay.formats import LogWriter
+from replay.geometry import invert, quat_xyzw_from_rotation
+
+from .clock import Shot, schedule
+from .errors import RecorderError
+from .motion import Trajectory, plan_trajectory
+from .optics import Optics, plan_optics
+from .render import SceneRenderer, gl_backend
+from .scenario import CameraSpec, Scenario
+from .scene import board_corners_in_target
+
+SCENARIO_TOPIC = "/camlog/scenario"
+#: seed streams, so that changing one aspect of a scenario does not reshuffle the others
+MOTION_STREAM, CLOCK_STREAM, NOISE_STREAM = 1, 2, 3
+
+
+def image_topic(camera: CameraSpec) -> str:
+    return f"{camera.namespace}/image_raw"
+
+
+def info_topic(camera: CameraSpec) -> str:
+    return f"{camera.namespace}/camera_info"
+
+
+def truth_topic(camera: CameraSpec, target_name: str) -> str:
+    return f"{camera.namespace}/ground_truth/{target_name}"
+
+
+@dataclass
+class RecordResult:
+    """What a recording produced."""
+
+    path: Path
+    frames: dict[str, int]  # camera name -> frames written
+    dropped: dict[str, list[int]]  # camera name -> dropped frame indices
+    wall_s: float
+    topics: list[str] = field(default_factory=list)
+
+    @property
+    def fps(self) -> float:
+        return sum(self.frames.values()) / self.wall_s if self.wall_s > 0 else 0.0
+
+
+def rng_for(scenario: Scenario, stream: int, index: int) -> np.random.Generator:
+    return np.random.default_rng([scenario.seed, stream, index])
+
+
+def scenario_record(
+    scenario: Scenario, optics: list[Optics], dropped: dict[int, np.ndarray]
+) -> dict[str, Any]:
+    """Everything that shaped the recording, stored as JSON in the log."""
+    import mujoco
+
+    cameras = []
+    for index, camera in enumerate(scenario.cameras):
+        cameras.append({
+            "name": camera.name, "namespace": camera.namespace, "frame_id": camera.frame_id,
+            "width": camera.model.width, "height": camera.model.height,
+            "k": camera.model.k.tolist(), "distortion_model": camera.model.distortion_model,
+            "d": camera.model.d.tolist(), "world_from_camera": camera.world_from_camera.tolist(),
+            "render_size": [optics[index].render_width, optics[index].render_height],
+            "supersample": optics[index].supersample,
+            "dropped_frames": dropped[index].tolist(),
+        })
+    targets = []
+    for target in scenario.targets:
+        entry: dict[str, Any] = {"name": target.name, "kind": target.kind}
+        if target.kind == "checkerboard":
+            entry |= {
+                "inner_corners": list(target.inner_corners), "square_m": target.square_m,
+                "corners_in_target": board_corners_in_target(target).tolist(),
+                "frame": "origin at the first inner corner, x along cols, y along rows, "
+                         "z into the board",
+            }
+        else:
+            entry |= {"size_m": target.size_m.tolist(), "rgba": list(target.rgba),
+                      "frame": "origin at the box centre"}
+        targets.append(entry)
+    return {
+        "scenario": scenario.name, "source": scenario.source, "seed": scenario.seed,
+        "camlog_version": VERSION, "mujoco_version": mujoco.__version__,
+        "renderer": f"mujoco/{gl_backend()}", "spec": scenario.spec,
+        "cameras": cameras, "targets": targets,
+    }
+
+
+class _Pipeline:
+    """Worker thread: finish frames (warp, noise, encoding) and write them."""
+
+    def __init__(self, scenario: Scenario, optics: list[Optics], writer: LogWriter) -> None:
+        self.scenario = scenario
+        self.optics = optics
+        self.writer = writer
+        self.noise = [rng_for(scenario, NOISE_STREAM, i) for i in range(len(optics))]
+        self.queue: queue.Queue[Any] = queue.Queue(maxsize=6)
+        self.error: BaseException | None = None
+        self.thread = threading.Thread(target=self._run, name="camlog-writer", daemon=True)
+        self.thread.start()
+
+    def put(self, item: Any) -> None:
+        while True:
+            if self.error is not None:
+                raise self.error
+            try:
+                self.queue.put(item, timeout=0.2)
+                return
+            except queue.Full:
+                continue
+
+    def finish(self) -> None:
+        self.put(None)
+        self.thread.join()
+        if self.error is not None:
+            raise self.error
+
+    def _run(self) -> None:
+        try:
+            while (item := self.queue.get()) is not None:
+                self._write(*item)
+        except BaseException as err:  # handed to the rendering thread
+            self.error = err
+            while self.queue.get() is not None:  # drain so the producer never blocks
+                pass
+
+    def _write(self, shot: Shot, rendered: np.ndarray, truth: list[np.ndarray]) -> None:
+        camera = self.scenario.cameras[shot.camera_index]
+        stamp_ns = self.scenario.start_stamp_ns + int(round(shot.t_s * 1e9))
+        pixels = self.optics[shot.camera_index].apply(rendered)
+        if camera.noise_std > 0:
+            rng = self.noise[shot.camera_index]
+            noisy = pixels.astype(np.float32)
+            noisy += rng.standard_normal(pixels.shape, dtype=np.float32) * camera.noise_std
+            pixels = np.clip(np.rint(noisy), 0, 255).astype(np.uint8)
+        if camera.encoding == "bgr8":
+            pixels = cv2.cvtColor(pixels, cv2.COLOR_RGB2BGR)
+        elif camera.encoding == "mono8":
+            pixels = cv2.cvtColor(pixels, cv2.COLOR_RGB2GRAY)
+        write = self.writer.write
+        write(image_topic(camera), Image(stamp_ns, camera.frame_id, camera.encoding, pixels))
+        write(info_topic(camera), camera.model.camera_info(
+            stamp_ns=stamp_ns, frame_id=camera.frame_id, baseline_tx=camera.baseline_tx))
+        for target, camera_from_target in zip(self.scenario.targets, truth, strict=True):
+            write(truth_topic(camera, target.name), PoseStamped(
+                stamp_ns, camera.frame_id, camera_from_target[:3, 3],
+                quat_xyzw_from_rotation(camera_from_target[:3, :3])))
+
+
+def record(
+    scenario: Scenario,
+    output: str | Path,
+    *,
+    fmt: str | None = None,
+    overwrite: bool = False,
+    progress: bool | None = None,
+    **writer_options: Any,
+) -> RecordResult:
+    """Render ``scenario`` and write its log to ``output`` (atomically)."""
+    output = Path(output)
+    started = time.perf_counter()
+    optics = [plan_optics(c.model, c.supersample) for c in scenario.cameras]
+    frame_count = scenario.frame_count
+    duration_s = frame_count / scenario.rate_hz + max(c.phase_s for c in scenario.cameras)
+    trajectories: list[Trajectory] = [
+        plan_trajectory(t, scenario.cameras, duration_s, rng_for(scenario, MOTION_STREAM, i))
+        for i, t in enumerate(scenario.targets)
+    ]
+    shots, dropped = schedule(
+        scenario.cameras, frame_count,
+        [rng_for(scenario, CLOCK_STREAM, i) for i in range(len(scenario.cameras))],
+    )
+    renderer = SceneRenderer(scenario, optics)
+    camera_from_world = [invert(c.world_from_camera) for c in scenario.cameras]
+    writer = open_writer(output, fmt=fmt, overwrite=overwrite, **writer_options)
+    frames = dict.fromkeys((c.name for c in scenario.cameras), 0)
+    try:
+        writer.write(SCENARIO_TOPIC, Text(json.dumps(scenario_record(scenario, optics, dropped))),
+                     log_time_ns=scenario.start_stamp_ns)
+        writer.set_metadata("camlog", {"scenario": scenario.name, "seed": str(scenario.seed),
+                                       "version": VERSION, "renderer": f"mujoco/{gl_backend()}"})
+        pipeline = _Pipeline(scenario, optics, writer)
+        bar = tqdm(total=len(shots), unit="frame", desc=f"record {scenario.name}",
+                   disable=None if progress is None else not progress, leave=False)
+        try:
+            last_t = None
+            poses: list[np.ndarray] = []
+            for shot in shots:
+                if shot.t_s != last_t:
+                    poses = [trajectory.at(shot.t_s) for trajectory in trajectories]
+                    renderer.set_poses(poses)
+                    last_t = shot.t_s
+                rendered = renderer.render(shot.camera_index)
+                truth = [camera_from_world[shot.camera_index] @ p for p in poses]
+                pipeline.put((shot, rendered, truth))
+                frames[scenario.cameras[shot.camera_index].name] += 1
+                bar.update()
+            pipeline.finish()
+        finally:
+            bar.close()
+        writer.close()
+    except BaseException:
+        writer.abort()
+        raise
+    finally:
+        renderer.close()
+    return RecordResult(
+        path=output,
+        frames=frames,
+        dropped={c.name: dropped[i].tolist() for i, c in enumerate(scenario.cameras)},
+        wall_s=time.perf_counter() - started,
+        topics=sorted({SCENARIO_TOPIC} | {
+            t for c in scenario.cameras
+            for t in (image_topic(c), info_topic(c), *(truth_topic(c, x.name)
+                                                       for x in scenario.targets))
+        }),
+    )
+
+
+__all__ = ["RecordResult", "RecorderError", "record"]

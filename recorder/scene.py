@@ -1,0 +1,126 @@
+"""MJCF for a scenario: ground, light, cameras and mocap-driven targets.
+
+A checkerboard is built from geometry, not a texture, so that its corners are exact: black
+squares 20 um thick lie on a white plate, their faces on the board plane z = 0. The board
+frame has its origin at the first inner corner, x along the ``cols`` inner corners, y along
+the ``rows``, and z into the board (the printed face looks along -z).
+"""
+
+from __future__ import annotations
+
+from xml.sax.saxutils import quoteattr
+
+import numpy as np
+
+from replay.geometry import OPTICAL_FROM_MJCAMERA, quat_xyzw_from_rotation
+from replay.messages import F64
+
+from .scenario import Scenario, TargetSpec
+
+BLACK_THICKNESS_M = 2e-5
+PLATE_THICKNESS_M = 3e-3
+
+
+def _vec(values: F64 | list[float] | tuple[float, ...]) -> str:
+    return " ".join(f"{float(v):.9g}" for v in values)
+
+
+def board_corners_in_target(target: TargetSpec) -> F64:
+    """Inner corners ``(rows * cols, 3)`` in the board frame, row-major (x fastest)."""
+    cols, rows = target.inner_corners
+    xs, ys = np.meshgrid(np.arange(cols), np.arange(rows))
+    return np.column_stack([xs.ravel(), ys.ravel(), np.zeros(xs.size)]) * target.square_m
+
+
+def outline_in_target(target: TargetSpec) -> F64:
+    """Points ``(N, 3)`` that must be visible for the target to count as fully in view."""
+    if target.kind == "checkerboard":
+        cols, rows = target.inner_corners
+        s = target.square_m
+        x0, x1, y0, y1 = -s, cols * s, -s, rows * s
+        return np.array([[x0, y0, 0], [x1, y0, 0], [x1, y1, 0], [x0, y1, 0]])
+    half = target.size_m / 2
+    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
+    return signs * half
+
+
+def _checkerboard_geoms(target: TargetSpec) -> list[str]:
+    cols, rows = target.inner_corners
+    s = target.square_m
+    b = target.border_squares * s
+    x0, x1 = -s - b, cols * s + b
+    y0, y1 = -s - b, rows * s + b
+    plate_center = ((x0 + x1) / 2, (y0 + y1) / 2, BLACK_THICKNESS_M + PLATE_THICKNESS_M / 2)
+    plate_half = ((x1 - x0) / 2, (y1 - y0) / 2, PLATE_THICKNESS_M / 2)
+    geoms = [
+        f'<geom type="box" pos="{_vec(plate_center)}" size="{_vec(plate_half)}" material="white"/>'
+    ]
+    half = (s / 2, s / 2, BLACK_THICKNESS_M / 2)
+    for i in range(rows + 1):
+        for j in range(cols + 1):
+            if (i + j) % 2:
+                continue
+            center = ((j - 0.5) * s, (i - 0.5) * s, BLACK_THICKNESS_M / 2)
+            geoms.append(
+                f'<geom type="box" pos="{_vec(center)}" size="{_vec(half)}" material="black"/>'
+            )
+    return geoms
+
+
+def build_mjcf(scenario: Scenario, *, offscreen_size: tuple[int, int]) -> str:
+    """MJCF text of the scenario's scene; ``offscreen_size`` is the largest render (W, H)."""
+    width, height = offscreen_size
+    parts = [
+        f'<mujoco model={quoteattr("camlog_" + scenario.name)}>',
+        '<compiler angle="radian"/>',
+        '<option gravity="0 0 0"/>',
+        '<statistic extent="1" center="0 0 0.25"/>',
+        "<visual>",
+        f'  <global offwidth="{width}" offheight="{height}"/>',
+        '  <quality offsamples="8"/>',
+        '  <headlight ambient="0.45 0.45 0.45" diffuse="0.5 0.5 0.5" specular="0 0 0"/>',
+        '  <map znear="0.005" zfar="20"/>',
+        "</visual>",
+        "<asset>",
+        '  <material name="white" rgba="0.93 0.93 0.93 1" specular="0" shininess="0"/>',
+        '  <material name="black" rgba="0.03 0.03 0.03 1" specular="0" shininess="0"/>',
+        '  <material name="ground" rgba="0.55 0.57 0.6 1" specular="0" shininess="0"/>',
+    ]
+    for target in scenario.targets:
+        if target.kind == "box":
+            parts.append(
+                f'  <material name="{target.name}_mat" rgba="{_vec(target.rgba)}" '
+                'specular="0" shininess="0"/>'
+            )
+    parts += [
+        "</asset>",
+        "<worldbody>",
+        '  <light directional="true" pos="0 0 3" dir="0 0 -1" diffuse="0.35 0.35 0.35" '
+        'specular="0 0 0" castshadow="false"/>',
+        '  <geom name="ground" type="plane" size="2 2 0.01" material="ground"/>',
+    ]
+    for camera in scenario.cameras:
+        world_from_mjcam = camera.world_from_camera[:3, :3] @ OPTICAL_FROM_MJCAMERA
+        xyaxes = np.concatenate([world_from_mjcam[:, 0], world_from_mjcam[:, 1]])
+        parts.append(
+            f'  <camera name={quoteattr(camera.name)} '
+            f'pos="{_vec(camera.world_from_camera[:3, 3])}" xyaxes="{_vec(xyaxes)}" fovy="30"/>'
+        )
+    for target in scenario.targets:
+        pose = target.motion.world_from_target
+        quat = quat_xyzw_from_rotation(pose[:3, :3])
+        parts.append(
+            f'  <body name={quoteattr(target.name)} mocap="true" pos="{_vec(pose[:3, 3])}" '
+            f'quat="{_vec([quat[3], *quat[:3]])}">'
+        )
+        geoms = (
+            _checkerboard_geoms(target)
+            if target.kind == "checkerboard"
+            else [f'<geom type="box" size="{_vec(target.size_m / 2)}" '
+                  f'material="{target.name}_mat"/>']
+        )
+        no_contact = '<geom contype="0" conaffinity="0" '
+        parts += ["    " + g.replace("<geom ", no_contact) for g in geoms]
+        parts.append("  </body>")
+    parts += ["</worldbody>", "</mujoco>"]
+    return "\n".join(parts)
