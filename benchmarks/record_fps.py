@@ -1,0 +1,89 @@
+"""Recording throughput against a bare MuJoCo render loop of the same scene, in one run.
+
+The baseline renders exactly the frames the recording renders (same scene, cameras, render
+sizes and pose changes) and does nothing else; the ratio says how much warping, noise,
+serialization, compression and writing slow rendering down (target >= 0.9).
+
+    python -m benchmarks.record_fps [SCENARIO] [--frames N] [--repeats R]
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+import time
+from pathlib import Path
+
+from recorder.clock import schedule
+from recorder.motion import plan_trajectory
+from recorder.optics import plan_optics
+from recorder.record import CLOCK_STREAM, MOTION_STREAM, record, rng_for
+from recorder.render import SceneRenderer
+from recorder.scenario import Scenario, load_scenario
+
+
+def bare_render_fps(scenario: Scenario) -> float:
+    """Frames per second of rendering alone, over the recording's own shots."""
+    optics = [plan_optics(c.model, c.supersample) for c in scenario.cameras]
+    duration_s = scenario.frame_count / scenario.rate_hz
+    trajectories = [
+        plan_trajectory(t, scenario.cameras, duration_s, rng_for(scenario, MOTION_STREAM, i))
+        for i, t in enumerate(scenario.targets)
+    ]
+    shots, _ = schedule(scenario.cameras, scenario.frame_count,
+                        [rng_for(scenario, CLOCK_STREAM, i) for i in range(len(scenario.cameras))])
+    renderer = SceneRenderer(scenario, optics)
+    try:
+        started = time.perf_counter()
+        last_t = None
+        for shot in shots:
+            if shot.t_s != last_t:
+                renderer.set_poses([tr.at(shot.t_s) for tr in trajectories])
+                last_t = shot.t_s
+            renderer.render(shot.camera_index)
+        return len(shots) / (time.perf_counter() - started)
+    finally:
+        renderer.close()
+
+
+def record_fps(scenario: Scenario, out_dir: Path) -> tuple[float, int]:
+    """Frames per second of a full recording to MCAP, and the file size in bytes."""
+    path = out_dir / f"{scenario.name}.mcap"
+    started = time.perf_counter()
+    result = record(scenario, path, overwrite=True, progress=False)
+    wall = time.perf_counter() - started
+    return sum(result.frames.values()) / wall, path.stat().st_size
+
+
+def run(scenario_name: str, frames: int, repeats: int, overrides: dict[str, object]) -> dict[str, float]:
+    scenario = load_scenario(scenario_name, {"frames": frames, **overrides})
+    bare, rec = [], []
+    size = 0
+    with tempfile.TemporaryDirectory() as tmp:
+        for _ in range(repeats):  # interleave to share any drift in machine load
+            bare.append(bare_render_fps(scenario))
+            fps, size = record_fps(scenario, Path(tmp))
+            rec.append(fps)
+    return {"bare_fps": max(bare), "record_fps": max(rec), "ratio": max(rec) / max(bare),
+            "mb": size / 1e6}
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("scenario", nargs="?", default="mono_checkerboard")
+    parser.add_argument("--frames", type=int, default=600)
+    parser.add_argument("--repeats", type=int, default=2)
+    args = parser.parse_args()
+    rows = [
+        ("ideal camera", {}),
+        ("plumb_bob k1=-0.2, supersample 2", {"distortion": [-0.2, 0.05, 0.0, 0.0, 0.0]}),
+    ]
+    print(f"{'scenario':22} {'case':34} {'bare fps':>9} {'record fps':>11} {'ratio':>6} {'MB':>7}")
+    for label, overrides in rows:
+        r = run(args.scenario, args.frames, args.repeats, overrides)
+        print(f"{args.scenario:22} {label:34} {r['bare_fps']:9.1f} {r['record_fps']:11.1f} "
+              f"{r['ratio']:6.2f} {r['mb']:7.1f}")
+
+
+if __name__ == "__main__":
+    main()
