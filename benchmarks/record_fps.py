@@ -55,7 +55,9 @@ def record_fps(scenario: Scenario, out_dir: Path) -> tuple[float, int]:
     return sum(result.frames.values()) / wall, path.stat().st_size
 
 
-def run(scenario_name: str, frames: int, repeats: int, overrides: dict[str, object]) -> dict[str, float]:
+def run(
+    scenario_name: str, frames: int, repeats: int, overrides: dict[str, object]
+) -> dict[str, float]:
     scenario = load_scenario(scenario_name, {"frames": frames, **overrides})
     bare, rec = [], []
     size = 0

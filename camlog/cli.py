@@ -17,8 +17,14 @@ def _commands() -> dict[str, Command]:
     from camlog import cmd_info, cmd_record
 
     return {
-        "record": ("simulate a scenario in MuJoCo and write its camera log", cmd_record.add_arguments, cmd_record.run),
-        "info": ("summarise a log: format, duration, topics, rates, encodings", cmd_info.add_arguments, cmd_info.run),
+        "record": (
+            "simulate a scenario in MuJoCo and write its camera log",
+            cmd_record.add_arguments, cmd_record.run,
+        ),
+        "info": (
+            "summarise a log: format, duration, topics, rates, encodings",
+            cmd_info.add_arguments, cmd_info.run,
+        ),
     }
 
 

@@ -26,7 +26,7 @@ class Trajectory:
     world_from_target: F64  # (N, 4, 4)
 
     def at(self, t_s: float) -> F64:
-        index = min(int(math.floor(max(t_s, 0.0) / self.hold_s)), len(self.world_from_target) - 1)
+        index = min(math.floor(max(t_s, 0.0) / self.hold_s), len(self.world_from_target) - 1)
         return self.world_from_target[index]
 
 
@@ -91,7 +91,7 @@ def plan_trajectory(
     if motion.kind == "static":
         return Trajectory(duration_s + 1.0, motion.world_from_target[None])
     outline = outline_in_target(target)
-    count = int(math.ceil(duration_s / motion.hold_s)) + 1
+    count = math.ceil(duration_s / motion.hold_s) + 1
     poses = []
     for _ in range(count):
         partial = rng.uniform() < motion.partial_view_probability

@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from replay import CameraInfo, Image, PoseStamped, Text, open_writer
+from replay import Image, PoseStamped, Text, open_writer
 from replay._version import VERSION
 from replay.formats import LogWriter
 from replay.geometry import invert, quat_xyzw_from_rotation
@@ -146,7 +146,7 @@ class _Pipeline:
 
     def _write(self, shot: Shot, rendered: np.ndarray, truth: list[np.ndarray]) -> None:
         camera = self.scenario.cameras[shot.camera_index]
-        stamp_ns = self.scenario.start_stamp_ns + int(round(shot.t_s * 1e9))
+        stamp_ns = self.scenario.start_stamp_ns + round(shot.t_s * 1e9)
         pixels = self.optics[shot.camera_index].apply(rendered)
         if camera.noise_std > 0:
             rng = self.noise[shot.camera_index]

@@ -19,7 +19,7 @@ import numpy as np
 
 from replay.camera import DISTORTION_MODELS, CameraModel, focal_from_hfov
 from replay.geometry import frame_from_axes, rotation_from_rpy
-from replay.messages import IMAGE_ENCODINGS, F64
+from replay.messages import F64, IMAGE_ENCODINGS
 
 from .errors import ScenarioError
 
@@ -105,12 +105,14 @@ class Scenario:
         """Frames per camera before drops."""
         if self.frames is not None:
             return self.frames
-        return max(1, int(round(self.duration_s * self.rate_hz)))
+        return max(1, round(self.duration_s * self.rate_hz))
 
 
 # --- loading -------------------------------------------------------------------------------
 
-def load_scenario(name_or_path: str | None = None, overrides: dict[str, Any] | None = None) -> Scenario:
+def load_scenario(
+    name_or_path: str | None = None, overrides: dict[str, Any] | None = None
+) -> Scenario:
     """Load a built-in scenario by name or a spec file by path, then apply ``overrides``."""
     name_or_path = name_or_path or DEFAULT_SCENARIO
     path = Path(name_or_path)
@@ -189,7 +191,8 @@ class _Fields:
     def number(self, key: str, default: Any = ..., *, low: float | None = None,
                high: float | None = None, positive: bool = False) -> float:
         value = self.get(key, default)
-        if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
+        number = isinstance(value, int | float) and not isinstance(value, bool)
+        if not number or not math.isfinite(value):
             raise self._fail(key, f"expected a number, got {value!r}")
         if positive and value <= 0:
             raise self._fail(key, f"must be > 0, got {value!r}")

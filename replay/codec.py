@@ -68,7 +68,8 @@ def to_ros(message: Message) -> Any:
     match message:
         case Image():
             pixels = np.ascontiguousarray(message.pixels)
-            row_bytes = pixels.shape[1] * pixels.itemsize * (1 if pixels.ndim == 2 else pixels.shape[2])
+            channels = 1 if pixels.ndim == 2 else pixels.shape[2]
+            row_bytes = pixels.shape[1] * pixels.itemsize * channels
             big = pixels.dtype.itemsize > 1 and pixels.dtype.byteorder == ">"
             return types["sensor_msgs/msg/Image"](
                 header=_header(ts, message.stamp_ns, message.frame_id),
@@ -252,7 +253,9 @@ def decode_compressed(message: CompressedImage) -> Image:
     return Image(message.stamp_ns, message.frame_id, encoding, array)
 
 
-def encode_compressed(image: Image, fmt: str = "jpeg", *, jpeg_quality: int = 90) -> CompressedImage:
+def encode_compressed(
+    image: Image, fmt: str = "jpeg", *, jpeg_quality: int = 90
+) -> CompressedImage:
     """Encode an Image as JPEG or PNG (the ``format`` string follows image_transport)."""
     if fmt not in ("jpeg", "png"):
         raise EncodingError(f"unsupported compression {fmt!r} (use jpeg or png)")

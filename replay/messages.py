@@ -53,6 +53,18 @@ class Image:
     def height(self) -> int:
         return int(self.pixels.shape[0])
 
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, Image):
+            return NotImplemented
+        return (
+            (self.stamp_ns, self.frame_id, self.encoding)
+            == (other.stamp_ns, other.frame_id, other.encoding)
+            and self.pixels.dtype == other.pixels.dtype
+            and np.array_equal(self.pixels, other.pixels)
+        )
+
+    __hash__ = None  # type: ignore[assignment]
+
 
 @dataclass(frozen=True, slots=True)
 class CompressedImage:

@@ -129,7 +129,7 @@ class AtomicPath:
             self.temp.rename(self.final)
             _remove(old)
         else:
-            os.replace(self.temp, self.final)
+            self.temp.replace(self.final)
 
     def discard(self) -> None:
         _remove(self.temp)

@@ -228,7 +228,7 @@ class McapLogReader(LogReader):
         wanted = None if topics is None else set(topics)
         if self._summary is not None:
             start_name, end_name = _TIME_BOUNDS
-            bounds = {start_name: start_ns, end_name: end_ns}
+            bounds: dict[str, Any] = {start_name: start_ns, end_name: end_ns}
             try:
                 reader = self._seeking_reader()
                 for _schema, channel, message in reader.iter_messages(
@@ -278,7 +278,11 @@ def _describe(err: BaseException) -> str:
     return f"{type(err).__name__}: {text}" if text else type(err).__name__
 
 
-COMPRESSION = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4, "none": CompressionType.NONE}
+COMPRESSION = {
+    "zstd": CompressionType.ZSTD,
+    "lz4": CompressionType.LZ4,
+    "none": CompressionType.NONE,
+}
 
 
 class McapLogWriter(LogWriter):

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
@@ -42,7 +43,8 @@ class _RosbagsReader(LogReader):
         self.message_count = reader.message_count
         if self.message_count:
             self.start_ns = reader.start_time
-            self.end_ns = reader.end_time - 1 if reader.end_time > reader.start_time else reader.start_time
+            # rosbags' end_time lies one nanosecond after the last message
+            self.end_ns = max(reader.end_time - 1, reader.start_time)
 
     def raw_messages(
         self,
@@ -141,10 +143,8 @@ class Rosbag2LogWriter(LogWriter):
         staged.rename(self.temp_path)
 
     def _abort(self) -> None:
-        try:
+        with contextlib.suppress(Exception):  # the output is discarded anyway
             self._writer.close()
-        except Exception:  # the output is discarded anyway
-            pass
 
 
 class Ros1LogWriter(LogWriter):
@@ -176,10 +176,8 @@ class Ros1LogWriter(LogWriter):
         self._writer.close()
 
     def _abort(self) -> None:
-        try:
+        with contextlib.suppress(Exception):  # the output is discarded anyway
             self._writer.close()
-        except Exception:  # the output is discarded anyway
-            pass
 
 
 def _first_line(err: BaseException) -> str:

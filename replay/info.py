@@ -1,0 +1,179 @@
+"""What a log holds, like ``ros2 bag info``: format, size, time span, topics and rates.
+
+:func:`summarize` streams the raw messages once (rates need each topic's first and last log
+time) and decodes only the first message of image and camera-info topics to report their
+encoding and size. :func:`format_summary` renders the result as text.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+
+from .codec import decode_compressed, deserialize
+from .errors import ReplayError
+from .formats.base import LogReader, RawMessage
+from .messages import MSGTYPES, CameraInfo, CompressedImage, Image
+
+__all__ = ["LogSummary", "TopicSummary", "format_summary", "summarize"]
+
+#: topics whose first message is decoded to describe the stream
+DESCRIBED_TYPES = frozenset(MSGTYPES[kind] for kind in (Image, CompressedImage, CameraInfo))
+
+
+@dataclass(frozen=True, slots=True)
+class TopicSummary:
+    """One topic: type, message count, first/last log time and a short stream description.
+
+    ``detail`` is e.g. ``mono8 848x800`` for images, ``jpeg 640x480`` for compressed images
+    (format string, decoded size) and ``640x480 plumb_bob`` for camera info; empty otherwise.
+    """
+
+    name: str
+    msgtype: str
+    count: int
+    first_ns: int | None
+    last_ns: int | None
+    detail: str = ""
+
+    @property
+    def rate_hz(self) -> float | None:
+        """``(count - 1) / (last - first)``; None with fewer than two distinct times."""
+        if self.count < 2 or self.first_ns is None or self.last_ns is None:
+            return None
+        span_ns = self.last_ns - self.first_ns
+        return (self.count - 1) * 1e9 / span_ns if span_ns > 0 else None
+
+
+@dataclass(frozen=True, slots=True)
+class LogSummary:
+    """Everything ``camlog info`` prints about one log."""
+
+    path: Path
+    format_name: str
+    size_bytes: int
+    start_ns: int | None
+    end_ns: int | None
+    message_count: int
+    topics: tuple[TopicSummary, ...]
+    warnings: tuple[str, ...] = ()
+
+    @property
+    def duration_s(self) -> float:
+        """Log time from the first to the last message (0 for an empty log)."""
+        if self.start_ns is None or self.end_ns is None:
+            return 0.0
+        return (self.end_ns - self.start_ns) / 1e9
+
+
+def summarize(reader: LogReader) -> LogSummary:
+    """Summary of an open log; reads every raw message once, decodes few."""
+    counts: dict[str, int] = {}
+    first_ns: dict[str, int] = {}
+    last_ns: dict[str, int] = {}
+    details: dict[str, str] = {}
+    for raw in reader.raw_messages():
+        topic = raw.topic
+        counts[topic] = counts.get(topic, 0) + 1
+        if topic not in first_ns:
+            first_ns[topic] = raw.log_time_ns
+            if raw.msgtype in DESCRIBED_TYPES:
+                details[topic] = describe(raw)
+        last_ns[topic] = raw.log_time_ns
+    msgtypes = {name: info.msgtype for name, info in reader.topics.items()}
+    topics = tuple(
+        TopicSummary(
+            name=name,
+            msgtype=msgtype,
+            count=counts.get(name, 0),
+            first_ns=first_ns.get(name),
+            last_ns=last_ns.get(name),
+            detail=details.get(name, ""),
+        )
+        for name, msgtype in sorted(msgtypes.items())
+    )
+    return LogSummary(
+        path=reader.path,
+        format_name=reader.format_name,
+        size_bytes=size_on_disk(reader.path),
+        start_ns=min(first_ns.values(), default=None),
+        end_ns=max(last_ns.values(), default=None),
+        message_count=sum(counts.values()),
+        topics=topics,
+        warnings=tuple(reader.warnings),
+    )
+
+
+def describe(raw: RawMessage) -> str:
+    """Encoding and size of an image / camera-info message, or why it cannot be decoded."""
+    try:
+        message = deserialize(raw.data, raw.msgtype, raw.serialization)
+        match message:
+            case Image():
+                return f"{message.encoding} {message.width}x{message.height}"
+            case CompressedImage():
+                image = decode_compressed(message)
+                return f"{message.format} {image.width}x{image.height}"
+            case CameraInfo():
+                return f"{message.width}x{message.height} {message.distortion_model}"
+    except ReplayError as err:
+        return f"(cannot decode: {err})"
+    return ""
+
+
+def size_on_disk(path: Path) -> int:
+    """Bytes of a file, or of all files below a directory."""
+    if path.is_dir():
+        return sum(f.stat().st_size for f in path.rglob("*") if f.is_file())
+    return path.stat().st_size
+
+
+def format_stamp(stamp_ns: int | None) -> str:
+    """``2019-03-21T14:57:04.368061647Z (1553180224368061647 ns)``; ``-`` for None."""
+    if stamp_ns is None:
+        return "-"
+    sec, nsec = divmod(stamp_ns, 1_000_000_000)
+    iso = datetime.fromtimestamp(sec, tz=UTC).strftime("%Y-%m-%dT%H:%M:%S")
+    return f"{iso}.{nsec:09d}Z ({stamp_ns} ns)"
+
+
+def format_size(size_bytes: int) -> str:
+    """``3.9 MiB (4129654 bytes)``."""
+    value = float(size_bytes)
+    for unit in ("B", "KiB", "MiB", "GiB"):
+        if value < 1024 or unit == "GiB":
+            break
+        value /= 1024
+    scaled = f"{size_bytes} B" if unit == "B" else f"{value:.1f} {unit}"
+    return f"{scaled} ({size_bytes} bytes)"
+
+
+def format_summary(summary: LogSummary) -> str:
+    """Human-readable multi-line text of a summary (no trailing newline)."""
+    lines = [
+        f"path:      {summary.path}",
+        f"format:    {summary.format_name}",
+        f"size:      {format_size(summary.size_bytes)}",
+        f"start:     {format_stamp(summary.start_ns)}",
+        f"end:       {format_stamp(summary.end_ns)}",
+        f"duration:  {summary.duration_s:.3f} s",
+        f"messages:  {summary.message_count}",
+        f"topics:    {len(summary.topics)}",
+    ]
+    rows = [("topic", "type", "count", "rate_hz", "detail")]
+    for topic in summary.topics:
+        rate = "" if topic.rate_hz is None else f"{topic.rate_hz:.2f}"
+        rows.append((topic.name, topic.msgtype, str(topic.count), rate, topic.detail))
+    widths = [max(len(row[i]) for row in rows) for i in range(4)]
+    for row in rows:
+        cells = [
+            row[0].ljust(widths[0]),
+            row[1].ljust(widths[1]),
+            row[2].rjust(widths[2]),
+            row[3].rjust(widths[3]),
+            row[4],
+        ]
+        lines.append(("  " + "  ".join(cells)).rstrip())
+    lines.extend(f"warning: {warning}" for warning in summary.warnings)
+    return "\n".join(lines)
