@@ -19,6 +19,13 @@ def _floats(text: str) -> list[float]:
         ) from None
 
 
+def _intrinsics(text: str) -> list[float]:
+    values = _floats(text)
+    if len(values) != 4:
+        raise argparse.ArgumentTypeError(f"expected FX,FY,CX,CY, got {text!r}")
+    return values
+
+
 def _resolution(text: str) -> tuple[int, int]:
     try:
         w, h = (int(v) for v in text.lower().split("x"))
@@ -56,7 +63,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resolution", type=_resolution, metavar="WxH",
                    help="image size of every camera, e.g. 640x480")
     p.add_argument("--hfov", type=float, metavar="RAD", help="horizontal field of view (rad)")
-    p.add_argument("--intrinsics", type=_floats, metavar="FX,FY,CX,CY",
+    p.add_argument("--intrinsics", type=_intrinsics, metavar="FX,FY,CX,CY",
                    help="pinhole intrinsics in pixels (overrides --hfov)")
     p.add_argument("--distortion", type=_distortion, metavar="MODEL:K1,K2,...",
                    help="lens distortion, e.g. plumb_bob:-0.2,0.05,0,0,0 or "
@@ -85,8 +92,6 @@ def overrides_from(args: argparse.Namespace) -> dict[str, Any]:
     if args.resolution:
         out["width"], out["height"] = args.resolution
     if args.intrinsics is not None:
-        if len(args.intrinsics) != 4:
-            raise SystemExit("camlog record: error: --intrinsics takes FX,FY,CX,CY")
         out["intrinsics"] = args.intrinsics
     if args.distortion:
         out["distortion_model"], out["distortion"] = args.distortion

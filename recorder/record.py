@@ -10,6 +10,7 @@ import json
 import queue
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -106,18 +107,31 @@ def scenario_record(
     }
 
 
-class _Pipeline:
-    """Worker thread: finish frames (warp, noise, encoding) and write them."""
+#: queue item that ends the worker and drops the partial log
+_ABORT = object()
 
-    def __init__(self, scenario: Scenario, optics: list[Optics], writer: LogWriter) -> None:
+
+class _Pipeline:
+    """Worker thread that owns the log writer: it opens it, finishes frames (warp, noise,
+    encoding), writes them, and closes or aborts it. Every writer call happens on this one
+    thread, since some storages (SQLite) refuse to be used from another."""
+
+    def __init__(
+        self, scenario: Scenario, optics: list[Optics], open_log: Callable[[], LogWriter]
+    ) -> None:
         self.scenario = scenario
         self.optics = optics
-        self.writer = writer
         self.noise = [rng_for(scenario, NOISE_STREAM, i) for i in range(len(optics))]
         self.queue: queue.Queue[Any] = queue.Queue(maxsize=6)
         self.error: BaseException | None = None
+        self._open_log = open_log
+        self._opened = threading.Event()
         self.thread = threading.Thread(target=self._run, name="camlog-writer", daemon=True)
         self.thread.start()
+        self._opened.wait()
+        if self.error is not None:  # the log could not be opened
+            self.thread.join()
+            raise self.error
 
     def put(self, item: Any) -> None:
         while True:
@@ -130,21 +144,46 @@ class _Pipeline:
                 continue
 
     def finish(self) -> None:
-        self.put(None)
-        self.thread.join()
+        """Write what is queued, close the log and raise the worker's error, if any."""
+        self._stop(None)
         if self.error is not None:
             raise self.error
 
+    def abort(self) -> None:
+        """Drop what is queued and the partial log."""
+        self._stop(_ABORT)
+
+    def _stop(self, sentinel: object) -> None:
+        if self.thread.is_alive():
+            self.queue.put(sentinel)
+            self.thread.join()
+
     def _run(self) -> None:
         try:
-            while (item := self.queue.get()) is not None:
-                self._write(*item)
+            writer = self._open_log()
         except BaseException as err:  # handed to the rendering thread
             self.error = err
-            while self.queue.get() is not None:  # drain so the producer never blocks
-                pass
+            return
+        finally:
+            self._opened.set()
+        # after an error, keep taking items without writing so that the producer never blocks
+        while (item := self.queue.get()) is not None and item is not _ABORT:
+            if self.error is None:
+                try:
+                    self._write(writer, *item)
+                except BaseException as err:
+                    self.error = err
+        try:
+            if item is None and self.error is None:
+                writer.close()
+            else:
+                writer.abort()
+        except BaseException as err:
+            self.error = self.error or err
 
-    def _write(self, shot: Shot, rendered: np.ndarray, truth: list[np.ndarray]) -> None:
+    def _write(
+        self, writer: LogWriter, shot: Shot, rendered: np.ndarray, truth: list[np.ndarray]
+    ) -> None:
         camera = self.scenario.cameras[shot.camera_index]
         stamp_ns = self.scenario.start_stamp_ns + round(shot.t_s * 1e9)
         pixels = self.optics[shot.camera_index].apply(rendered)
@@ -157,7 +196,7 @@ class _Pipeline:
             pixels = cv2.cvtColor(pixels, cv2.COLOR_RGB2BGR)
         elif camera.encoding == "mono8":
             pixels = cv2.cvtColor(pixels, cv2.COLOR_RGB2GRAY)
-        write = self.writer.write
+        write = writer.write
         write(image_topic(camera), Image(stamp_ns, camera.frame_id, camera.encoding, pixels))
         write(info_topic(camera), camera.model.camera_info(
             stamp_ns=stamp_ns, frame_id=camera.frame_id, baseline_tx=camera.baseline_tx))
@@ -190,16 +229,25 @@ def record(
         scenario.cameras, frame_count,
         [rng_for(scenario, CLOCK_STREAM, i) for i in range(len(scenario.cameras))],
     )
-    renderer = SceneRenderer(scenario, optics)
+    renderer = SceneRenderer(scenario, optics)  # first: it sets MUJOCO_GL before the import
+    header = Text(json.dumps(scenario_record(scenario, optics, dropped)))
+    metadata = {"scenario": scenario.name, "seed": str(scenario.seed), "version": VERSION,
+                "renderer": f"mujoco/{gl_backend()}"}
+
+    def open_log() -> LogWriter:
+        writer = open_writer(output, fmt=fmt, overwrite=overwrite, **writer_options)
+        try:
+            writer.write(SCENARIO_TOPIC, header, log_time_ns=scenario.start_stamp_ns)
+            writer.set_metadata("camlog", metadata)
+        except BaseException:
+            writer.abort()
+            raise
+        return writer
+
     camera_from_world = [invert(c.world_from_camera) for c in scenario.cameras]
-    writer = open_writer(output, fmt=fmt, overwrite=overwrite, **writer_options)
     frames = dict.fromkeys((c.name for c in scenario.cameras), 0)
     try:
-        writer.write(SCENARIO_TOPIC, Text(json.dumps(scenario_record(scenario, optics, dropped))),
-                     log_time_ns=scenario.start_stamp_ns)
-        writer.set_metadata("camlog", {"scenario": scenario.name, "seed": str(scenario.seed),
-                                       "version": VERSION, "renderer": f"mujoco/{gl_backend()}"})
-        pipeline = _Pipeline(scenario, optics, writer)
+        pipeline = _Pipeline(scenario, optics, open_log)
         bar = tqdm(total=len(shots), unit="frame", desc=f"record {scenario.name}",
                    disable=None if progress is None else not progress, leave=False)
         try:
@@ -216,12 +264,11 @@ def record(
                 frames[scenario.cameras[shot.camera_index].name] += 1
                 bar.update()
             pipeline.finish()
+        except BaseException:
+            pipeline.abort()
+            raise
         finally:
             bar.close()
-        writer.close()
-    except BaseException:
-        writer.abort()
-        raise
     finally:
         renderer.close()
     return RecordResult(

@@ -111,9 +111,16 @@ class AtomicPath:
 
     def __init__(self, final: Path, *, overwrite: bool) -> None:
         self.final = final
-        if final.exists() and not overwrite:
-            raise LogWriteError(f"{final} exists (pass --overwrite to replace it)")
+        if final.exists() or final.is_symlink():
+            if not overwrite:
+                raise LogWriteError(f"{final} exists (pass --overwrite to replace it)")
+            if final.is_dir() and not (final / "metadata.yaml").is_file():
+                raise LogWriteError(
+                    f"refusing to replace {final}: it is a directory but not a rosbag2 log"
+                )
         parent = final.parent
+        if parent.exists() and not parent.is_dir():
+            raise LogWriteError(f"cannot write {final}: {parent} is not a directory")
         if not parent.is_dir():
             raise LogWriteError(f"cannot write {final}: directory {parent} does not exist")
         if not os.access(parent, os.W_OK):
@@ -122,6 +129,8 @@ class AtomicPath:
         _remove(self.temp)
 
     def commit(self) -> None:
+        if self.final.exists() and self.final.is_dir() != self.temp.is_dir():
+            _remove(self.final)  # a log file replaced by a rosbag2 directory, or back
         if self.final.is_dir() and not self.final.is_symlink():
             old = self.final.with_name(f"{self.final.name}.replaced")
             _remove(old)

@@ -263,3 +263,32 @@ def test_real_t265_ros1_bag(realdata_dir: Path) -> None:
         assert image.stamp_ns == msg.header.stamp.sec * 1_000_000_000 + msg.header.stamp.nanosec
         assert np.array_equal(image.pixels, np.asarray(msg.data).reshape(800, 848))
         assert 10 < image.pixels.mean() < 245  # a real picture, not a blank buffer
+
+
+def test_overwrite_refuses_a_directory_that_is_not_a_log(tmp_path: Path) -> None:
+    precious = tmp_path / "home"
+    precious.mkdir()
+    (precious / "notes.txt").write_text("keep me")
+    with pytest.raises(LogWriteError, match="not a rosbag2 log"):
+        open_writer(precious, fmt="rosbag2", overwrite=True)
+    assert (precious / "notes.txt").read_text() == "keep me"
+
+
+def test_overwrite_replaces_a_log_of_the_other_kind(tmp_path: Path) -> None:
+    target = tmp_path / "run"
+    target.write_bytes(b"old file")
+    with open_writer(target, fmt="rosbag2", overwrite=True) as writer:
+        writer.write("/t", Text("x"), log_time_ns=1)
+    assert (target / "metadata.yaml").is_file()
+    with open_writer(target, fmt="mcap", overwrite=True) as writer:
+        writer.write("/t", Text("y"), log_time_ns=2)
+    assert target.is_file()
+    with open_reader(target) as reader:
+        assert [r.message for r in reader.messages()] == [Text("y")]
+
+
+def test_parent_that_is_a_file_is_named(tmp_path: Path) -> None:
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    with pytest.raises(LogWriteError, match="is not a directory"):
+        open_writer(blocker / "out.mcap")

@@ -1,0 +1,114 @@
+"""plan_optics: the ideal render MuJoCo makes and the warp to the camera's model."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from recorder.errors import ScenarioError
+from recorder.optics import Optics, plan_optics
+from replay.camera import CameraModel
+from replay.messages import F64
+
+W, H, HFOV_RAD = 320, 240, 0.6
+
+
+def model(*, fx: float | None = None, fy: float | None = None, cx: float | None = None,
+          cy: float | None = None, distortion_model: str = "plumb_bob",
+          d: list[float] | None = None) -> CameraModel:
+    f = (W / 2) / math.tan(HFOV_RAD / 2)
+    k = np.array([[fx or f, 0, (W - 1) / 2 if cx is None else cx],
+                  [0, fy or f, (H - 1) / 2 if cy is None else cy], [0, 0, 1]])
+    return CameraModel(W, H, k, distortion_model, np.array(d or [0.0]))
+
+
+def test_ideal_camera_renders_directly() -> None:
+    camera = model()
+    optics = plan_optics(camera, 1)
+    assert optics.map_x is None and optics.map_y is None
+    assert (optics.render_width, optics.render_height) == (W, H)
+    # MuJoCo's fovy spans the image height: pixel rows -0.5 .. H - 0.5
+    fovy_deg = math.degrees(2 * math.atan((H / 2) / camera.fy))
+    assert optics.fovy_deg == pytest.approx(fovy_deg, abs=1e-12)
+    # square pixels: the same focal length across, from the horizontal FOV
+    assert (W / 2) / math.tan(HFOV_RAD / 2) == pytest.approx(
+        (H / 2) / math.tan(math.radians(optics.fovy_deg) / 2))
+    rendered = np.random.default_rng(0).integers(0, 256, (H, W, 3), dtype=np.uint8)
+    assert optics.apply(rendered) is rendered
+
+
+def ideal_rays(optics: Optics) -> F64:
+    """Normalized ideal coordinates (N, 2) of every map sample, from the render geometry."""
+    assert optics.map_x is not None and optics.map_y is not None
+    f_render = (optics.render_height / 2) / math.tan(math.radians(optics.fovy_deg) / 2)
+    cx = (optics.render_width - 1) / 2
+    cy = (optics.render_height - 1) / 2
+    x = (optics.map_x.astype(np.float64) - cx) / f_render
+    y = (optics.map_y.astype(np.float64) - cy) / f_render
+    return np.column_stack([x.ravel(), y.ravel()])
+
+
+def sample_positions(s: int) -> F64:
+    """Sub-pixel sample centres (N, 2), row-major: pixel u covers [u - 0.5, u + 0.5]."""
+    us = (np.arange(W * s) + 0.5) / s - 0.5
+    vs = (np.arange(H * s) + 0.5) / s - 0.5
+    grid_u, grid_v = np.meshgrid(us, vs)
+    return np.column_stack([grid_u.ravel(), grid_v.ravel()])
+
+
+WARPED = {
+    "plumb_bob": model(d=[-0.2, 0.05, 0.001, -0.001, 0.0]),
+    "rational_polynomial": model(distortion_model="rational_polynomial",
+                                 d=[-0.25, 0.06, 0.0, 0.0, 0.0, 0.05, 0.0, 0.0]),
+    "intrinsics": model(fx=500.0, fy=540.0, cx=170.0, cy=110.0),
+    "ideal": model(),
+}
+#: (case, supersample); the ideal camera without supersampling is not warped (see above)
+WARP_PARAMS = [(case, s) for case in sorted(WARPED) for s in (1, 2) if (case, s) != ("ideal", 1)]
+
+
+@pytest.mark.parametrize(("case", "s"), WARP_PARAMS)
+def test_every_map_sample_comes_from_its_ideal_ray(case: str, s: int) -> None:
+    camera = WARPED[case]
+    optics = plan_optics(camera, s)
+    assert optics.supersample == s
+    assert optics.output_size == (W, H)
+    assert optics.map_x is not None and optics.map_y is not None
+    assert optics.map_x.shape == optics.map_y.shape == (H * s, W * s)
+    # every sample lies inside the render, so no border pixel is ever replicated
+    assert optics.map_x.min() >= 0 and optics.map_x.max() <= optics.render_width - 1
+    assert optics.map_y.min() >= 0 and optics.map_y.max() <= optics.render_height - 1
+    redistorted = camera.distort_normalized(ideal_rays(optics))
+    error = np.abs(redistorted - sample_positions(s)).max()
+    assert error < 1e-3
+
+
+def test_warp_output_has_the_camera_size() -> None:
+    optics = plan_optics(WARPED["plumb_bob"], 2)
+    rendered = np.full((optics.render_height, optics.render_width, 3), 200, np.uint8)
+    image = optics.apply(rendered)
+    assert image.shape == (H, W, 3) and image.dtype == np.uint8
+    assert (image == 200).all()
+
+
+def test_barrel_distortion_needs_a_wider_render() -> None:
+    """k1 < 0 pulls the image corners in, so the ideal view must reach further out."""
+    plain = plan_optics(model(), 2)
+    barrel = plan_optics(WARPED["plumb_bob"], 2)
+    assert barrel.render_width > plain.render_width
+    assert barrel.fovy_deg > plain.fovy_deg
+
+
+def test_non_invertible_distortion_is_rejected() -> None:
+    k1 = -5.0
+    # r_d = r (1 + k1 r^2) peaks at r = 1 / sqrt(-3 k1); image points beyond that peak have
+    # no undistorted ray
+    r = 1 / math.sqrt(-3 * k1)
+    peak = r * (1 + k1 * r * r)
+    f = (W / 2) / math.tan(HFOV_RAD / 2)
+    corner = math.hypot((W / 2) / f, (H / 2) / f)
+    assert corner > peak
+    with pytest.raises(ScenarioError, match="not invertible"):
+        plan_optics(model(d=[k1, 0.0, 0.0, 0.0, 0.0]), 2)
