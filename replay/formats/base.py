@@ -11,9 +11,11 @@ from pathlib import Path
 from types import TracebackType
 from typing import Self
 
-from ..codec import deserialize, msgtype_of, serialize
-from ..errors import LogWriteError, ReplayError
-from ..messages import Message
+from ..codec import decode_compressed, deserialize, msgtype_of, serialize
+from ..errors import LogWriteError, ReplayError, TopicError
+from ..messages import MSGTYPES, CompressedImage, Image, Message
+
+IMAGE_TYPES = frozenset({MSGTYPES[Image], MSGTYPES[CompressedImage]})
 
 
 @dataclass(frozen=True, slots=True)
@@ -89,6 +91,26 @@ class LogReader:
         """Decoded messages in log-time order (topics must have camlog record types)."""
         for raw in self.raw_messages(topics, start_ns, end_ns):
             yield Record(raw.topic, raw.log_time_ns, self.decode(raw))
+
+    def images(
+        self,
+        topics: Iterable[str] | None = None,
+        start_ns: int | None = None,
+        end_ns: int | None = None,
+    ) -> Iterator[Record]:
+        """Image records of ``topics`` (default: every image topic), JPEG/PNG decoded."""
+        if topics is None:
+            topics = [t.name for t in self.topics.values() if t.msgtype in IMAGE_TYPES]
+        for raw in self.raw_messages(topics, start_ns, end_ns):
+            message = self.decode(raw)
+            if isinstance(message, CompressedImage):
+                try:
+                    message = decode_compressed(message)
+                except ReplayError as err:
+                    raise type(err)(f"{self.path}: topic {raw.topic}: {err}") from None
+            if not isinstance(message, Image):
+                raise TopicError(f"{self.path}: topic {raw.topic} holds {raw.msgtype}, not images")
+            yield Record(raw.topic, raw.log_time_ns, message)
 
     def close(self) -> None:
         """Release file handles."""

@@ -17,6 +17,7 @@ from replay import (
     PointStamped,
     RawMessage,
     Text,
+    TopicError,
     open_reader,
     open_writer,
 )
@@ -292,3 +293,27 @@ def test_parent_that_is_a_file_is_named(tmp_path: Path) -> None:
     blocker.write_text("")
     with pytest.raises(LogWriteError, match="is not a directory"):
         open_writer(blocker / "out.mcap")
+
+
+@pytest.mark.parametrize("fmt", ["jpeg", "png"])
+def test_images_decodes_compressed_topics_on_read(tmp_path: Path, fmt: str) -> None:
+    from replay.codec import encode_compressed
+
+    ys, xs = np.mgrid[0:24, 0:32]
+    flat = np.stack([xs * 7, ys * 9, 255 - xs * 5], axis=-1).astype(np.uint8)
+    raw = Image(T0_NS, "cam", "rgb8", flat)
+    path = tmp_path / "c.mcap"
+    with open_writer(path) as writer:
+        writer.write("/cam/image_raw", raw)
+        writer.write("/cam/image_raw/compressed", encode_compressed(raw, fmt))
+        writer.write("/cam/label", Text("not an image"), log_time_ns=T0_NS)
+    with open_reader(path) as reader:
+        records = list(reader.images())
+        assert {r.topic for r in records} == {"/cam/image_raw", "/cam/image_raw/compressed"}
+        decoded = next(r.message for r in records if r.topic.endswith("compressed"))
+        assert isinstance(decoded, Image) and decoded.encoding == "rgb8"
+        assert decoded.stamp_ns == T0_NS
+        error = np.abs(decoded.pixels.astype(int) - flat.astype(int))
+        assert error.max() == 0 if fmt == "png" else error.mean() < 8
+        with pytest.raises(TopicError, match="/cam/label"):
+            list(reader.images(["/cam/label"]))
