@@ -27,7 +27,8 @@ class Trajectory:
 
     def at(self, t_s: float) -> F64:
         index = min(math.floor(max(t_s, 0.0) / self.hold_s), len(self.world_from_target) - 1)
-        return self.world_from_target[index]
+        pose: F64 = self.world_from_target[index]
+        return pose
 
 
 def visible_fraction(

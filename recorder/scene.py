@@ -29,7 +29,8 @@ def board_corners_in_target(target: TargetSpec) -> F64:
     """Inner corners ``(rows * cols, 3)`` in the board frame, row-major (x fastest)."""
     cols, rows = target.inner_corners
     xs, ys = np.meshgrid(np.arange(cols), np.arange(rows))
-    return np.column_stack([xs.ravel(), ys.ravel(), np.zeros(xs.size)]) * target.square_m
+    grid = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(xs.size)])
+    return np.asarray(grid * target.square_m, dtype=np.float64)
 
 
 def outline_in_target(target: TargetSpec) -> F64:

@@ -105,7 +105,7 @@ class CameraModel:
         """Pixels ``(N, 2)`` of points ``(N, 3)`` in the optical frame (z > 0)."""
         pts = np.asarray(points_in_camera, dtype=np.float64).reshape(-1, 3)
         uv, _ = cv2.projectPoints(pts, np.zeros(3), np.zeros(3), self.k, self.d)
-        return uv.reshape(-1, 2)
+        return np.asarray(uv, dtype=np.float64).reshape(-1, 2)
 
     def distort_normalized(self, xy: F64) -> F64:
         """Pixels ``(N, 2)`` of ideal normalized coordinates ``(N, 2)`` (``x = X / Z``)."""
@@ -123,4 +123,4 @@ class CameraModel:
             xy = cv2.undistortPoints(uv, self.k, None)
         else:
             xy = cv2.undistortPoints(uv, self.k, self.d, criteria=_UNDISTORT_CRITERIA)
-        return xy.reshape(-1, 2)
+        return np.asarray(xy, dtype=np.float64).reshape(-1, 2)

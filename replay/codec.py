@@ -7,7 +7,7 @@ module only maps fields between rosbags' message classes and :mod:`replay.messag
 from __future__ import annotations
 
 from functools import cache
-from typing import Any
+from typing import Any, Literal
 
 import cv2
 import numpy as np
@@ -149,7 +149,7 @@ def _image_from_ros(msg: Any) -> Image:
             f"(step {step})"
         )
     rows = data[: step * height].reshape(height, step)[:, :row]
-    order = ">" if msg.is_bigendian else "<"
+    order: Literal["<", ">"] = ">" if msg.is_bigendian else "<"
     pixels = np.ascontiguousarray(rows).view(dtype.newbyteorder(order))
     if order == ">":
         pixels = pixels.astype(dtype)
@@ -310,7 +310,8 @@ def to_mono8(image: Image) -> np.ndarray:
         case "mono8" | "8UC1":
             return px
         case "mono16" | "16UC1":
-            return (px >> 8).astype(np.uint8)
+            mono: np.ndarray = (px >> 8).astype(np.uint8)
+            return mono
         case "bgr8":
             return cv2.cvtColor(px, cv2.COLOR_BGR2GRAY)
         case "bgra8":

@@ -36,7 +36,8 @@ def rotation_from_rpy(rpy: F64) -> F64:
     rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
     ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
     rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
-    return rz @ ry @ rx
+    rotation: F64 = rz @ ry @ rx
+    return rotation
 
 
 def rotation_about(axis: F64, angle_rad: float) -> F64:
@@ -44,7 +45,8 @@ def rotation_about(axis: F64, angle_rad: float) -> F64:
     a = np.asarray(axis, dtype=np.float64)
     a = a / np.linalg.norm(a)
     k = np.array([[0, -a[2], a[1]], [a[2], 0, -a[0]], [-a[1], a[0], 0]])
-    return np.eye(3) + np.sin(angle_rad) * k + (1 - np.cos(angle_rad)) * (k @ k)
+    rotation: F64 = np.eye(3) + np.sin(angle_rad) * k + (1 - np.cos(angle_rad)) * (k @ k)
+    return rotation
 
 
 def quat_xyzw_from_rotation(rotation: F64) -> F64:
@@ -65,7 +67,8 @@ def quat_xyzw_from_rotation(rotation: F64) -> F64:
         q[k] = (m[k, i] + m[i, k]) / s
         q[3] = (m[k, j] - m[j, k]) / s
     q = q / np.linalg.norm(q)
-    return -q if q[3] < 0 else q
+    out: F64 = -q if q[3] < 0 else q
+    return out
 
 
 def rotation_from_quat_xyzw(q: F64) -> F64:

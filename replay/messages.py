@@ -7,6 +7,7 @@ Pixels and matrices are numpy arrays with their shape documented on the field.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -14,6 +15,8 @@ import numpy.typing as npt
 from .errors import EncodingError
 
 F64 = npt.NDArray[np.float64]
+#: image pixels: uint8 or uint16, (H, W) or (H, W, C)
+Pixels = npt.NDArray[Any]
 
 #: encoding -> (numpy dtype, channels)
 IMAGE_ENCODINGS: dict[str, tuple[np.dtype[np.generic], int]] = {
@@ -40,7 +43,7 @@ class Image:
     stamp_ns: int
     frame_id: str
     encoding: str
-    pixels: npt.NDArray[np.generic]
+    pixels: Pixels
 
     def __post_init__(self) -> None:
         check_pixels(self.encoding, self.pixels)
@@ -192,7 +195,7 @@ MSGTYPES: dict[type, str] = {
 }
 
 
-def check_pixels(encoding: str, pixels: npt.NDArray[np.generic]) -> None:
+def check_pixels(encoding: str, pixels: Pixels) -> None:
     """Raise :class:`EncodingError` unless ``pixels`` has the dtype and channels of ``encoding``."""
     if encoding not in IMAGE_ENCODINGS:
         raise EncodingError(

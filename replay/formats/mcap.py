@@ -345,7 +345,7 @@ class McapLogWriter(LogWriter):
         self._writer.add_metadata(name, values)
 
     def _finish(self) -> None:
-        self._writer.finish()
+        self._writer.finish()  # type: ignore[no-untyped-call]
         self._file.close()
 
     def _abort(self) -> None:
