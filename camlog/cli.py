@@ -6,6 +6,7 @@ import argparse
 import sys
 from collections.abc import Callable, Sequence
 
+from processors.errors import ProcessorError
 from recorder.errors import RecorderError
 from replay.errors import ReplayError
 
@@ -14,7 +15,7 @@ Command = tuple[str, Callable[[argparse.ArgumentParser], None], Callable[[argpar
 
 
 def _commands() -> dict[str, Command]:
-    from camlog import cmd_info, cmd_record
+    from camlog import cmd_info, cmd_process, cmd_record, cmd_resync
 
     return {
         "record": (
@@ -24,6 +25,14 @@ def _commands() -> dict[str, Command]:
         "info": (
             "summarise a log: format, duration, topics, rates, encodings",
             cmd_info.add_arguments, cmd_info.run,
+        ),
+        "process": (
+            "run image processors (red pixels, edges, rectify) over one topic of a log",
+            cmd_process.add_arguments, cmd_process.run,
+        ),
+        "resync": (
+            "pair and re-stamp the images of two unsynchronised cameras",
+            cmd_resync.add_arguments, cmd_resync.run,
         ),
     }
 
@@ -47,7 +56,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.run(args))
-    except (ReplayError, RecorderError) as err:
+    except (ReplayError, RecorderError, ProcessorError) as err:
         print(f"camlog {args.command}: error: {err}", file=sys.stderr)
         return 1
     except KeyboardInterrupt:

@@ -1,0 +1,32 @@
+"""Canny edges of the grayscale image (the chapter's ``find_features`` node)."""
+
+from __future__ import annotations
+
+import cv2
+
+from replay.codec import to_mono8
+from replay.messages import Image
+
+from .base import Output
+from .errors import ConfigError
+
+EDGES = "/image_converter/edges"
+
+
+class Edges:
+    """Grayscale, then ``cv2.Canny(gray, low, high)``; publishes a mono8 edge image (255 on
+    edges). Thresholds are on the 8-bit gradient magnitude (L1 norm, OpenCV's default)."""
+
+    name = "edges"
+
+    def __init__(self, *, low: float = 50.0, high: float = 150.0) -> None:
+        if not 0 <= low <= high:
+            raise ConfigError(f"Canny thresholds need 0 <= low <= high, got {low}, {high}")
+        self.low, self.high = low, high
+
+    def outputs(self) -> dict[str, str]:
+        return {EDGES: "sensor_msgs/msg/Image"}
+
+    def __call__(self, image: Image) -> list[Output]:
+        edges = cv2.Canny(to_mono8(image), self.low, self.high)
+        return [(EDGES, Image(image.stamp_ns, image.frame_id, "mono8", edges))]

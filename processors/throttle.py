@@ -1,0 +1,79 @@
+"""Which frames to process: every N-th, or at most HZ by header stamp (a throttle node).
+
+Both are small state machines fed one stamp at a time, so that a stream needs no look-ahead;
+:func:`throttle_mask` runs one over a whole array.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import numpy as np
+import numpy.typing as npt
+
+from .errors import ConfigError
+
+
+class Throttle(Protocol):
+    """Decides per frame, in stream order."""
+
+    def keep(self, stamp_ns: int) -> bool:
+        """True to process the frame with this header stamp."""
+        ...
+
+
+class KeepAll:
+    """No throttling."""
+
+    def keep(self, stamp_ns: int) -> bool:
+        return True
+
+
+class EveryNth:
+    """Frames 0, N, 2N, ... of the stream (the chapter's 10 Hz spin over a 30 Hz camera)."""
+
+    def __init__(self, n: int) -> None:
+        if n < 1:
+            raise ConfigError(f"--every needs N >= 1, got {n}")
+        self.n = n
+        self._seen = 0
+
+    def keep(self, stamp_ns: int) -> bool:
+        kept = self._seen % self.n == 0
+        self._seen += 1
+        return kept
+
+
+class RateLimit:
+    """At most ``rate_hz``: keep a frame when its stamp is at least one period after the last
+    kept one (topic_tools throttle, by header stamp). Frames whose stamp goes backwards are
+    dropped until the stream passes the last kept stamp plus one period."""
+
+    def __init__(self, rate_hz: float) -> None:
+        if not rate_hz > 0:
+            raise ConfigError(f"--rate needs HZ > 0, got {rate_hz}")
+        self.period_ns = round(1e9 / rate_hz)
+        self._last_ns: int | None = None
+
+    def keep(self, stamp_ns: int) -> bool:
+        if self._last_ns is not None and stamp_ns - self._last_ns < self.period_ns:
+            return False
+        self._last_ns = stamp_ns
+        return True
+
+
+def make_throttle(*, every: int | None = None, rate_hz: float | None = None) -> Throttle:
+    """The throttle for ``--every N`` or ``--rate HZ`` (not both), or none."""
+    if every is not None and rate_hz is not None:
+        raise ConfigError("use --every or --rate, not both")
+    if every is not None:
+        return EveryNth(every)
+    if rate_hz is not None:
+        return RateLimit(rate_hz)
+    return KeepAll()
+
+
+def throttle_mask(stamps_ns: npt.ArrayLike, throttle: Throttle) -> npt.NDArray[np.bool_]:
+    """``(N,)`` bool: which of the stamps ``(N,)`` (in stream order) the throttle keeps."""
+    return np.array([throttle.keep(int(s)) for s in np.asarray(stamps_ns).reshape(-1)],
+                    dtype=bool)
