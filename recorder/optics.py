@@ -30,14 +30,16 @@ class Optics:
     render_height: int
     fovy_deg: float
     supersample: int
-    map_x: np.ndarray | None  # (H * s, W * s) float32 render x for each sub-pixel sample
+    map_x: np.ndarray | None  # (H * s, W * s) float32 render x per sub-pixel; None: box filter
     map_y: np.ndarray | None
     output_size: tuple[int, int]  # (W, H)
 
     def apply(self, rendered: np.ndarray) -> np.ndarray:
         """Camera image ``(H, W, 3)`` uint8 from an ideal render ``(Hr, Wr, 3)``."""
         if self.map_x is None or self.map_y is None:
-            return rendered
+            if self.supersample == 1:
+                return rendered
+            return cv2.resize(rendered, self.output_size, interpolation=cv2.INTER_AREA)
         samples = cv2.remap(rendered, self.map_x, self.map_y, cv2.INTER_LINEAR,
                             borderMode=cv2.BORDER_REPLICATE)
         if self.supersample == 1:
@@ -48,10 +50,12 @@ class Optics:
 def plan_optics(model: CameraModel, supersample: int) -> Optics:
     """Ideal render and warp that produce images of ``model``."""
     w, h = model.width, model.height
-    if model.is_ideal and supersample == 1:
-        fovy = 2.0 * math.degrees(math.atan((h / 2.0) / model.fy))
-        return Optics(w, h, fovy, 1, None, None, (w, h))
     s = supersample
+    if model.is_ideal:
+        # An ideal camera is an exact s-times denser render: output pixel u covers render
+        # pixels s*u .. s*u + s - 1, so a box filter (area resize) is the whole warp.
+        fovy = 2.0 * math.degrees(math.atan((h / 2.0) / model.fy))
+        return Optics(w * s, h * s, fovy, s, None, None, (w, h))
     # Sub-pixel sample centres: pixel u covers [u - 0.5, u + 0.5].
     us = (np.arange(w * s) + 0.5) / s - 0.5
     vs = (np.arange(h * s) + 0.5) / s - 0.5

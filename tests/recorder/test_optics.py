@@ -63,10 +63,34 @@ WARPED = {
     "rational_polynomial": model(distortion_model="rational_polynomial",
                                  d=[-0.25, 0.06, 0.0, 0.0, 0.0, 0.05, 0.0, 0.0]),
     "intrinsics": model(fx=500.0, fy=540.0, cx=170.0, cy=110.0),
-    "ideal": model(),
 }
-#: (case, supersample); the ideal camera without supersampling is not warped (see above)
-WARP_PARAMS = [(case, s) for case in sorted(WARPED) for s in (1, 2) if (case, s) != ("ideal", 1)]
+#: (case, supersample); the ideal camera is never remapped (see the box-filter tests)
+WARP_PARAMS = [(case, s) for case in sorted(WARPED) for s in (1, 2)]
+
+
+@pytest.mark.parametrize("s", [1, 2, 3])
+def test_ideal_camera_is_an_exact_denser_render(s: int) -> None:
+    camera = model()
+    optics = plan_optics(camera, s)
+    assert optics.map_x is None and optics.map_y is None
+    assert (optics.render_width, optics.render_height) == (W * s, H * s)
+    f_render = (optics.render_height / 2) / math.tan(math.radians(optics.fovy_deg) / 2)
+    assert f_render == pytest.approx(s * camera.fy, rel=1e-12)
+
+
+def test_box_filter_keeps_pixel_footprints_aligned() -> None:
+    """Render pixels s*u .. s*u+s-1 make output pixel u: an edge on a block boundary of the
+    render stays a sharp edge between two output pixels, with no bleed."""
+    s = 2
+    optics = plan_optics(model(), s)
+    rendered = np.zeros((H * s, W * s, 3), np.uint8)
+    rendered[:, s * 100:] = 240  # edge at the boundary between output columns 99 and 100
+    rendered[s * 50 + 1:, :, 1] = 120  # edge inside output row 50: that row averages
+    image = optics.apply(rendered)
+    assert image.shape == (H, W, 3)
+    assert (image[:, :100, 0] == 0).all() and (image[:, 100:, 0] == 240).all()
+    assert (image[:50, :100, 1] == 0).all()
+    assert image[50, 0, 1] == 60 and image[51, 0, 1] == 120
 
 
 @pytest.mark.parametrize(("case", "s"), WARP_PARAMS)
