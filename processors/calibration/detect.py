@@ -1,0 +1,108 @@
+"""Chessboard detection with checks that reject partial and false detections.
+
+OpenCV's detector can return a grid that is not the board: a board cut by the image border
+may be "found" one row off, its outer row laid on the white margin. Every detection is
+therefore checked square by square: around each inner corner the four squares must
+alternate dark / bright with the board's parity. A shifted grid puts "squares" on the
+margin and fails this check.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from replay.messages import F64
+
+from .board import Board
+
+#: corners closer than this to the image border make a view unreliable (camera_calibration: 8)
+BORDER_PX = 8.0
+#: fraction of corners whose four squares may fail the parity check (noise, blur)
+PARITY_TOLERANCE = 0.08
+MIN_CONTRAST = 12.0
+
+
+@dataclass(frozen=True)
+class Detection:
+    """A board found in one image. ``corners_px`` is ``(N, 2)`` in board order."""
+
+    corners_px: F64
+    accepted: bool
+    reason: str = ""  # why a found board was rejected
+
+
+def find_chessboard(gray: np.ndarray, board: Board) -> Detection | None:
+    """Detect ``board`` in a ``(H, W)`` uint8 image; None when no board is found."""
+    flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK
+    found, corners = cv2.findChessboardCorners(gray, board.pattern_size, flags=flags)
+    if not found or corners is None or len(corners) != board.corner_count:
+        return None
+    corners = corners.reshape(-1, 2).astype(np.float32)
+    spacing = _min_spacing(corners, board)
+    radius = max(2, min(11, math.ceil(spacing * 0.5)))
+    criteria = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 60, 0.001)
+    refined = cv2.cornerSubPix(gray, corners.reshape(-1, 1, 2), (radius, radius), (-1, -1),
+                               criteria).reshape(-1, 2).astype(np.float64)
+    refined = canonical_order(refined, board)
+    return check_detection(gray, refined, board)
+
+
+def _min_spacing(corners: np.ndarray, board: Board) -> float:
+    grid = corners.reshape(board.rows, board.cols, 2)
+    along = np.linalg.norm(np.diff(grid, axis=1), axis=2)
+    across = np.linalg.norm(np.diff(grid, axis=0), axis=2)
+    return float(min(along.min(), across.min()))
+
+
+def canonical_order(corners_px: F64, board: Board) -> F64:
+    """Reverse the order when OpenCV started from the far end (first corner below the last),
+    so that left and right views of a stereo pair agree."""
+    if corners_px[0, 1] > corners_px[-1, 1]:
+        return np.ascontiguousarray(corners_px[::-1])
+    return corners_px
+
+
+def check_detection(gray: np.ndarray, corners_px: F64, board: Board) -> Detection:
+    """Accept a detection only if it lies inside the image and alternates like a board."""
+    h, w = gray.shape
+    u, v = corners_px[:, 0], corners_px[:, 1]
+    if u.min() < BORDER_PX or v.min() < BORDER_PX or u.max() > w - 1 - BORDER_PX \
+            or v.max() > h - 1 - BORDER_PX:
+        return Detection(corners_px, False, "touches the image border")
+    parity_ok = _parity_fraction(gray, corners_px, board)
+    if parity_ok < 1.0 - PARITY_TOLERANCE:
+        return Detection(
+            corners_px, False,
+            f"squares do not alternate around {100 * (1 - parity_ok):.0f}% of corners "
+            "(partial or shifted board)",
+        )
+    return Detection(corners_px, True)
+
+
+def _parity_fraction(gray: np.ndarray, corners_px: F64, board: Board) -> float:
+    """Share of corners whose 4 neighbouring squares alternate with the board's parity."""
+    grid = corners_px.reshape(board.rows, board.cols, 2)
+    # local grid axes at every corner (central differences, one-sided at the edges)
+    dx = np.gradient(grid, axis=1)
+    dy = np.gradient(grid, axis=0)
+    centers = np.stack([grid + sx * 0.5 * dx + sy * 0.5 * dy
+                        for sx, sy in ((1, 1), (-1, -1), (1, -1), (-1, 1))])  # (4, R, C, 2)
+    blurred = cv2.blur(gray, (3, 3)).astype(np.float32)
+    h, w = gray.shape
+    xs = np.clip(np.rint(centers[..., 0]), 0, w - 1).astype(int)
+    ys = np.clip(np.rint(centers[..., 1]), 0, h - 1).astype(int)
+    values = blurred[ys, xs]  # (4, R, C)
+    diagonal = values[0] + values[1]
+    anti = values[2] + values[3]
+    contrast = (diagonal - anti) / 2.0
+    rows, cols = np.meshgrid(np.arange(board.rows), np.arange(board.cols), indexing="ij")
+    parity = np.where((rows + cols) % 2 == 0, 1.0, -1.0)
+    signed = contrast * parity
+    # the board's own phase is whichever sign dominates
+    phase = 1.0 if np.median(signed) >= 0 else -1.0
+    good = (signed * phase) > MIN_CONTRAST
+    return float(np.mean(good))

@@ -1,0 +1,148 @@
+"""Stereo extrinsics and rectification from per-camera calibrations.
+
+Each camera's intrinsics come from every frame it saw (``calibrate_mono``); the pair's
+rotation and translation come from the joint views with those intrinsics held fixed
+(``stereoCalibrate``), then ``stereoRectify`` gives R1, R2, P1, P2 with
+``P2[0, 3] = -fx' * B``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from replay.camera import CameraModel
+from replay.messages import F64
+
+from ..errors import ProcessorError
+from .solve import CRITERIA, MIN_VIEWS
+
+
+@dataclass
+class StereoResult:
+    """``right_from_left`` (4, 4): X_right = R X_left + T (metres)."""
+
+    right_from_left: F64
+    rms_px: float
+    r1: F64
+    r2: F64
+    p1: F64
+    p2: F64
+    epipolar_rms_px: float
+    baseline_m: float
+    baseline_std_m: float
+    square_m: float  # square size re-estimated by triangulating the joint views
+    view_epipolar_px: list[float]
+
+    @property
+    def rotation_deg(self) -> float:
+        angle = math.acos(max(-1.0, min(1.0, (np.trace(self.right_from_left[:3, :3]) - 1) / 2)))
+        return math.degrees(angle)
+
+
+def rectified_points(corners_px: F64, model: CameraModel, r: F64, p: F64) -> F64:
+    """Corners ``(N, 2)`` in the rectified image given by rotation ``r`` and projection ``p``."""
+    out = cv2.undistortPoints(corners_px.reshape(-1, 1, 2), model.k, model.d, R=r, P=p)
+    return np.asarray(out, dtype=np.float64).reshape(-1, 2)
+
+
+def epipolar_errors(left: list[F64], right: list[F64], *, left_model: CameraModel,
+                    right_model: CameraModel, r1: F64, p1: F64, r2: F64, p2: F64) -> list[float]:
+    """Per joint view, RMS of the row difference of matching rectified corners (px)."""
+    errors = []
+    for cl, cr in zip(left, right, strict=True):
+        yl = rectified_points(cl, left_model, r1, p1)[:, 1]
+        yr = rectified_points(cr, right_model, r2, p2)[:, 1]
+        errors.append(float(np.sqrt(np.mean((yl - yr) ** 2))))
+    return errors
+
+
+def calibrate_stereo(points_in_board: F64, left: list[F64], right: list[F64], *,
+                     left_model: CameraModel, right_model: CameraModel,
+                     square_m: float) -> StereoResult:
+    """Extrinsics and rectification from joint views ``left[i]``, ``right[i]`` ``(N, 2)``."""
+    if len(left) < MIN_VIEWS:
+        raise ProcessorError(
+            f"too few joint stereo views: {len(left)} (need at least {MIN_VIEWS}); "
+            "both cameras must see the whole board at the same time"
+        )
+    size = (left_model.width, left_model.height)
+    objects = [points_in_board.astype(np.float32)] * len(left)
+    try:
+        rms, _k1, _d1, _k2, _d2, rot, trans, _e, _f = cv2.stereoCalibrate(
+            objects, [c.reshape(-1, 1, 2).astype(np.float32) for c in left],
+            [c.reshape(-1, 1, 2).astype(np.float32) for c in right],
+            left_model.k, left_model.d, right_model.k, right_model.d, size,
+            flags=cv2.CALIB_FIX_INTRINSIC, criteria=CRITERIA,
+        )
+        r1, r2, p1, p2, _q, _roi1, _roi2 = cv2.stereoRectify(
+            left_model.k, left_model.d, right_model.k, right_model.d, size, rot, trans,
+            flags=cv2.CALIB_ZERO_DISPARITY, alpha=0.0,
+        )
+    except cv2.error as err:
+        raise ProcessorError(f"stereo calibration failed: {str(err).strip().splitlines()[-1]}") \
+            from None
+    pose = np.eye(4)
+    pose[:3, :3] = rot
+    pose[:3, 3] = np.asarray(trans).reshape(3)
+    view_errors = epipolar_errors(left, right, left_model=left_model, right_model=right_model,
+                                  r1=r1, p1=p1, r2=r2, p2=p2)
+    squared = np.concatenate([
+        (rectified_points(cl, left_model, r1, p1)[:, 1]
+         - rectified_points(cr, right_model, r2, p2)[:, 1]) ** 2
+        for cl, cr in zip(left, right, strict=True)
+    ])
+    return StereoResult(
+        right_from_left=pose, rms_px=float(rms), r1=r1, r2=r2, p1=p1, p2=p2,
+        epipolar_rms_px=float(np.sqrt(squared.mean())),
+        baseline_m=float(np.linalg.norm(trans)),
+        baseline_std_m=_baseline_std(points_in_board, left, right, left_model, right_model),
+        square_m=_square_size(left, right, left_model=left_model, right_model=right_model,
+                              r1=r1, p1=p1, r2=r2, p2=p2, points_in_board=points_in_board,
+                              square_m=square_m),
+        view_epipolar_px=view_errors,
+    )
+
+
+def _board_pose(points_in_board: F64, corners: F64, model: CameraModel) -> F64:
+    _ok, rvec, tvec = cv2.solvePnP(points_in_board, corners, model.k, model.d)
+    pose = np.eye(4)
+    pose[:3, :3] = cv2.Rodrigues(rvec)[0]
+    pose[:3, 3] = tvec.reshape(3)
+    return pose
+
+
+def _baseline_std(points_in_board: F64, left: list[F64], right: list[F64],
+                  left_model: CameraModel, right_model: CameraModel) -> float:
+    """Standard error of the baseline from the spread of per-view relative poses."""
+    baselines = []
+    for cl, cr in zip(left, right, strict=True):
+        left_from_board = _board_pose(points_in_board, cl, left_model)
+        right_from_board = _board_pose(points_in_board, cr, right_model)
+        right_from_left = right_from_board @ np.linalg.inv(left_from_board)
+        baselines.append(float(np.linalg.norm(right_from_left[:3, 3])))
+    return float(np.std(baselines, ddof=1) / math.sqrt(len(baselines)))
+
+
+def _square_size(left: list[F64], right: list[F64], *, left_model: CameraModel,
+                 right_model: CameraModel, r1: F64, p1: F64, r2: F64, p2: F64,
+                 points_in_board: F64, square_m: float) -> float:
+    """Mean distance between neighbouring corners triangulated from the rectified pair.
+
+    Independent of the given square size except through the baseline's scale, so it checks
+    that the stereo geometry and the board agree (camera_calibration's chessboard size).
+    """
+    grid = np.rint(points_in_board[:, :2] / square_m).astype(int)
+    cols = int(grid[:, 0].max()) + 1
+    distances = []
+    for cl, cr in zip(left, right, strict=True):
+        xl = rectified_points(cl, left_model, r1, p1)
+        xr = rectified_points(cr, right_model, r2, p2)
+        points = cv2.triangulatePoints(p1, p2, xl.T, xr.T)
+        xyz = (points[:3] / points[3]).T.reshape(-1, cols, 3)
+        distances.append(np.linalg.norm(np.diff(xyz, axis=1), axis=2).ravel())
+        distances.append(np.linalg.norm(np.diff(xyz, axis=0), axis=2).ravel())
+    return float(np.mean(np.concatenate(distances)))
