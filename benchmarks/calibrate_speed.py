@@ -1,0 +1,121 @@
+"""Calibration speed and accuracy on full-length default recordings, in one run.
+
+Records the default scenarios (60 s at 30 Hz unless --duration says otherwise), then for
+each log measures a decode-only pass (read and decode every image: the floor any offline
+calibrator pays) and ``camlog calibrate``, and prints wall time, the ratio to decode-only,
+and the result against the simulator's ground truth. Peak memory of the calibrate command
+is measured on a short and a full-length log to show that it does not grow with length.
+
+    python -m benchmarks.calibrate_speed [--duration S] [--quick]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+from camlog.calibrate_log import calibrate_log
+from processors.calibration.board import make_board
+from processors.calibration.solve import CalibrationOptions
+from recorder.record import record
+from recorder.scenario import load_scenario
+from replay import open_reader
+
+CASES = [
+    # label, scenario, overrides, cameras, options
+    ("mono", "mono_checkerboard", {}, ["/simple_camera"], {}),
+    ("mono --zero-tangent-dist", "mono_checkerboard", {}, ["/simple_camera"],
+     {"zero_tangent_dist": True}),
+    ("mono plumb_bob k1=-0.2", "mono_checkerboard",
+     {"distortion": [-0.2, 0.05, 0.0, 0.0, 0.0]}, ["/simple_camera"], {}),
+    ("stereo", "stereo_checkerboard", {}, ["/stereo_camera/left", "/stereo_camera/right"], {}),
+]
+
+
+def decode_only_s(path: Path, topics: list[str]) -> float:
+    started = time.perf_counter()
+    with open_reader(path) as reader:
+        for _ in reader.images(topics):
+            pass
+    return time.perf_counter() - started
+
+
+#: VmHWM, not ru_maxrss: ru_maxrss survives fork + exec, so a child would report the
+#: benchmark's own (MuJoCo-sized) peak; VmHWM belongs to the new address space.
+PEAK_RSS = (
+    "import re, sys\n"
+    "from camlog.cli import main\n"
+    "code = main(sys.argv[1:])\n"
+    "status = open('/proc/self/status').read()\n"
+    "print(re.search(r'VmHWM:\\s*(\\d+)', status).group(1))\n"
+    "sys.exit(code)\n"
+)
+
+
+def peak_rss_mb(path: Path, camera: str, out: Path) -> float:
+    """Peak resident memory (MB) of ``camlog calibrate`` in a fresh process."""
+    done = subprocess.run(
+        [sys.executable, "-c", PEAK_RSS, "calibrate", str(path), "--size", "7x6", "--square",
+         "0.01", "--camera", camera, "-o", str(out), "--overwrite", "--no-progress"],
+        check=True, capture_output=True, text=True)
+    return int(done.stdout.strip().splitlines()[-1]) / 1024
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--duration", type=float, default=60.0, help="seconds per recording")
+    parser.add_argument("--quick", action="store_true", help="10 s recordings (CI smoke mode)")
+    args = parser.parse_args()
+    duration = 10.0 if args.quick else args.duration
+    board = make_board("7x6", 0.01)
+    print(f"{'case':26} {'frames':>6} {'decode s':>8} {'calib s':>8} {'ratio':>6} "
+          f"{'fx err %':>9} {'fy err %':>9} {'cx err':>7} {'cy err':>7} {'maxdiff':>8} "
+          f"{'stereo':>26}")
+    with tempfile.TemporaryDirectory() as tmp_name:
+        tmp = Path(tmp_name)
+        logs: dict[tuple[str, str], Path] = {}
+        for label, scenario_name, overrides, cameras, options in CASES:
+            key = (scenario_name, json.dumps(overrides, sort_keys=True))
+            if key not in logs:
+                logs[key] = tmp / f"{scenario_name}_{len(logs)}.mcap"
+                scenario = load_scenario(scenario_name, {"duration_s": duration, **overrides})
+                record(scenario, logs[key], progress=False)
+            path = logs[key]
+            topics = [f"{c}/image_raw" for c in cameras]
+            decode = decode_only_s(path, topics)
+            started = time.perf_counter()
+            run = calibrate_log(path, board=board, cameras=cameras, output_dir=tmp / "out",
+                                options=CalibrationOptions(**options), overwrite=True,
+                                progress=False)
+            wall = time.perf_counter() - started
+            cam = run.summary["cameras"][0]
+            p = cam["parameters"]
+            frames = sum(c["frames"] for c in run.summary["cameras"])
+            stereo = ""
+            if "stereo" in run.summary:
+                s = run.summary["stereo"]
+                stereo = (f"B {s['truth']['baseline_error_percent']:+.3f}% "
+                          f"epi {s['epipolar_rms_px']:.3f}px")
+            print(f"{label:26} {frames:6d} {decode:8.2f} {wall:8.2f} {wall / decode:6.1f} "
+                  f"{100 * p['fx']['error'] / p['fx']['truth']:+9.4f} "
+                  f"{100 * p['fy']['error'] / p['fy']['truth']:+9.4f} "
+                  f"{p['cx']['error']:+7.3f} {p['cy']['error']:+7.3f} "
+                  f"{cam['max_projection_difference_vs_truth_covered_px']:8.3f} {stereo:>26}")
+        short = tmp / "short.mcap"
+        record(load_scenario("mono_checkerboard", {"duration_s": duration / 3}), short,
+               progress=False)
+        long_log = logs[("mono_checkerboard", "{}")]
+        rss_short = peak_rss_mb(short, "/simple_camera", tmp / "rss_short")
+        rss_long = peak_rss_mb(long_log, "/simple_camera", tmp / "rss_long")
+        print(f"peak memory of camlog calibrate: {rss_short:.0f} MB for {duration / 3:.0f} s, "
+              f"{rss_long:.0f} MB for {duration:.0f} s of log")
+    print("maxdiff: max projection difference against the true model where corners were seen")
+
+
+if __name__ == "__main__":
+    main()
