@@ -15,7 +15,7 @@ Command = tuple[str, Callable[[argparse.ArgumentParser], None], Callable[[argpar
 
 
 def _commands() -> dict[str, Command]:
-    from camlog import cmd_calibrate, cmd_info, cmd_process, cmd_record, cmd_resync
+    from camlog import cmd_batch, cmd_calibrate, cmd_info, cmd_process, cmd_record, cmd_resync
 
     return {
         "record": (
@@ -33,6 +33,10 @@ def _commands() -> dict[str, Command]:
         "resync": (
             "pair and re-stamp the images of two unsynchronised cameras",
             cmd_resync.add_arguments, cmd_resync.run,
+        ),
+        "batch": (
+            "run a pipeline (resync, calibrate, process, ...) over many logs in parallel",
+            cmd_batch.add_arguments, cmd_batch.run,
         ),
         "calibrate": (
             "calibrate a mono camera or stereo pair from a log (or --check a calibration)",
