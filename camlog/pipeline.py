@@ -166,8 +166,10 @@ def _info(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
     return StepOutcome(None, {}, [path])
 
 
+Runner = Callable[[Path, Path, dict[str, Any], int], StepOutcome]
+
 #: step kind -> (allowed option keys, runner)
-STEPS: dict[str, tuple[frozenset[str], Callable[[Path, Path, dict[str, Any], int], StepOutcome]]] = {
+STEPS: dict[str, tuple[frozenset[str], Runner]] = {
     "resync": (frozenset({"left", "right", "slop", "out_prefix"}), _resync),
     "calibrate": (frozenset({"size", "square", "camera", "left", "right", "approximate",
                              "fix_principal_point", "fix_aspect_ratio", "zero_tangent_dist",
@@ -178,8 +180,7 @@ STEPS: dict[str, tuple[frozenset[str], Callable[[Path, Path, dict[str, Any], int
 }
 
 
-def register_step(kind: str, keys: frozenset[str],
-                  runner: Callable[[Path, Path, dict[str, Any], int], StepOutcome]) -> None:
+def register_step(kind: str, keys: frozenset[str], runner: Runner) -> None:
     """Add a step kind (one function and its option names)."""
     STEPS[kind] = (keys, runner)
 
