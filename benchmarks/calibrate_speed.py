@@ -26,6 +26,8 @@ from recorder.record import record
 from recorder.scenario import load_scenario
 from replay import open_reader
 
+from .report import emit
+
 CASES = [
     # label, scenario, overrides, cameras, options
     ("mono", "mono_checkerboard", {}, ["/simple_camera"], {}),
@@ -106,6 +108,13 @@ def main() -> None:
                   f"{100 * p['fy']['error'] / p['fy']['truth']:+9.4f} "
                   f"{p['cx']['error']:+7.3f} {p['cy']['error']:+7.3f} "
                   f"{cam['max_projection_difference_vs_truth_covered_px']:8.3f} {stereo:>26}")
+            if label in ("mono", "stereo"):
+                minutes = frames / len(cameras) / 30.0 / 60.0
+                emit(f"calibrate {label} ({frames // len(cameras) / 30:.0f} s log)",
+                     baseline="decode only", baseline_value=decode, measured="calibrate",
+                     measured_value=wall, unit="s", ratio=wall / decode,
+                     target=f"<= {20 if label == 'mono' else 40} s per minute of log "
+                            f"(here {wall / minutes:.1f} s/min)")
         short = tmp / "short.mcap"
         record(load_scenario("mono_checkerboard", {"duration_s": duration / 3}), short,
                progress=False)

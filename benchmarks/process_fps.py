@@ -29,6 +29,8 @@ from processors.edges import EDGES, Edges
 from processors.red_pixels import CENTROID, COUNT, OUTPUT_VIDEO, RedPixels
 from replay import Image, PointStamped, open_reader
 
+from .report import emit
+
 TOPIC = "/stereo_camera/left/image_raw"
 
 
@@ -114,6 +116,12 @@ def main() -> None:
     print(f"copy-through baseline:  {r['copy_fps']:7.0f} frames/s  ({r['copy_mb']:.1f} MB out)")
     print(f"red pixels + edges:     {r['process_fps']:7.0f} frames/s  ({r['process_mb']:.1f} MB "
           f"out)  = {r['ratio']:.2f} x copy-through (target >= 0.7, >= 300 frames/s)")
+    emit("process red pixels + edges", baseline="copy-through", baseline_value=r["copy_fps"],
+         measured="process", measured_value=r["process_fps"], unit="fps", ratio=r["ratio"],
+         target=">= 0.7 and >= 300 fps")
+    emit("process: decode only (reference)", baseline="decode only",
+         baseline_value=r["decode_fps"], measured="process", measured_value=r["process_fps"],
+         unit="fps", ratio=r["process_fps"] / r["decode_fps"], target="(reference)")
 
 
 if __name__ == "__main__":

@@ -22,6 +22,8 @@ from recorder.record import CLOCK_STREAM, MOTION_STREAM, record, rng_for
 from recorder.render import SceneRenderer
 from recorder.scenario import Scenario, load_scenario
 
+from .report import emit
+
 
 def bare_render_fps(scenario: Scenario) -> float:
     """Frames per second of rendering alone, over the recording's own shots."""
@@ -86,6 +88,9 @@ def main() -> None:
         r = run(args.scenario, args.frames, args.repeats, overrides)
         print(f"{args.scenario:18} {label:34} {r['bare_fps']:9.1f} {r['record_fps']:11.1f} "
               f"{r['ratio']:6.2f} {r['end_to_end_fps']:11.1f} {r['mb']:6.1f}")
+        emit(f"record {label}", baseline="bare render", baseline_value=r["bare_fps"],
+             measured="record", measured_value=r["record_fps"], unit="fps", ratio=r["ratio"],
+             target=">= 0.9")
 
 
 if __name__ == "__main__":
