@@ -95,14 +95,14 @@ def _parity_fraction(gray: np.ndarray, corners_px: F64, board: Board) -> float:
     h, w = gray.shape
     xs = np.clip(np.rint(centers[..., 0]), 0, w - 1).astype(int)
     ys = np.clip(np.rint(centers[..., 1]), 0, h - 1).astype(int)
-    values = blurred[ys, xs]  # (4, R, C)
-    diagonal = values[0] + values[1]
-    anti = values[2] + values[3]
-    contrast = (diagonal - anti) / 2.0
+    v = blurred[ys, xs]  # (4, R, C): two diagonal squares, then the two anti-diagonal ones
     rows, cols = np.meshgrid(np.arange(board.rows), np.arange(board.cols), indexing="ij")
     parity = np.where((rows + cols) % 2 == 0, 1.0, -1.0)
-    signed = contrast * parity
     # the board's own phase is whichever sign dominates
-    phase = 1.0 if np.median(signed) >= 0 else -1.0
-    good = (signed * phase) > MIN_CONTRAST
+    phase = 1.0 if np.median((v[0] + v[1] - v[2] - v[3]) * parity) >= 0 else -1.0
+    # each square on its own: summed pairs would pass a corner on the board's edge (one dark
+    # square and three bright ones), which is where a grid shifted by one row puts its outer row
+    diagonal_bright = np.minimum(v[0], v[1]) - np.maximum(v[2], v[3])
+    anti_bright = np.minimum(v[2], v[3]) - np.maximum(v[0], v[1])
+    good = np.where(parity * phase > 0, diagonal_bright, anti_bright) > MIN_CONTRAST
     return float(np.mean(good))

@@ -36,12 +36,17 @@ def _angle(a: F64, b: F64, c: F64) -> float:
     return math.acos(max(-1.0, min(1.0, cos)))
 
 
+def _cross(a: F64, b: F64) -> float:
+    """z of the cross product of two 2-D vectors (NumPy 2 deprecates ``np.cross`` on them)."""
+    return float(a[0] * b[1] - a[1] * b[0])
+
+
 def view_parameters(corners_px: F64, board: Board, size: tuple[int, int]) -> F64:
     """camera_calibration's (X, Y, size, skew) of one view, each in [0, 1]."""
     width, height = size
     ul, ur, dr, dl = outside_corners(corners_px, board)
     a, b, c = ur - ul, dr - ur, dl - dr
-    area = abs(float(np.cross(a, b)) + float(np.cross(b, c))) / 2.0
+    area = abs(_cross(b + c, a + b)) / 2.0  # half the cross product of the diagonals
     skew = min(1.0, 2.0 * abs(math.pi / 2.0 - _angle(ul, ur, dr)))
     border = math.sqrt(area)
     mean = corners_px.mean(axis=0)

@@ -1,0 +1,69 @@
+"""Simulated calibration recordings shared by the CLI tests: each is rendered once per session.
+
+The scenarios hold the board 0.5 s per pose; these variants hold it 0.1 s (3 frames at
+30 Hz), so a few hundred frames show about a hundred poses, at the 640x480 the calibration
+accuracy is stated for.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from camlog.cli import main
+
+SCENARIOS = Path(__file__).resolve().parents[2] / "datasets" / "scenarios"
+HOLD = "hold_s = 0.5"
+PARTIAL = "partial_view_probability = 0.05"
+
+
+def spec_variant(name: str, folder: Path, replacements: dict[str, str]) -> Path:
+    """A copy of a built-in scenario spec with some lines replaced (each must exist once)."""
+    text = (SCENARIOS / f"{name}.toml").read_text()
+    for old, new in replacements.items():
+        assert text.count(old) == 1, f"{name}.toml: expected one {old!r}"
+        text = text.replace(old, new)
+    path = folder / f"{name}.toml"
+    path.write_text(text)
+    return path
+
+
+def record(spec: Path | str, output: Path, *options: str) -> Path:
+    assert main(["record", str(spec), "-o", str(output), "--resolution", "640x480",
+                 "--no-progress", *options]) == 0
+    return output
+
+
+@pytest.fixture(scope="session")
+def rig_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """stereo_checkerboard, 330 frames per camera: 110 poses seen by an ideal 0.02 m rig."""
+    tmp = tmp_path_factory.mktemp("rig")
+    spec = spec_variant("stereo_checkerboard", tmp, {HOLD: "hold_s = 0.1"})
+    return record(spec, tmp / "rig.mcap", "--frames", "330")
+
+
+@pytest.fixture(scope="session")
+def plumb_bob_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """mono_checkerboard through a k1 = -0.2, k2 = 0.05 lens, 330 frames (110 poses)."""
+    tmp = tmp_path_factory.mktemp("plumb_bob")
+    spec = spec_variant("mono_checkerboard", tmp, {HOLD: "hold_s = 0.1"})
+    return record(spec, tmp / "plumb_bob.mcap", "--frames", "330",
+                  "--distortion", "plumb_bob:-0.2,0.05,0,0,0")
+
+
+@pytest.fixture(scope="session")
+def unsynced_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """stereo_unsynced (own stamps, 7 ms phase, jitter, drops), 120 frames (40 poses), and
+    the board cut by the image border in 30 % of the poses."""
+    tmp = tmp_path_factory.mktemp("unsynced")
+    spec = spec_variant("stereo_unsynced", tmp, {
+        HOLD: "hold_s = 0.1", PARTIAL: "partial_view_probability = 0.3"})
+    return record(spec, tmp / "unsynced.mcap", "--frames", "120")
+
+
+@pytest.fixture(scope="session")
+def few_poses_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """mono_checkerboard as built in (0.5 s per pose), 30 frames: two board poses."""
+    tmp = tmp_path_factory.mktemp("few_poses")
+    return record("mono_checkerboard", tmp / "few.mcap", "--frames", "30")

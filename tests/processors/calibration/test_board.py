@@ -1,0 +1,51 @@
+"""Board sizes are counted in inner corners; corner order is OpenCV's (x fastest)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from processors.calibration.board import Board, make_board, parse_size
+from processors.errors import ProcessorError
+
+
+@pytest.mark.parametrize(("text", "expected"), [
+    ("7x6", (7, 6)), ("8X6", (8, 6)), (" 9 x 7 ", (9, 7)), ("2x2", (2, 2)), ("12x11", (12, 11)),
+])
+def test_parse_size_reads_columns_by_rows(text: str, expected: tuple[int, int]) -> None:
+    assert parse_size(text) == expected
+
+
+@pytest.mark.parametrize("text", ["7", "7x", "x6", "7x6x5", "7.5x6", "7*6", "-7x6", "", "axb"])
+def test_parse_size_rejects_what_is_not_a_size(text: str) -> None:
+    with pytest.raises(ProcessorError, match="7x6"):
+        parse_size(text)
+
+
+@pytest.mark.parametrize("text", ["1x6", "7x1", "0x0"])
+def test_parse_size_needs_two_corners_each_way(text: str) -> None:
+    with pytest.raises(ProcessorError, match="at least 2x2"):
+        parse_size(text)
+
+
+def test_points_in_board_are_row_by_row_with_x_fastest() -> None:
+    board = Board(4, 3, 0.05)
+    points = board.points_in_board()
+    assert points.shape == (12, 3) and points.dtype == np.float64
+    # corner (col, row) sits at (col * square, row * square, 0), rows one after another
+    expected = [[c * 0.05, r * 0.05, 0.0] for r in range(3) for c in range(4)]
+    np.testing.assert_allclose(points, expected, atol=1e-15)
+    np.testing.assert_array_equal(board.grid(), [[c, r] for r in range(3) for c in range(4)])
+    assert board.pattern_size == (4, 3)
+    assert board.corner_count == 12
+
+
+def test_make_board_checks_its_inputs() -> None:
+    board = make_board("7x6", 0.01)
+    assert (board.cols, board.rows, board.square_m, board.pattern) == (7, 6, 0.01, "chessboard")
+    with pytest.raises(ProcessorError, match="--square"):
+        make_board("7x6", 0.0)
+    with pytest.raises(ProcessorError, match="--square"):
+        make_board("7x6", -0.01)
+    with pytest.raises(ProcessorError, match="unsupported pattern 'circles'"):
+        make_board("7x6", 0.01, "circles")

@@ -1,0 +1,178 @@
+"""Mono calibration of synthetic views: the truth within the stated uncertainty, options kept."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from processors.calibration.solve import (
+    CalibrationOptions,
+    MonoResult,
+    calibrate_mono,
+    cross_validate,
+    max_projection_difference,
+)
+from processors.errors import ProcessorError
+from replay.camera import CameraModel
+
+from .synthetic import BOARD, D_TRUE, K_TRUE, H, W, random_poses, true_model, views
+
+NOISE_PX = 0.05  # the simulator's measured corner noise
+VIEWS = 30
+TRUTH = {"fx": K_TRUE[0, 0], "fy": K_TRUE[1, 1], "cx": K_TRUE[0, 2], "cy": K_TRUE[1, 2],
+         **dict(zip(["k1", "k2", "p1", "p2", "k3"], D_TRUE, strict=True))}
+
+
+@pytest.fixture(scope="module")
+def poses() -> list[np.ndarray]:
+    return random_poses(np.random.default_rng(1), VIEWS, [true_model()])
+
+
+def solve(corners: list[np.ndarray], options: CalibrationOptions | None = None,
+          **kwargs: bool) -> MonoResult:
+    return calibrate_mono(BOARD.points_in_board(), corners, (W, H),
+                          options or CalibrationOptions(), **kwargs)
+
+
+def test_recovers_the_camera_within_its_uncertainty(poses: list[np.ndarray]) -> None:
+    result = solve(views(true_model(), poses, NOISE_PX, seed=2))
+    assert result.view_ids == list(range(VIEWS)) and not result.rejected
+    params = result.parameters()
+    assert list(params) == ["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"]
+    for name, value in params.items():
+        sigma = result.std[name]
+        if name == "k3":  # two radial coefficients by default: k3 is held at 0
+            assert value == 0.0 and sigma == 0.0
+            continue
+        assert sigma > 0
+        assert abs(value - TRUTH[name]) < 4 * sigma, f"{name} {value} ± {sigma}"
+    # RMS of 2-D residuals of isotropic noise: sigma * sqrt(2), less the fitted parameters
+    dof = 2 * VIEWS * BOARD.corner_count
+    fitted = 8 + 6 * VIEWS
+    expected = NOISE_PX * math.sqrt(2 * (dof - fitted) / dof)
+    assert result.rms_px == pytest.approx(expected, rel=0.1)
+    assert set(result.camera_from_board) == set(result.view_ids)
+    for i, residual in result.residuals_px.items():
+        rms = math.sqrt(float(np.mean(np.sum(residual**2, axis=1))))
+        assert rms == pytest.approx(result.view_rms_px[i], rel=1e-3)
+
+
+def test_uncertainty_matches_the_spread_over_noise_draws(poses: list[np.ndarray]) -> None:
+    """The reported sigma is the scatter a parameter really shows from one noise draw to the next:
+    errors divided by sigma have RMS ≈ 1 over repeated draws."""
+    names = ["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"]
+    z = []
+    for seed in range(24):
+        result = solve(views(true_model(), poses, NOISE_PX, seed=100 + seed),
+                       reject_outliers=False)
+        params = result.parameters()
+        z.append([(params[n] - TRUTH[n]) / result.std[n] for n in names])
+    rms_z = float(np.sqrt(np.mean(np.square(z))))
+    assert 0.7 < rms_z < 1.4, f"RMS of error/sigma {rms_z:.2f}"
+    # sigma scales with the noise
+    quiet = solve(views(true_model(), poses, NOISE_PX, seed=5))
+    loud = solve(views(true_model(), poses, 2 * NOISE_PX, seed=5))
+    for name in names:
+        assert loud.std[name] / quiet.std[name] == pytest.approx(2.0, rel=0.05)
+
+
+def test_fix_principal_point_holds_the_image_centre(poses: list[np.ndarray]) -> None:
+    result = solve(views(true_model(), poses, NOISE_PX, seed=3),
+                   CalibrationOptions(fix_principal_point=True))
+    assert result.model.cx == (W - 1) / 2 and result.model.cy == (H - 1) / 2
+    assert result.std["cx"] == result.std["cy"] == 0.0
+
+
+def test_fix_aspect_ratio_forces_square_pixels(poses: list[np.ndarray]) -> None:
+    square = K_TRUE.copy()
+    square[1, 1] = square[0, 0]
+    result = solve(views(true_model(k=square), poses, NOISE_PX, seed=3),
+                   CalibrationOptions(fix_aspect_ratio=True))
+    assert result.model.fx == pytest.approx(result.model.fy, rel=1e-12)
+    assert abs(result.model.fy - square[1, 1]) < 4 * result.std["fy"]
+
+
+def test_zero_tangent_dist_holds_p1_p2_at_zero(poses: list[np.ndarray]) -> None:
+    model = true_model(d=np.array([-0.2, 0.05, 0.0, 0.0, 0.0]))
+    result = solve(views(model, poses, NOISE_PX, seed=3),
+                   CalibrationOptions(zero_tangent_dist=True))
+    assert result.model.d[2] == result.model.d[3] == 0.0
+    assert result.std["p1"] == result.std["p2"] == 0.0
+    assert abs(result.model.d[0] + 0.2) < 4 * result.std["k1"]
+
+
+def test_one_radial_coefficient(poses: list[np.ndarray]) -> None:
+    result = solve(views(true_model(), poses, NOISE_PX, seed=3),
+                   CalibrationOptions(k_coefficients=1))
+    k1, k2, _p1, _p2, k3 = result.model.d
+    assert k2 == k3 == 0.0 and k1 < 0
+    assert result.model.distortion_model == "plumb_bob"
+
+
+def test_four_coefficients_use_the_rational_model(poses: list[np.ndarray]) -> None:
+    result = solve(views(true_model(), poses, NOISE_PX, seed=3),
+                   CalibrationOptions(k_coefficients=4))
+    assert result.model.distortion_model == "rational_polynomial"
+    assert result.model.d.shape == (8,)
+    assert list(result.parameters())[4:] == ["k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"]
+    assert result.model.d[6] == result.model.d[7] == 0.0  # k5, k6 not estimated
+    assert result.std["k4"] > 0 and result.std["k5"] == result.std["k6"] == 0.0
+
+
+def test_k_coefficients_out_of_range() -> None:
+    with pytest.raises(ProcessorError, match=r"0\.\.6"):
+        CalibrationOptions(k_coefficients=7)
+
+
+def test_a_noisy_view_is_rejected(poses: list[np.ndarray]) -> None:
+    corners = views(true_model(), poses, NOISE_PX, seed=4)
+    corners[7] = corners[7] + np.random.default_rng(9).normal(0, 2.0, corners[7].shape)
+    result = solve(corners)
+    assert set(result.rejected) == {7}
+    assert "RMS" in result.rejected[7]
+    assert 7 not in result.view_ids and len(result.view_ids) == VIEWS - 1
+    # without the bad view the camera is as good as ever
+    assert abs(result.model.fx - K_TRUE[0, 0]) < 4 * result.std["fx"]
+
+
+def test_too_few_views(poses: list[np.ndarray]) -> None:
+    with pytest.raises(ProcessorError, match="too few good views"):
+        solve(views(true_model(), poses[:4], NOISE_PX, seed=3))
+
+
+def test_cross_validation_vanishes_without_noise_and_grows_with_it(
+    poses: list[np.ndarray]
+) -> None:
+    options = CalibrationOptions()
+    points = BOARD.points_in_board()
+    exact = cross_validate(points, views(true_model(), poses, 0.0, seed=6), (W, H), options)
+    assert exact is not None and exact < 0.01
+    # the same noise draw scaled: to first order the halves' difference scales with it
+    quiet = cross_validate(points, views(true_model(), poses, NOISE_PX, seed=6), (W, H), options)
+    loud = cross_validate(points, views(true_model(), poses, 2 * NOISE_PX, seed=6), (W, H),
+                          options)
+    assert quiet is not None and loud is not None
+    assert loud / quiet == pytest.approx(2.0, rel=0.1)
+    assert cross_validate(points, views(true_model(), poses[:9], NOISE_PX, seed=6), (W, H),
+                          options) is None  # two halves need 5 views each
+
+
+def test_max_projection_difference() -> None:
+    model = true_model()
+    assert max_projection_difference(model, model) < 1e-9
+    # a pinhole camera with focal length f + df images the ray of pixel p at
+    # c + (f + df) (p - c) / f: it moves by df * |p - c| / f, most at the farthest image corner
+    f, df = 800.0, 2.0
+    k = np.array([[f, 0, 320.0], [0, f, 240.0], [0, 0, 1]])
+    a = CameraModel(W, H, k)
+    b = CameraModel(W, H, k + np.diag([df, df, 0]))
+    farthest = math.hypot(320, 240)
+    assert max_projection_difference(a, b, step_px=4) == pytest.approx(df * farthest / f,
+                                                                       rel=0.02)
+    # only where the views put corners: a 50 px disc about the principal point
+    angles = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+    disc = np.column_stack([320 + 50 * np.cos(angles), 240 + 50 * np.sin(angles)])
+    within = max_projection_difference(a, b, step_px=2, within=disc)
+    assert within == pytest.approx(df * 50 / f, rel=0.05)
