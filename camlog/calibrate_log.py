@@ -238,14 +238,16 @@ def apply_speed_limit(camera: CameraStream, max_speed_px: float) -> None:
 def size_hint(camera: CameraStream, board: Board) -> str:
     """A hint when another inner-corner count would have matched the frames."""
     c, r = board.cols, board.rows
-    for cols, rows in ((r, c), (c + 1, r), (c - 1, r), (c, r + 1), (c, r - 1),
-                       (c + 1, r + 1), (c - 1, r - 1)):
+    for cols, rows in ((r, c), (c + 1, r), (c, r + 1), (c + 1, r + 1), (c - 1, r), (c, r - 1),
+                       (c - 1, r - 1)):
         if cols < 2 or rows < 2 or (cols, rows) == (c, r):
             continue
         other = Board(cols, rows, board.square_m)
-        if any(find_chessboard(gray, other) is not None for gray in camera.samples):
-            return (f"; a {cols}x{rows} board was found instead: --size counts inner corners "
-                    "(squares minus one) per row x per column")
+        for gray in camera.samples:
+            found = find_chessboard(gray, other)
+            if found is not None and found.accepted:
+                return (f"; the frames show a {cols}x{rows} board: --size counts inner "
+                        "corners (squares minus one) per row x per column")
     return ""
 
 
@@ -267,7 +269,7 @@ def solve_camera(camera: CameraStream, board: Board, options: CalibrationOptions
     if not corners:
         reasons = sorted({f.reason or f.detection.reason for f in found if f.detection})
         raise InputError(f"{camera.image_topic}: every board found was rejected "
-                         f"({'; '.join(reasons)})")
+                         f"({'; '.join(reasons)}){size_hint(camera, board)}")
     params = np.array([view_parameters(c, board, camera.size) for c in corners])
     chosen = select_views(params, max_views=max_views, min_distance=MIN_VIEW_DISTANCE)
     camera.selected = [camera.candidates[i] for i in chosen]
@@ -473,6 +475,12 @@ def write_calibrated_log(reader: LogReader, path: Path, cameras: list[CameraStre
             writer.write(f"{ns}/calibrated/camera_info", CameraInfo(
                 stamp, image.frame_id, info.width, info.height, info.distortion_model,
                 info.d, info.k, info.r, info.p), log_time_ns=raw.log_time_ns)
+            # a joint view's frame may repeat the previous one on one side: rectify it anyway
+            if ns in rectify_maps and (ns, frame.index) in stereo_frames:
+                map1, map2 = rectify_maps[ns]
+                rectified = cv2.remap(image.pixels, map1, map2, cv2.INTER_LINEAR)
+                writer.write(f"{ns}/image_rect", Image(stamp, image.frame_id, image.encoding,
+                                                       rectified), log_time_ns=raw.log_time_ns)
             if frame.duplicate:
                 continue
             status, used = frame_status(camera, frame)
@@ -495,11 +503,6 @@ def write_calibrated_log(reader: LogReader, path: Path, cameras: list[CameraStre
                     "corners_px": np.round(corners, 4).tolist(),
                     "residuals_px": np.round(residual, 5).tolist(),
                 })), log_time_ns=raw.log_time_ns)
-            if ns in rectify_maps and (ns, frame.index) in stereo_frames:
-                map1, map2 = rectify_maps[ns]
-                rectified = cv2.remap(image.pixels, map1, map2, cv2.INTER_LINEAR)
-                writer.write(f"{ns}/image_rect", Image(stamp, image.frame_id, image.encoding,
-                                                       rectified), log_time_ns=raw.log_time_ns)
         end = reader.end_ns or 0
         writer.write("/calibration/summary", Text(json.dumps(summary, indent=1)),
                      log_time_ns=end)

@@ -15,7 +15,15 @@ Command = tuple[str, Callable[[argparse.ArgumentParser], None], Callable[[argpar
 
 
 def _commands() -> dict[str, Command]:
-    from camlog import cmd_batch, cmd_calibrate, cmd_info, cmd_process, cmd_record, cmd_resync
+    from camlog import (
+        cmd_batch,
+        cmd_calibrate,
+        cmd_golden,
+        cmd_info,
+        cmd_process,
+        cmd_record,
+        cmd_resync,
+    )
 
     return {
         "record": (
@@ -41,6 +49,10 @@ def _commands() -> dict[str, Command]:
         "calibrate": (
             "calibrate a mono camera or stereo pair from a log (or --check a calibration)",
             cmd_calibrate.add_arguments, cmd_calibrate.run,
+        ),
+        "golden": (
+            "golden-log regression: check, update or re-record the committed golden logs",
+            cmd_golden.add_arguments, cmd_golden.run,
         ),
     }
 

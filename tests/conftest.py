@@ -18,3 +18,14 @@ def realdata_dir() -> Path:
     """
     override = os.environ.get("CAMLOG_REALDATA")
     return Path(override) if override else REPO_ROOT.parent / "shared" / "realdata"
+
+
+def pytest_addoption(parser: pytest.Parser) -> None:
+    parser.addoption("--update-goldens", action="store_true",
+                     help="regenerate datasets/golden/expected instead of comparing with it")
+
+
+@pytest.fixture(scope="session")
+def update_goldens(request: pytest.FixtureRequest) -> bool:
+    """Whether ``--update-goldens`` asked to regenerate the golden outputs."""
+    return bool(request.config.getoption("--update-goldens"))

@@ -67,42 +67,71 @@ def canonical_order(corners_px: F64, board: Board) -> F64:
 
 
 def check_detection(gray: np.ndarray, corners_px: F64, board: Board) -> Detection:
-    """Accept a detection only if it lies inside the image and alternates like a board."""
+    """Accept a detection only if it lies inside the image, alternates like a board in
+    every row and column, and is not part of a larger board (``--size`` too small)."""
     h, w = gray.shape
     u, v = corners_px[:, 0], corners_px[:, 1]
     if u.min() < BORDER_PX or v.min() < BORDER_PX or u.max() > w - 1 - BORDER_PX \
             or v.max() > h - 1 - BORDER_PX:
         return Detection(corners_px, False, "touches the image border")
-    parity_ok = _parity_fraction(gray, corners_px, board)
-    if parity_ok < 1.0 - PARITY_TOLERANCE:
+    grid = corners_px.reshape(board.rows, board.cols, 2)
+    dx, dy = np.gradient(grid, axis=1), np.gradient(grid, axis=0)  # local grid axes
+    rows, cols = np.meshgrid(np.arange(board.rows), np.arange(board.cols), indexing="ij")
+    parity = np.where((rows + cols) % 2 == 0, 1.0, -1.0)
+    blurred = cv2.blur(gray, (3, 3)).astype(np.float32)
+    values = _square_values(blurred, grid, dx, dy)
+    # the board's own phase is whichever sign dominates
+    phase = 1.0 if np.median((values[0] + values[1] - values[2] - values[3]) * parity) >= 0 \
+        else -1.0
+    good = _alternates(values, parity * phase)
+    worst_line = min(good.mean(axis=1).min(), good.mean(axis=0).min())
+    if good.mean() < 1.0 - PARITY_TOLERANCE or worst_line < 0.5:
         return Detection(
             corners_px, False,
-            f"squares do not alternate around {100 * (1 - parity_ok):.0f}% of corners "
+            f"squares do not alternate around {100 * (1 - good.mean()):.0f}% of corners "
             "(partial or shifted board)",
         )
+    # one step beyond each side: a real board's outer squares meet the plain margin there,
+    # so the pattern must stop; if it goes on, the board has more corners than --size
+    for line, step, axis_u, axis_v, line_parity in (
+        (grid[0], -dy[0], dx[0], dy[0], -parity[0]),
+        (grid[-1], dy[-1], dx[-1], dy[-1], -parity[-1]),
+        (grid[:, 0], -dx[:, 0], dx[:, 0], dy[:, 0], -parity[:, 0]),
+        (grid[:, -1], dx[:, -1], dx[:, -1], dy[:, -1], -parity[:, -1]),
+    ):
+        beyond = line + step
+        margin = 0.5 * float(np.linalg.norm(step, axis=-1).max())
+        inside = (beyond[:, 0].min() > margin and beyond[:, 1].min() > margin
+                  and beyond[:, 0].max() < w - 1 - margin and beyond[:, 1].max() < h - 1 - margin)
+        if not inside:
+            continue
+        extra = _alternates(_square_values(blurred, beyond[None], axis_u[None], axis_v[None]),
+                            (line_parity * phase)[None])
+        if extra.mean() >= 0.8:
+            return Detection(corners_px, False,
+                             f"the board goes on beyond this {board.cols}x{board.rows} grid "
+                             "(--size too small?)")
     return Detection(corners_px, True)
 
 
-def _parity_fraction(gray: np.ndarray, corners_px: F64, board: Board) -> float:
-    """Share of corners whose 4 neighbouring squares alternate with the board's parity."""
-    grid = corners_px.reshape(board.rows, board.cols, 2)
-    # local grid axes at every corner (central differences, one-sided at the edges)
-    dx = np.gradient(grid, axis=1)
-    dy = np.gradient(grid, axis=0)
-    centers = np.stack([grid + sx * 0.5 * dx + sy * 0.5 * dy
-                        for sx, sy in ((1, 1), (-1, -1), (1, -1), (-1, 1))])  # (4, R, C, 2)
-    blurred = cv2.blur(gray, (3, 3)).astype(np.float32)
-    h, w = gray.shape
+def _square_values(blurred: np.ndarray, points: F64, dx: F64, dy: F64) -> np.ndarray:
+    """Brightness ``(4, ...)`` at the centres of the squares around each point: the two
+    diagonal ones (+x+y, -x-y), then the two anti-diagonal ones."""
+    centers = np.stack([points + sx * 0.5 * dx + sy * 0.5 * dy
+                        for sx, sy in ((1, 1), (-1, -1), (1, -1), (-1, 1))])
+    h, w = blurred.shape
     xs = np.clip(np.rint(centers[..., 0]), 0, w - 1).astype(int)
     ys = np.clip(np.rint(centers[..., 1]), 0, h - 1).astype(int)
-    v = blurred[ys, xs]  # (4, R, C): two diagonal squares, then the two anti-diagonal ones
-    rows, cols = np.meshgrid(np.arange(board.rows), np.arange(board.cols), indexing="ij")
-    parity = np.where((rows + cols) % 2 == 0, 1.0, -1.0)
-    # the board's own phase is whichever sign dominates
-    phase = 1.0 if np.median((v[0] + v[1] - v[2] - v[3]) * parity) >= 0 else -1.0
-    # each square on its own: summed pairs would pass a corner on the board's edge (one dark
-    # square and three bright ones), which is where a grid shifted by one row puts its outer row
-    diagonal_bright = np.minimum(v[0], v[1]) - np.maximum(v[2], v[3])
-    anti_bright = np.minimum(v[2], v[3]) - np.maximum(v[0], v[1])
-    good = np.where(parity * phase > 0, diagonal_bright, anti_bright) > MIN_CONTRAST
-    return float(np.mean(good))
+    return np.asarray(blurred[ys, xs])
+
+
+def _alternates(values: np.ndarray, signed_parity: np.ndarray) -> np.ndarray:
+    """Which points are X-junctions of the expected phase.
+
+    Each square is judged on its own: summed pairs would pass a corner on the board's edge
+    (one dark square and three bright ones), where a grid shifted by one row puts its outer
+    row.
+    """
+    diagonal_bright = np.minimum(values[0], values[1]) - np.maximum(values[2], values[3])
+    anti_bright = np.minimum(values[2], values[3]) - np.maximum(values[0], values[1])
+    return np.asarray(np.where(signed_parity > 0, diagonal_bright, anti_bright) > MIN_CONTRAST)

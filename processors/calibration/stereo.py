@@ -20,6 +20,10 @@ from replay.messages import F64
 from ..errors import ProcessorError
 from .solve import CRITERIA, MIN_VIEWS
 
+#: stereo re-solves for the baseline's standard deviation, each on this many views at most
+BOOTSTRAP_RESAMPLES = 30
+BOOTSTRAP_VIEWS = 40
+
 
 @dataclass
 class StereoResult:
@@ -99,7 +103,8 @@ def calibrate_stereo(points_in_board: F64, left: list[F64], right: list[F64], *,
         right_from_left=pose, rms_px=float(rms), r1=r1, r2=r2, p1=p1, p2=p2,
         epipolar_rms_px=float(np.sqrt(squared.mean())),
         baseline_m=float(np.linalg.norm(trans)),
-        baseline_std_m=_baseline_std(points_in_board, left, right, left_model, right_model),
+        baseline_std_m=_baseline_std(points_in_board, left, right, left_model=left_model,
+                                     right_model=right_model),
         square_m=_square_size(left, right, left_model=left_model, right_model=right_model,
                               r1=r1, p1=p1, r2=r2, p2=p2, points_in_board=points_in_board,
                               square_m=square_m),
@@ -107,24 +112,33 @@ def calibrate_stereo(points_in_board: F64, left: list[F64], right: list[F64], *,
     )
 
 
-def _board_pose(points_in_board: F64, corners: F64, model: CameraModel) -> F64:
-    _ok, rvec, tvec = cv2.solvePnP(points_in_board, corners, model.k, model.d)
-    pose = np.eye(4)
-    pose[:3, :3] = cv2.Rodrigues(rvec)[0]
-    pose[:3, 3] = tvec.reshape(3)
-    return pose
+def _baseline_std(points_in_board: F64, left: list[F64], right: list[F64], *,
+                  left_model: CameraModel, right_model: CameraModel,
+                  resamples: int = BOOTSTRAP_RESAMPLES) -> float:
+    """Standard deviation of the baseline from an m-out-of-n bootstrap of the joint views.
 
-
-def _baseline_std(points_in_board: F64, left: list[F64], right: list[F64],
-                  left_model: CameraModel, right_model: CameraModel) -> float:
-    """Standard error of the baseline from the spread of per-view relative poses."""
+    Each resample of ``m <= BOOTSTRAP_VIEWS`` views re-solves R, T with the intrinsics fixed
+    (OpenCV's solver is dense in every view's pose, so small resamples keep this cheap); the
+    spread scales to the full ``n`` views as ``sqrt(m / n)``. Seeded, so reproducible.
+    """
+    rng = np.random.default_rng(0)
+    size = (left_model.width, left_model.height)
+    objects = points_in_board.astype(np.float32)
+    lefts = [c.reshape(-1, 1, 2).astype(np.float32) for c in left]
+    rights = [c.reshape(-1, 1, 2).astype(np.float32) for c in right]
+    flags = cv2.CALIB_FIX_INTRINSIC
+    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 30, 1e-10)
+    n = len(left)
+    m = min(n, BOOTSTRAP_VIEWS)
     baselines = []
-    for cl, cr in zip(left, right, strict=True):
-        left_from_board = _board_pose(points_in_board, cl, left_model)
-        right_from_board = _board_pose(points_in_board, cr, right_model)
-        right_from_left = right_from_board @ np.linalg.inv(left_from_board)
-        baselines.append(float(np.linalg.norm(right_from_left[:3, 3])))
-    return float(np.std(baselines, ddof=1) / math.sqrt(len(baselines)))
+    for _ in range(resamples):
+        pick = rng.integers(0, n, m)
+        out = cv2.stereoCalibrate(
+            [objects] * len(pick), [lefts[i] for i in pick], [rights[i] for i in pick],
+            left_model.k, left_model.d, right_model.k, right_model.d, size,
+            flags=flags, criteria=criteria)
+        baselines.append(float(np.linalg.norm(out[6])))
+    return float(np.std(baselines, ddof=1) * math.sqrt(m / n))
 
 
 def _square_size(left: list[F64], right: list[F64], *, left_model: CameraModel,

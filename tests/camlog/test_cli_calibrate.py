@@ -184,6 +184,11 @@ def test_stereo_rig(stereo: Path) -> None:
     for side in ("left", "right"):
         for figure in FIGURES:
             assert (stereo / f"{side}_{figure}").is_file()
+    # every joint view is rectified on both sides, also where one side repeats a frame
+    with open_reader(stereo / "calibration.mcap") as reader:
+        counts = {side: reader.topics[f"/stereo_camera/{side}/image_rect"].count
+                  for side in ("left", "right")}
+    assert counts["left"] == counts["right"] == s["joint_views"]
 
 
 # --- what calibrate writes ----------------------------------------------------------------------
