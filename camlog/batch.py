@@ -65,8 +65,16 @@ def up_to_date(job: Job) -> dict[str, Any] | None:
     return status if same and outputs_exist else None
 
 
+#: thread pools of numerical libraries, sized per job so that parallel jobs do not
+#: oversubscribe the cores (read when a worker process starts)
+THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+
+
 def run_job(job: Job) -> dict[str, Any]:
     """Run every step on one log; never raises for a bad log (the error is the status)."""
+    import cv2
+
+    cv2.setNumThreads(job.workers)  # OpenCV's own pool, besides the steps' worker threads
     started = time.perf_counter()
     previous = up_to_date(job)
     if previous is not None:
@@ -126,11 +134,22 @@ def plan_jobs(pipeline: Pipeline, logs: Iterable[Path], out_dir: Path, jobs: int
 
 
 def _run_processes(jobs: list[Job], n: int, done: Callable[[dict[str, Any]], None]) -> None:
-    # spawn: workers start clean instead of inheriting this process's threads and locks
-    with ProcessPoolExecutor(max_workers=n, mp_context=get_context("spawn")) as pool:
-        futures: dict[Future[dict[str, Any]], Job] = {pool.submit(run_job, j): j for j in jobs}
-        for future in as_completed(futures):
-            done(future.result())
+    # spawn: workers start clean instead of inheriting this process's threads and locks;
+    # they read the thread-pool sizes from the environment when they start
+    saved = {name: os.environ.get(name) for name in THREAD_ENV}
+    os.environ.update(dict.fromkeys(THREAD_ENV, str(jobs[0].workers if jobs else 1)))
+    try:
+        with ProcessPoolExecutor(max_workers=n, mp_context=get_context("spawn")) as pool:
+            futures: dict[Future[dict[str, Any]], Job] = {
+                pool.submit(run_job, j): j for j in jobs}
+            for future in as_completed(futures):
+                done(future.result())
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
 
 
 def _run_ray(jobs: list[Job], n: int, done: Callable[[dict[str, Any]], None]) -> None:
@@ -140,8 +159,10 @@ def _run_ray(jobs: list[Job], n: int, done: Callable[[dict[str, Any]], None]) ->
         raise ConfigError("--engine ray needs Ray: pip install 'camlog[ray]'") from None
     started_here = not ray.is_initialized()
     if started_here:
+        threads = str(jobs[0].workers if jobs else 1)
         ray.init(num_cpus=n, include_dashboard=False, log_to_driver=False,
-                 configure_logging=False)
+                 configure_logging=False,
+                 runtime_env={"env_vars": dict.fromkeys(THREAD_ENV, threads)})
     try:
         remote = ray.remote(num_cpus=1)(run_job)
         pending = [remote.remote(job) for job in jobs]
