@@ -18,11 +18,15 @@ def _commands() -> dict[str, Command]:
     from camlog import (
         cmd_batch,
         cmd_calibrate,
+        cmd_convert,
         cmd_golden,
+        cmd_import,
         cmd_info,
+        cmd_play,
         cmd_process,
         cmd_record,
         cmd_resync,
+        cmd_view,
     )
 
     return {
@@ -49,6 +53,22 @@ def _commands() -> dict[str, Command]:
         "calibrate": (
             "calibrate a mono camera or stereo pair from a log (or --check a calibration)",
             cmd_calibrate.add_arguments, cmd_calibrate.run,
+        ),
+        "view": (
+            "show logs in rerun: write an .rrd or stream to a viewer, with a ready layout",
+            cmd_view.add_arguments, cmd_view.run,
+        ),
+        "play": (
+            "replay a log in (scaled) real time to a viewer, an .rrd or a new log",
+            cmd_play.add_arguments, cmd_play.run,
+        ),
+        "convert": (
+            "convert a log between MCAP, rosbag2 and ROS1, filtered, images re-encoded",
+            cmd_convert.add_arguments, cmd_convert.run,
+        ),
+        "import": (
+            "turn a folder of image files (mono or left/right stereo) into a log",
+            cmd_import.add_arguments, cmd_import.run,
         ),
         "golden": (
             "golden-log regression: check, update or re-record the committed golden logs",

@@ -3,11 +3,14 @@
 from ._version import VERSION
 from .errors import (
     EncodingError,
+    ImageFolderError,
     LogFormatError,
     LogReadError,
     LogWriteError,
+    OptionError,
     ReplayError,
     TopicError,
+    ViewerError,
 )
 from .formats import (
     FORMATS,
@@ -39,12 +42,14 @@ __all__ = [
     "CompressedImage",
     "EncodingError",
     "Image",
+    "ImageFolderError",
     "LogFormatError",
     "LogReadError",
     "LogReader",
     "LogWriteError",
     "LogWriter",
     "Message",
+    "OptionError",
     "PointStamped",
     "PoseStamped",
     "RawMessage",
@@ -53,6 +58,7 @@ __all__ = [
     "Text",
     "TopicError",
     "TopicInfo",
+    "ViewerError",
     "open_reader",
     "open_writer",
 ]

@@ -25,3 +25,15 @@ class EncodingError(ReplayError):
 
 class TopicError(ReplayError):
     """A requested topic does not exist in a log or has the wrong type."""
+
+
+class OptionError(ReplayError):
+    """Options are out of range or contradict each other (e.g. ``--start`` after ``--end``)."""
+
+
+class ImageFolderError(ReplayError):
+    """A folder of image files cannot be imported (missing, empty, unreadable, mixed sizes)."""
+
+
+class ViewerError(ReplayError):
+    """A rerun recording could not be written or a viewer could not be reached."""

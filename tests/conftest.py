@@ -7,6 +7,13 @@ from pathlib import Path
 
 import pytest
 
+from tests.recordings import (  # noqa: F401  (session fixtures: small logs made by the CLI)
+    mono_calibration_log,
+    red_log,
+    red_processed_log,
+    resynced_log,
+)
+
 REPO_ROOT = Path(__file__).resolve().parents[1]
 
 

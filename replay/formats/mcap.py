@@ -77,6 +77,7 @@ class McapLogReader(LogReader):
         self._summary: Any = None
         self._valid_until: int | None = None  # streaming: stop before this byte offset
         self._channels: dict[int, tuple[str, str, str]] = {}  # id -> topic, msgtype, encoding
+        self._seeker: SeekingReader | None = None
         try:
             self._open()
         except BaseException:
@@ -91,7 +92,7 @@ class McapLogReader(LogReader):
             try:
                 summary = self._seeking_reader().get_summary()
             except (*_DAMAGE, OSError):  # OSError: too short to seek to a footer
-                summary = None
+                summary = self._seeker = None
         if summary is not None and summary.chunk_indexes and summary.statistics is not None:
             self._summary = summary
             self._load_summary(summary)
@@ -110,9 +111,11 @@ class McapLogReader(LogReader):
             return iter(())
 
     def _seeking_reader(self) -> SeekingReader:
-        # SeekingReader checks the magic at the current position
-        self._file.seek(0)
-        return SeekingReader(self._file, validate_crcs=True)
+        # one instance: it caches the summary, which each new instance would read again
+        if self._seeker is None:
+            self._file.seek(0)  # SeekingReader checks the magic at the current position
+            self._seeker = SeekingReader(self._file, validate_crcs=True)
+        return self._seeker
 
     def _add_channel(self, channel: Channel, schemas: dict[int, Schema]) -> None:
         schema = schemas.get(channel.schema_id)

@@ -1,0 +1,65 @@
+"""Per-camera frame bookkeeping of an export: decimation, frame matching, stale overlays.
+
+Pure state, no rerun: the logger asks a camera's :class:`CameraFrames` whether to keep an
+image, whether an overlay's frame was kept, which camera saw a stamp, and which overlays
+belong to older frames and must be cleared when a new image arrives.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+
+__all__ = ["RECENT", "CameraFrames"]
+
+RECENT = 256  # stamps remembered per camera: far more than outputs ever lag their frame
+
+
+@dataclass
+class CameraFrames:
+    """Images seen by one camera; ``every`` keeps every N-th (the first always)."""
+
+    every: int = 1
+    images: int = 0
+    recent: deque[int] = field(default_factory=lambda: deque(maxlen=RECENT))
+    dropped: deque[int] = field(default_factory=lambda: deque(maxlen=RECENT))
+    live: dict[str, int] = field(default_factory=dict)  # overlay entity -> its frame stamp
+
+    def take(self, stamp_ns: int) -> bool:
+        """Count an image; True when it is kept.
+
+        >>> frames = CameraFrames(every=2)
+        >>> [frames.take(s) for s in (10, 20, 30)], frames.shows(20), frames.shows(30)
+        ([True, False, True], False, True)
+        """
+        keep = self.images % self.every == 0
+        self.images += 1
+        self.recent.append(stamp_ns)
+        if not keep:
+            self.dropped.append(stamp_ns)
+        return keep
+
+    def saw(self, stamp_ns: int | None) -> bool:
+        """True if one of the recent images carried this stamp."""
+        return stamp_ns in self.recent
+
+    def shows(self, stamp_ns: int) -> bool:
+        """Whether an overlay of the frame stamped ``stamp_ns`` is drawn (its image kept)."""
+        return self.every == 1 or stamp_ns not in self.dropped
+
+    def drawn(self, entity: str, stamp_ns: int) -> None:
+        """Note an overlay that must go when a later frame arrives."""
+        self.live[entity] = stamp_ns
+
+    def stale(self, stamp_ns: int) -> list[str]:
+        """Overlays of frames older than ``stamp_ns``; forgotten once returned.
+
+        >>> frames = CameraFrames()
+        >>> frames.drawn("corners", 10); frames.drawn("mask", 20)
+        >>> frames.stale(20), frames.stale(30)
+        (['corners'], ['mask'])
+        """
+        old = [entity for entity, shown in self.live.items() if shown < stamp_ns]
+        for entity in old:
+            del self.live[entity]
+        return old

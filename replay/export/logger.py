@@ -1,0 +1,444 @@
+"""Log a stream of raw messages into a rerun recording, following a :class:`ScenePlan`.
+
+Every message is logged on two timelines: ``log_time`` (when it was stored) and
+``header_stamp`` (its header, absent for messages without one). Images are decimated per
+camera (``every``); an overlay is dropped with the frame it belongs to (same stamp).
+Overlays are per frame: when a camera's next image arrives, overlays of older frames are
+cleared, so a corner set never lingers on a frame without a board. Overlay topics with a
+message for every image of their camera (ground truth, processed every frame) need no
+clearing: the next frame's message replaces them.
+Camera_info is decoded only when its bytes (minus the stamp) change. With a JPEG quality,
+images are encoded on worker threads (OpenCV releases the GIL) while the next messages are
+read; every log call still reaches rerun in message order.
+"""
+
+from __future__ import annotations
+
+import json
+from collections import deque
+from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import rerun as rr
+
+from ..camera import CameraModel
+from ..codec import decode_compressed, to_mono8, to_rgb8
+from ..errors import ReplayError
+from ..formats.base import RawMessage
+from ..messages import CameraInfo, CompressedImage, Image, Message, PointStamped, PoseStamped, Text
+from .blueprint import LOG_TIME, REPLAY_TIME, STAMP_TIME
+from .frames import CameraFrames
+from .images import encoded_image, rerun_image
+from .overlays import (
+    CLASSES,
+    edge_classes,
+    header_stamp_ns,
+    inside_image,
+    mask_classes,
+    project_target,
+    residual_view,
+    stamp_free_key,
+)
+from .scene import CameraPlan, ScenePlan, rectified_entity, series_entity, text_entity
+from .topics import Kind, Route
+
+__all__ = ["LoggerOptions", "SceneLogger"]
+
+#: draw orders: overlays above the image, the annotated calibration image between
+ORDER_DETECTIONS, ORDER_MASK, ORDER_EDGES = -9.0, -8.0, -7.0
+GREEN, ORANGE, RED, YELLOW, CYAN = (60, 230, 60), (255, 150, 0), (255, 50, 50), (255, 230, 0), \
+    (0, 220, 255)
+#: log calls held back behind an image still being encoded (bounds memory)
+MAX_PENDING = 16
+CORNER_RADIUS, CENTROID_RADIUS, TRUTH_RADIUS, GUIDE_RADIUS = (
+    rr.components.Radius.ui_points(r) for r in (2.5, 5.0, 1.5, 0.5))
+
+
+#: (log time, header stamp or None, replay wall clock or None), ns
+_Times = tuple[int, int | None, int | None]
+
+
+@dataclass(frozen=True)
+class LoggerOptions:
+    """What to draw and how: ``every`` keeps every N-th image of a camera; ``jpeg_quality``
+    stores raw 8-bit images as JPEG; residual arrows are drawn ``residual_scale`` times long."""
+
+    every: int = 1
+    jpeg_quality: int | None = None
+    residual_scale: float = 50.0
+    ground_truth: bool = True
+
+
+@dataclass
+class _Camera:
+    """Logging state of one camera."""
+
+    plan: CameraPlan
+    info_key: bytes | None = None
+    model: CameraModel | None = None  # for projecting ground truth
+    size: tuple[int, int] | None = None  # (width, height) from camera_info or raw images
+    frames: CameraFrames = field(default_factory=CameraFrames)
+
+
+class SceneLogger:
+    """Logs raw messages of the planned topics to ``rec``; counts what it logged."""
+
+    def __init__(self, rec: rr.RecordingStream, plan: ScenePlan, options: LoggerOptions,
+                 *, decode: Callable[[RawMessage], Message]) -> None:
+        self.rec, self.plan, self.options, self._decode = rec, plan, options, decode
+        # rerun's own log_time (wall clock of the export) and log_tick would shadow and
+        # clutter the log's timelines
+        rec.set_log_time_enabled(False)
+        rec.set_log_tick_enabled(False)
+        self.cameras = {ns: _Camera(cam, frames=CameraFrames(every=options.every))
+                        for ns, cam in plan.cameras.items()}
+        self.counts: dict[str, int] = {}  # entity -> logged rows
+        self.warnings: list[str] = []
+        self._warned: set[str] = set()
+        self._guides: set[str] = set()
+        self._styled: set[str] = set()  # point entities whose colour and size are logged
+        self._truth: dict[str, tuple[bytes, CameraModel, Any]] = {}  # topic -> last pose
+        self._replay_ns: int | None = None
+        self._now: _Times = (0, None, None)  # log time, header stamp, replay time
+        self._applied: _Times | None = None  # times last set on the stream
+        # (times, entity, archetype or its encoding in progress), in message order
+        self._pending: deque[tuple[_Times, str, Any]] = deque()
+        self._pool = ThreadPoolExecutor(2, thread_name_prefix="camlog-jpeg") \
+            if options.jpeg_quality is not None else None
+        self._handlers: dict[Kind, Callable[[RawMessage, Route], None]] = {
+            Kind.IMAGE: self._image, Kind.CAMERA_INFO: self._camera_info,
+            Kind.CALIBRATED_INFO: self._camera_info, Kind.RECTIFIED: self._rectified,
+            Kind.DETECTIONS: self._detections, Kind.RESIDUALS: self._residuals,
+            Kind.VIEW_ERROR: self._series, Kind.RED_COUNT: self._series,
+            Kind.STEREO_OFFSET: self._series, Kind.POINT_SERIES: self._series,
+            Kind.RED_MASK: self._segmentation, Kind.EDGES: self._segmentation,
+            Kind.RED_CENTROID: self._centroid, Kind.GROUND_TRUTH: self._ground_truth,
+            Kind.TEXT: self._text,
+        }
+
+    # --- setup -----------------------------------------------------------------------------
+
+    def log_static(self) -> None:
+        """World axes, segmentation classes, rig poses and series styles (timeless)."""
+        rec = self.rec
+        rec.log("/", rr.AnnotationContext([(i, label, color) for i, (label, color)
+                                           in CLASSES.items()]), static=True)
+        up = rr.ViewCoordinates.RIGHT_HAND_Z_UP if self.plan.rig.world_is_scenario \
+            else rr.ViewCoordinates.RDF
+        rec.log("world", up, static=True)
+        for cam in self.plan.cameras.values():
+            if cam.world_from_camera is not None:
+                pose = cam.world_from_camera
+                rec.log(cam.entity, rr.Transform3D(translation=pose[:3, 3], mat3x3=pose[:3, :3]),
+                        static=True)
+        for route_topic, route in self.plan.routes.items():
+            if route.kind is Kind.POINT_SERIES:
+                rec.log(series_entity(route.kind, route_topic),
+                        rr.SeriesLines(names=["x", "y", "z"]), static=True)
+
+    # --- entry point -----------------------------------------------------------------------
+
+    def log(self, raw: RawMessage, *, replay_ns: int | None = None) -> None:
+        """Log one raw message of a planned topic (others are ignored); ``replay_ns`` also
+        places it on the ``replay_time`` timeline (``camlog play``)."""
+        self._replay_ns = replay_ns
+        route = self.plan.routes.get(raw.topic)
+        if route is None or raw.topic in self.plan.skipped:
+            return
+        handler = self._handlers.get(route.kind)
+        if handler is None:
+            return
+        try:
+            handler(raw, route)
+        except (ReplayError, ValueError) as err:
+            self._warn(raw.topic, f"{raw.topic}: message at log time {raw.log_time_ns} not "
+                                  f"shown: {err}")
+
+    # --- helpers ---------------------------------------------------------------------------
+
+    def _warn(self, key: str, text: str) -> None:
+        if key not in self._warned:
+            self._warned.add(key)
+            self.warnings.append(text)
+
+    def _emit(self, entity: str, archetype: Any, *, count: bool = True) -> None:
+        """Log at the current message's times, after anything logged before it."""
+        self._pending.append((self._now, entity, archetype))
+        self._drain(MAX_PENDING)
+        if count:
+            self.counts[entity] = self.counts.get(entity, 0) + 1
+
+    def _drain(self, keep: int) -> None:
+        """Send pending log calls in order; wait for an encoding only beyond ``keep``."""
+        while self._pending:
+            times, entity, archetype = self._pending[0]
+            if isinstance(archetype, Future):
+                if len(self._pending) <= keep and not archetype.done():
+                    return
+                archetype = archetype.result()
+            self._pending.popleft()
+            if times != self._applied:
+                self._apply(times)
+            self.rec.log(entity, archetype)
+
+    def _apply(self, times: _Times) -> None:
+        log_time_ns, stamp_ns, replay_ns = times
+        self.rec.set_time(LOG_TIME, timestamp=np.datetime64(log_time_ns, "ns"))
+        if stamp_ns is None:
+            self.rec.disable_timeline(STAMP_TIME)
+        else:
+            self.rec.set_time(STAMP_TIME, timestamp=np.datetime64(stamp_ns, "ns"))
+        if replay_ns is not None:
+            self.rec.set_time(REPLAY_TIME, timestamp=np.datetime64(replay_ns, "ns"))
+        self._applied = times
+
+    def _times(self, raw: RawMessage, stamp_ns: int | None) -> None:
+        self._now = (raw.log_time_ns, stamp_ns, self._replay_ns)
+
+    def close(self) -> None:
+        """Send what is still pending and stop the encoding threads."""
+        try:
+            self._drain(0)
+        finally:
+            if self._pool is not None:
+                self._pool.shutdown(cancel_futures=True)
+
+    def _camera_of(self, route: Route, message: Any) -> _Camera | None:
+        """The camera a message draws on: named by its route, or found by frame and stamp."""
+        if not route.by_frame:
+            return self.cameras.get(route.namespace)
+        frame_id = getattr(message, "frame_id", "")
+        names = self.plan.frames.get(frame_id, [])
+        if not names:
+            self._warn(f"frame {frame_id}", f"frame_id {frame_id!r} belongs to no camera of "
+                                            "the log; its overlays are not shown")
+            return None
+        stamp = getattr(message, "stamp_ns", None)
+        seen = [ns for ns in names if self.cameras[ns].frames.saw(stamp)]
+        return self.cameras[(seen or names)[0]]
+
+    def _shows(self, cam: _Camera, stamp_ns: int) -> bool:
+        return cam.frames.shows(stamp_ns)
+
+    def _overlay(self, raw: RawMessage, cam: _Camera, entity: str, stamp_ns: int,
+                 archetype: Any) -> None:
+        self._emit(entity, archetype)
+        image_topic, counts = cam.plan.image_topic, self.plan.counts
+        dense = image_topic is not None and counts.get(raw.topic, 0) >= counts.get(image_topic, 0)
+        if not dense:
+            cam.frames.drawn(entity, stamp_ns)
+
+    @staticmethod
+    def _pixels(message: Message) -> Image:
+        if isinstance(message, CompressedImage):
+            return decode_compressed(message)
+        if not isinstance(message, Image):
+            raise ValueError(f"expected an image, got {type(message).__name__}")
+        return message
+
+    # --- handlers --------------------------------------------------------------------------
+
+    def _image(self, raw: RawMessage, route: Route) -> None:
+        cam = self.cameras[route.namespace]
+        if raw.topic != cam.plan.image_topic:
+            return
+        message = self._decode(raw)
+        assert isinstance(message, Image | CompressedImage)
+        stamp = message.stamp_ns
+        if not cam.frames.take(stamp):
+            return
+        self._times(raw, stamp)
+        for entity in cam.frames.stale(stamp):
+            self._emit(entity, rr.Clear(recursive=False), count=False)
+        if isinstance(message, Image):
+            cam.size = (message.width, message.height)
+        self._emit(f"{cam.plan.entity}/image", self._archetype(message))
+
+    def _archetype(self, message: Image | CompressedImage, draw_order: float | None = None) -> Any:
+        if isinstance(message, CompressedImage):
+            archetype = encoded_image(message, draw_order=draw_order)
+            if archetype is not None:
+                return archetype
+            message = decode_compressed(message)
+        if self._pool is not None and message.pixels.dtype == np.uint8:
+            return self._pool.submit(rerun_image, message, draw_order=draw_order,
+                                     jpeg_quality=self.options.jpeg_quality)
+        return rerun_image(message, jpeg_quality=self.options.jpeg_quality,
+                           draw_order=draw_order)
+
+    def _camera_info(self, raw: RawMessage, route: Route) -> None:
+        cam = self.cameras[route.namespace]
+        if route.kind is Kind.CALIBRATED_INFO and cam.plan.info_topic is not None:
+            return  # the driver's camera_info draws the camera; calibrated adds the baseline
+        key = stamp_free_key(raw.data)
+        if key == cam.info_key:
+            return
+        cam.info_key = key
+        info = self._decode(raw)
+        assert isinstance(info, CameraInfo)
+        if info.k[0, 0] <= 0 or info.k[1, 1] <= 0 or info.width <= 0 or info.height <= 0:
+            self._warn(raw.topic, f"{raw.topic}: camera_info has no intrinsics; no Pinhole")
+            return
+        if info.distortion_model in ("plumb_bob", "rational_polynomial", ""):
+            try:
+                cam.model = CameraModel.from_camera_info(info)
+            except ValueError:
+                cam.model = None
+        cam.size = (info.width, info.height)
+        self._times(raw, info.stamp_ns)
+        self._emit(cam.plan.entity, rr.Pinhole(
+            image_from_camera=info.k, resolution=[info.width, info.height],
+            image_plane_distance=self.plan.image_plane_distance_m))
+
+    def _rectified(self, raw: RawMessage, route: Route) -> None:
+        message = self._decode(raw)
+        assert isinstance(message, Image | CompressedImage)
+        cam = self._camera_of(route, message)
+        if cam is not None and not self._shows(cam, message.stamp_ns):
+            return
+        entity = rectified_entity(raw.topic)
+        self._times(raw, message.stamp_ns)
+        if entity not in self._guides:
+            self._guides.add(entity)
+            self._guide_rows(entity, message)
+        self._emit(entity + "/image", self._archetype(message))
+
+    def _guide_rows(self, entity: str, message: Image | CompressedImage) -> None:
+        """Horizontal lines every 1/12 of the height: matching rows of a rectified pair."""
+        image = self._pixels(message)
+        width, height = image.width, image.height
+        rows = [[[0.0, v], [float(width), v]] for v in np.linspace(0, height, 13)[1:-1]]
+        self.rec.log(entity + "/rows", rr.LineStrips2D(rows, colors=[CYAN], radii=GUIDE_RADIUS),
+                     static=True)
+
+    def _detections(self, raw: RawMessage, route: Route) -> None:
+        message = self._decode(raw)
+        assert isinstance(message, Image | CompressedImage)
+        cam = self.cameras[route.namespace]
+        stamp = message.stamp_ns
+        if not self._shows(cam, stamp):
+            return
+        self._times(raw, stamp)
+        self._overlay(raw, cam, f"{cam.plan.entity}/calibration/detections", stamp,
+                      self._archetype(message, draw_order=ORDER_DETECTIONS))
+        why = self.plan.rejected.get(cam.plan.namespace, {}).get(stamp)
+        if why is not None:
+            image = self._pixels(message)
+            self._overlay(raw, cam, f"{cam.plan.entity}/calibration/status", stamp, rr.Boxes2D(
+                mins=[[0, 0]], sizes=[[image.width, image.height]], colors=[RED],
+                labels=[f"rejected: {why}"]))
+
+    def _residuals(self, raw: RawMessage, route: Route) -> None:
+        message = self._decode(raw)
+        assert isinstance(message, Text)
+        view = residual_view(json.loads(message.data))
+        cam = self.cameras[route.namespace]
+        if not self._shows(cam, view.stamp_ns):
+            return
+        self._times(raw, view.stamp_ns)
+        base, scale = f"{cam.plan.entity}/calibration", self.options.residual_scale
+        self._overlay(raw, cam, f"{base}/corners", view.stamp_ns,
+                      self._points(f"{base}/corners", view.corners_px, GREEN, CORNER_RADIUS))
+        self._overlay(raw, cam, f"{base}/residuals", view.stamp_ns, rr.Arrows2D(
+            origins=view.corners_px, vectors=view.residuals_px * scale, colors=[ORANGE]))
+        if cam.size is not None:
+            width, height = cam.size
+            self._overlay(raw, cam, f"{base}/status", view.stamp_ns, rr.Boxes2D(
+                mins=[[0, 0]], sizes=[[width, height]], colors=[GREEN],
+                labels=[f"used: view RMS {view.rms_px:.3f} px (residuals ×{scale:g})"]))
+
+    def _series(self, raw: RawMessage, route: Route) -> None:
+        message = self._decode(raw)
+        assert isinstance(message, PointStamped)
+        if route.kind is Kind.RED_COUNT:
+            cam = self._camera_of(route, message)
+            namespace = cam.plan.namespace if cam is not None else message.frame_id
+        else:
+            namespace = route.namespace
+        entity = series_entity(route.kind, namespace)
+        self._times(raw, message.stamp_ns)
+        match route.kind:
+            case Kind.STEREO_OFFSET:
+                values: Any = float(message.point[0]) * 1e3
+            case Kind.POINT_SERIES:
+                values = message.point
+            case _:
+                values = float(message.point[0])
+        self._emit(entity, rr.Scalars(values))
+
+    def _segmentation(self, raw: RawMessage, route: Route) -> None:
+        message = self._decode(raw)
+        assert isinstance(message, Image | CompressedImage)
+        cam = self._camera_of(route, message)
+        if cam is None or not self._shows(cam, message.stamp_ns):
+            return
+        image = self._pixels(message)
+        if route.kind is Kind.RED_MASK:
+            entity, classes, opacity, order = "red_pixels/mask", mask_classes(to_rgb8(image)), \
+                0.5, ORDER_MASK
+        else:
+            entity, classes, opacity, order = "edges", edge_classes(to_mono8(image)), 0.8, \
+                ORDER_EDGES
+        self._times(raw, message.stamp_ns)
+        self._overlay(raw, cam, f"{cam.plan.entity}/{entity}", message.stamp_ns,
+                      rr.SegmentationImage(classes, opacity=opacity, draw_order=order))
+
+    def _centroid(self, raw: RawMessage, route: Route) -> None:
+        message = self._decode(raw)
+        assert isinstance(message, PointStamped)
+        cam = self._camera_of(route, message)
+        if cam is None or not self._shows(cam, message.stamp_ns):
+            return
+        self._times(raw, message.stamp_ns)
+        entity = f"{cam.plan.entity}/red_pixels/centroid"
+        self._overlay(raw, cam, entity, message.stamp_ns, self._points(
+            entity, [message.point[:2]], CYAN, CENTROID_RADIUS, label="red centroid"))
+
+    def _ground_truth(self, raw: RawMessage, route: Route) -> None:
+        points = self.plan.targets.get(route.detail)
+        cam = self.cameras[route.namespace]
+        model = cam.model
+        if not self.options.ground_truth or points is None or model is None:
+            return
+        # a target held still sends the same pose again: reuse its projection
+        key = stamp_free_key(raw.data)
+        last = self._truth.get(raw.topic)
+        stamp = header_stamp_ns(raw.data, raw.serialization)
+        if last is not None and last[0] == key and last[1] is model and stamp is not None:
+            uv = last[2]
+        else:
+            message = self._decode(raw)
+            assert isinstance(message, PoseStamped)
+            stamp = message.stamp_ns
+            uv = inside_image(project_target(
+                points, position_m=message.position_m, orientation_xyzw=message.orientation_xyzw,
+                model=model), model.width, model.height)
+            self._truth[raw.topic] = (key, model, uv)
+        if not self._shows(cam, stamp):
+            return
+        self._times(raw, stamp)
+        entity = f"{cam.plan.entity}/ground_truth/{route.detail}"
+        self._overlay(raw, cam, entity, stamp, self._points(entity, uv, YELLOW, TRUTH_RADIUS))
+
+    def _points(self, entity: str, positions: Any, color: tuple[int, int, int], radius: Any,
+                label: str | None = None) -> Any:
+        """Points2D of the positions; colour, size and label are logged once, static."""
+        if entity not in self._styled:
+            self._styled.add(entity)
+            self.rec.log(entity, rr.Points2D.from_fields(
+                colors=[color], radii=radius, labels=None if label is None else [label]),
+                static=True)
+        return rr.Points2D(positions)
+
+    def _text(self, raw: RawMessage, route: Route) -> None:
+        message = self._decode(raw)
+        assert isinstance(message, Text)
+        try:
+            text = "```json\n" + json.dumps(json.loads(message.data), indent=1) + "\n```"
+        except json.JSONDecodeError:
+            text = message.data
+        self._times(raw, None)
+        self._emit(text_entity(raw.topic), rr.TextDocument(text, media_type="text/markdown"))

@@ -1,0 +1,161 @@
+"""Pure conversions from camlog's processor and calibration outputs to drawable arrays.
+
+Segmentation classes are shared by every overlay so that one annotation context colours
+them all: see :data:`CLASSES`.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from ..camera import CameraModel
+from ..geometry import rotation_from_quat_xyzw
+from ..messages import F64
+
+__all__ = [
+    "CLASSES",
+    "ResidualView",
+    "edge_classes",
+    "header_stamp_ns",
+    "inside_image",
+    "mask_classes",
+    "project_target",
+    "residual_view",
+    "stamp_free_key",
+    "target_points",
+]
+
+U8 = npt.NDArray[np.uint8]
+
+BACKGROUND, RED_PIXEL, CENTROID_MARKER, EDGE = 0, 1, 2, 3
+#: class id -> (label, RGBA); class 0 is transparent so overlays show the image beneath
+CLASSES: dict[int, tuple[str, tuple[int, int, int, int]]] = {
+    BACKGROUND: ("background", (0, 0, 0, 0)),
+    RED_PIXEL: ("red pixel", (255, 40, 40, 255)),
+    CENTROID_MARKER: ("centroid marker", (40, 90, 255, 255)),
+    EDGE: ("Canny edge", (40, 255, 90, 255)),
+}
+
+
+def mask_classes(mask_rgb: U8) -> U8:
+    """``(H, W)`` class ids of the red-pixel output: white -> red pixel, blue -> marker.
+
+    Thresholds at half range, so a JPEG-compressed mask classifies the same.
+
+    >>> mask = np.zeros((1, 3, 3), np.uint8); mask[0, 1] = 255; mask[0, 2] = (0, 0, 255)
+    >>> mask_classes(mask).tolist()
+    [[0, 1, 2]]
+    """
+    red = mask_rgb[..., 0] > 127
+    blue = mask_rgb[..., 2] > 127
+    classes = np.where(red, RED_PIXEL, np.where(blue, CENTROID_MARKER, BACKGROUND))
+    return classes.astype(np.uint8)
+
+
+def edge_classes(edges_mono: U8) -> U8:
+    """``(H, W)`` class ids of a Canny edge image (edge where the value is above 127)."""
+    return np.where(edges_mono > 127, EDGE, BACKGROUND).astype(np.uint8)
+
+
+@dataclass(frozen=True)
+class ResidualView:
+    """One calibration view: ``corners_px`` (N, 2) and ``residuals_px`` (N, 2), observed
+    minus reprojected, as ``camlog calibrate`` writes them."""
+
+    stamp_ns: int
+    rms_px: float
+    corners_px: F64
+    residuals_px: F64
+
+
+def residual_view(payload: Mapping[str, Any]) -> ResidualView:
+    """Parse one ``{ns}/calibration/residuals`` JSON object; ValueError when malformed."""
+    try:
+        corners = np.asarray(payload["corners_px"], dtype=np.float64).reshape(-1, 2)
+        residuals = np.asarray(payload["residuals_px"], dtype=np.float64).reshape(-1, 2)
+        stamp, rms = int(payload["stamp_ns"]), float(payload["rms_px"])
+    except (KeyError, TypeError, ValueError) as err:
+        raise ValueError(f"not a residuals record ({err})") from None
+    if corners.shape != residuals.shape:
+        raise ValueError(f"{len(corners)} corners but {len(residuals)} residuals")
+    return ResidualView(stamp, rms, corners, residuals)
+
+
+def target_points(target: Mapping[str, Any]) -> F64 | None:
+    """Points ``(N, 3)`` in the target frame worth projecting: a board's inner corners
+    (``corners_in_target``) or a box's eight vertices (``size_m``, centred)."""
+    corners = target.get("corners_in_target")
+    if corners is not None:
+        try:
+            points = np.asarray(corners, dtype=np.float64).reshape(-1, 3)
+        except (TypeError, ValueError):
+            return None
+        return points if len(points) else None
+    size = target.get("size_m")
+    if target.get("kind") == "box" and isinstance(size, list) and len(size) == 3:
+        half = np.asarray(size, dtype=np.float64) / 2
+        signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+        return signs * half
+    return None
+
+
+def project_target(
+    points_in_target: F64, *, position_m: F64, orientation_xyzw: F64, model: CameraModel
+) -> F64:
+    """Pixels ``(M, 2)`` of the target points in front of the camera, given the target's
+    pose in the camera optical frame: ``p_camera = R(q) p_target + t``."""
+    norm = float(np.linalg.norm(orientation_xyzw))
+    if not math.isfinite(norm) or norm == 0:
+        return np.zeros((0, 2))
+    camera_from_target = rotation_from_quat_xyzw(np.asarray(orientation_xyzw) / norm)
+    points_in_camera = points_in_target @ camera_from_target.T + np.asarray(position_m)
+    in_front = points_in_camera[:, 2] > 1e-6
+    if not np.any(in_front):
+        return np.zeros((0, 2))
+    return model.project(points_in_camera[in_front])
+
+
+def inside_image(uv: F64, width: int, height: int) -> F64:
+    """The pixels ``(N, 2)`` that fall on a ``width`` x ``height`` image (centres at
+    integer coordinates, so the image spans -0.5 .. W - 0.5).
+
+    >>> inside_image(np.array([[0.0, 0.0], [-1.0, 2.0], [9.4, 4.0], [3.0, 4.6]]), 10, 5)
+    array([[0. , 0. ],
+           [9.4, 4. ]])
+    """
+    keep = ((uv[:, 0] >= -0.5) & (uv[:, 0] <= width - 0.5)
+            & (uv[:, 1] >= -0.5) & (uv[:, 1] <= height - 0.5))
+    return uv[keep]
+
+
+#: bytes before the first field after a std_msgs/Header's stamp: CDR's 4-byte encapsulation
+#: header or ROS1's seq, then sec and nanosec
+_STAMP_END = 12
+
+
+def stamp_free_key(data: bytes | memoryview) -> bytes:
+    """Serialized message minus its header stamp (CDR or ROS1, header first): two
+    camera_info messages with equal keys differ only in their stamp."""
+    return bytes(data[_STAMP_END:])
+
+
+def header_stamp_ns(data: bytes | memoryview, serialization: str) -> int | None:
+    """Header stamp of a serialized message whose first field is a std_msgs/Header, read
+    without deserializing: little-endian CDR or ROS1 (None for big-endian CDR).
+
+    >>> from replay.codec import serialize
+    >>> from replay.messages import PointStamped
+    >>> header_stamp_ns(serialize(PointStamped(1_500_000_007, "f", np.zeros(3))), "cdr")
+    1500000007
+    """
+    if serialization == "cdr" and bytes(data[:2]) != b"\x00\x01":  # CDR_LE encapsulation
+        return None
+    sec, nanosec = struct.unpack_from("<iI", data, 4)
+    return int(sec) * 1_000_000_000 + int(nanosec)

@@ -1,0 +1,95 @@
+"""A cheap first look at the logs before exporting them: the facts the layout depends on.
+
+Reads the first message of each camera and overlay topic (its ``frame_id``, the first
+camera_info) and the JSON records of the scenario and the calibration summary. Every read
+stops after one message, so the survey costs a few chunks, not a pass over the log.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..errors import ReplayError
+from ..formats.base import LogReader, TopicInfo
+from ..messages import CameraInfo, Text
+from .topics import Kind, Route, classify
+
+__all__ = ["SCENARIO_TOPIC", "SUMMARY_TOPIC", "Survey", "survey"]
+
+SCENARIO_TOPIC = "/camlog/scenario"
+SUMMARY_TOPIC = "/calibration/summary"
+
+#: kinds whose first message tells which camera (frame_id) they belong to
+_FRAME_KINDS = frozenset({
+    Kind.IMAGE, Kind.CAMERA_INFO, Kind.CALIBRATED_INFO, Kind.RED_MASK, Kind.RED_CENTROID,
+    Kind.RED_COUNT, Kind.EDGES, Kind.RECTIFIED,
+})
+
+
+@dataclass
+class Survey:
+    """What the layout needs to know. ``topics``: the chosen topics of every log (a topic
+    in several logs is taken from the first); ``owner``: topic -> index of its log."""
+
+    topics: dict[str, TopicInfo] = field(default_factory=dict)
+    owner: dict[str, int] = field(default_factory=dict)
+    routes: dict[str, Route] = field(default_factory=dict)
+    frame_ids: dict[str, str] = field(default_factory=dict)  # topic -> first frame_id
+    camera_infos: dict[str, CameraInfo] = field(default_factory=dict)  # topic -> first
+    scenario: dict[str, Any] | None = None
+    calibration_summary: dict[str, Any] | None = None
+    duplicates: list[str] = field(default_factory=list)  # topics left out: an earlier log has them
+
+
+def _first(reader: LogReader, topic: str, start_ns: int | None, end_ns: int | None) -> Any:
+    for raw in reader.raw_messages([topic], start_ns, end_ns):
+        try:
+            return reader.decode(raw)
+        except ReplayError:
+            return None
+    return None
+
+
+def _json(message: Any) -> dict[str, Any] | None:
+    if not isinstance(message, Text):
+        return None
+    try:
+        data = json.loads(message.data)
+    except json.JSONDecodeError:
+        return None
+    return data if isinstance(data, dict) else None
+
+
+def survey(
+    readers: Sequence[LogReader],
+    chosen: Sequence[list[str] | None],
+    start_ns: int | None = None,
+    end_ns: int | None = None,
+) -> Survey:
+    """Survey ``readers`` restricted to their ``chosen`` topics (None: all)."""
+    result = Survey()
+    for index, (reader, wanted) in enumerate(zip(readers, chosen, strict=True)):
+        for name in sorted(reader.topics) if wanted is None else wanted:
+            info = reader.topics[name]
+            if info.count == 0:
+                continue
+            if name in result.topics:
+                result.duplicates.append(f"{name} ({reader.path})")
+                continue
+            result.topics[name], result.owner[name] = info, index
+            result.routes[name] = route = classify(name, info.msgtype)
+            if route.kind in _FRAME_KINDS:
+                message = _first(reader, name, start_ns, end_ns)
+                if message is None:
+                    continue
+                result.frame_ids[name] = getattr(message, "frame_id", "")
+                if isinstance(message, CameraInfo):
+                    result.camera_infos[name] = message
+            elif name == SCENARIO_TOPIC and result.scenario is None:
+                result.scenario = _json(_first(reader, name, None, None))
+            elif name == SUMMARY_TOPIC and result.calibration_summary is None:
+                result.calibration_summary = _json(_first(reader, name, None, None))
+    return result
