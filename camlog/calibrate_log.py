@@ -367,13 +367,18 @@ def read_truth(reader: LogReader) -> dict[str, Any] | None:
     return None
 
 
-def truth_for(truth: dict[str, Any] | None, namespace: str) -> dict[str, Any] | None:
+def truth_for(truth: dict[str, Any] | None, namespace: str,
+              frame_id: str | None = None) -> dict[str, Any] | None:
+    """The simulated camera of a namespace, or of a frame id once topics were renamed
+    (e.g. by resync, which keeps frame ids)."""
     if truth is None:
         return None
-    for camera in truth.get("cameras", []):
+    cameras = truth.get("cameras", [])
+    for camera in cameras:
         if camera.get("namespace") == namespace:
             return dict(camera)
-    return None
+    matches = [c for c in cameras if frame_id and c.get("frame_id") == frame_id]
+    return dict(matches[0]) if len(matches) == 1 else None
 
 
 def truth_model(camera: dict[str, Any]) -> CameraModel:
@@ -576,7 +581,8 @@ def calibrate_log(
                     apply_speed_limit(stream, max_speed_px)
                 note = "" if not stereo_mode else f" (camera {stream.namespace})"
                 solve_camera(stream, board, options, max_views=max_views, topic_note=note)
-                stream.truth = truth_for(truth, stream.namespace)
+                stream.truth = truth_for(truth, stream.namespace,
+                                         stream.log_info.frame_id if stream.log_info else None)
             stereo: StereoResult | None = None
             pairs: list[tuple[int, int]] = []
             frame_id = {s.namespace: (s.log_info.frame_id if s.log_info else s.name)

@@ -19,6 +19,7 @@ def _commands() -> dict[str, Command]:
         cmd_batch,
         cmd_calibrate,
         cmd_convert,
+        cmd_demo,
         cmd_golden,
         cmd_import,
         cmd_info,
@@ -30,6 +31,11 @@ def _commands() -> dict[str, Command]:
     )
 
     return {
+        "demo": (
+            "run the whole workflow on built-in scenarios: record, resync, calibrate, "
+            "process, view",
+            cmd_demo.add_arguments, cmd_demo.run,
+        ),
         "record": (
             "simulate a scenario in MuJoCo and write its camera log",
             cmd_record.add_arguments, cmd_record.run,
