@@ -100,7 +100,43 @@ class Ros1LogReader(_RosbagsReader):
         super().__init__(path, reader)
 
 
-class Rosbag2LogWriter(LogWriter):
+class _RosbagsWriter(LogWriter):
+    """Shared writing through a rosbags writer: one connection per topic."""
+
+    _writer: Any
+
+    def __init__(self, path: Path, *, overwrite: bool) -> None:
+        super().__init__(path, overwrite=overwrite)
+        self._conns: dict[str, Any] = {}
+
+    def _open(self, writer: Any) -> None:
+        self._writer = writer
+        try:
+            writer.open()
+        except Exception as err:
+            raise LogWriteError(f"cannot write {self.path}: {_first_line(err)}") from None
+
+    def _typestore(self) -> Any:
+        raise NotImplementedError
+
+    def _write(
+        self, topic: str, msgtype: str, log_time_ns: int, data: bytes | memoryview, msgdef: str
+    ) -> None:
+        conn = self._conns.get(topic)
+        if conn is None:
+            conn = self._writer.add_connection(topic, msgtype, typestore=self._typestore())
+            self._conns[topic] = conn
+        self._writer.write(conn, log_time_ns, bytes(data))
+
+    def _finish(self) -> None:
+        self._writer.close()
+
+    def _abort(self) -> None:
+        with contextlib.suppress(Exception):  # the output is discarded anyway
+            self._writer.close()
+
+
+class Rosbag2LogWriter(_RosbagsWriter):
     """Writer for a rosbag2 directory; ``storage`` is ``mcap`` (default) or ``sqlite3``."""
 
     format_name = "rosbag2"
@@ -114,40 +150,25 @@ class Rosbag2LogWriter(LogWriter):
         # rosbags names the storage file after its directory; write inside a temp parent
         # so the final directory keeps files named after itself.
         self.temp_path.mkdir()
-        self._writer = Writer2(self.temp_path / path.name, version=9, storage_plugin=plugin)
-        try:
-            self._writer.open()
-        except Exception as err:
-            raise LogWriteError(f"cannot write {path}: {_first_line(err)}") from None
-        self._conns: dict[str, Any] = {}
+        self._open(Writer2(self.temp_path / path.name, version=9, storage_plugin=plugin))
 
-    def _write(
-        self, topic: str, msgtype: str, log_time_ns: int, data: bytes | memoryview, msgdef: str
-    ) -> None:
-        conn = self._conns.get(topic)
-        if conn is None:
-            conn = self._writer.add_connection(topic, msgtype, typestore=ros2_typestore())
-            self._conns[topic] = conn
-        self._writer.write(conn, log_time_ns, bytes(data))
+    def _typestore(self) -> Any:
+        return ros2_typestore()
 
     def set_metadata(self, name: str, values: dict[str, str]) -> None:
         for key, value in values.items():
             self._writer.set_custom_data(f"{name}.{key}", value)
 
     def _finish(self) -> None:
-        self._writer.close()
+        super()._finish()
         inner = self.temp_path / self.path.name
         staged = self.temp_path.with_name(f"{self.path.name}.staged")
         inner.rename(staged)
         self.temp_path.rmdir()
         staged.rename(self.temp_path)
 
-    def _abort(self) -> None:
-        with contextlib.suppress(Exception):  # the output is discarded anyway
-            self._writer.close()
 
-
-class Ros1LogWriter(LogWriter):
+class Ros1LogWriter(_RosbagsWriter):
     """Writer for a ROS1 ``.bag`` file (lz4-compressed chunks)."""
 
     format_name = "ros1"
@@ -155,29 +176,12 @@ class Ros1LogWriter(LogWriter):
 
     def __init__(self, path: Path, *, overwrite: bool = False) -> None:
         super().__init__(path, overwrite=overwrite)
-        self._writer = Writer1(self.temp_path)
-        self._writer.set_compression(Writer1.CompressionFormat.LZ4)
-        try:
-            self._writer.open()
-        except Exception as err:
-            raise LogWriteError(f"cannot write {path}: {_first_line(err)}") from None
-        self._conns: dict[str, Any] = {}
+        writer = Writer1(self.temp_path)
+        writer.set_compression(Writer1.CompressionFormat.LZ4)
+        self._open(writer)
 
-    def _write(
-        self, topic: str, msgtype: str, log_time_ns: int, data: bytes | memoryview, msgdef: str
-    ) -> None:
-        conn = self._conns.get(topic)
-        if conn is None:
-            conn = self._writer.add_connection(topic, msgtype, typestore=ros1_typestore())
-            self._conns[topic] = conn
-        self._writer.write(conn, log_time_ns, bytes(data))
-
-    def _finish(self) -> None:
-        self._writer.close()
-
-    def _abort(self) -> None:
-        with contextlib.suppress(Exception):  # the output is discarded anyway
-            self._writer.close()
+    def _typestore(self) -> Any:
+        return ros1_typestore()
 
 
 def _first_line(err: BaseException) -> str:
