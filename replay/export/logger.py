@@ -53,6 +53,8 @@ GREEN, ORANGE, RED, YELLOW, CYAN = (60, 230, 60), (255, 150, 0), (255, 50, 50), 
     (0, 220, 255)
 #: log calls held back behind an image still being encoded (bounds memory)
 MAX_PENDING = 16
+#: log calls between blocking flushes of the recording (bounds rerun's write queue)
+FLUSH_EVERY = 400
 CORNER_RADIUS, CENTROID_RADIUS, TRUTH_RADIUS, GUIDE_RADIUS = (
     rr.components.Radius.ui_points(r) for r in (2.5, 5.0, 1.5, 0.5))
 
@@ -106,6 +108,7 @@ class SceneLogger:
         self._applied: _Times | None = None  # times last set on the stream
         # (times, entity, archetype or its encoding in progress), in message order
         self._pending: deque[tuple[_Times, str, Any]] = deque()
+        self._logged = 0
         self._pool = ThreadPoolExecutor(2, thread_name_prefix="camlog-jpeg") \
             if options.jpeg_quality is not None else None
         self._handlers: dict[Kind, Callable[[RawMessage, Route], None]] = {
@@ -183,6 +186,11 @@ class SceneLogger:
             if times != self._applied:
                 self._apply(times)
             self.rec.log(entity, archetype)
+            self._logged += 1
+            if self._logged % FLUSH_EVERY == 0:
+                # rerun writes on its own thread; without back-pressure its queue grows with
+                # the log's length whenever logging outpaces writing
+                self.rec.flush()
 
     def _apply(self, times: _Times) -> None:
         log_time_ns, stamp_ns, replay_ns = times
