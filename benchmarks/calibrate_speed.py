@@ -13,8 +13,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -26,7 +24,7 @@ from recorder.record import record
 from recorder.scenario import load_scenario
 from replay import open_reader
 
-from .report import emit
+from .report import cli_peak_rss_mb, emit
 
 CASES = [
     # label, scenario, overrides, cameras, options
@@ -47,25 +45,10 @@ def decode_only_s(path: Path, topics: list[str]) -> float:
     return time.perf_counter() - started
 
 
-#: VmHWM, not ru_maxrss: ru_maxrss survives fork + exec, so a child would report the
-#: benchmark's own (MuJoCo-sized) peak; VmHWM belongs to the new address space.
-PEAK_RSS = (
-    "import re, sys\n"
-    "from camlog.cli import main\n"
-    "code = main(sys.argv[1:])\n"
-    "status = open('/proc/self/status').read()\n"
-    "print(re.search(r'VmHWM:\\s*(\\d+)', status).group(1))\n"
-    "sys.exit(code)\n"
-)
-
-
 def peak_rss_mb(path: Path, camera: str, out: Path) -> float:
     """Peak resident memory (MB) of ``camlog calibrate`` in a fresh process."""
-    done = subprocess.run(
-        [sys.executable, "-c", PEAK_RSS, "calibrate", str(path), "--size", "7x6", "--square",
-         "0.01", "--camera", camera, "-o", str(out), "--overwrite", "--no-progress"],
-        check=True, capture_output=True, text=True)
-    return int(done.stdout.strip().splitlines()[-1]) / 1024
+    return cli_peak_rss_mb(["calibrate", str(path), "--size", "7x6", "--square", "0.01",
+                            "--camera", camera, "-o", str(out), "--overwrite", "--no-progress"])
 
 
 def main() -> None:

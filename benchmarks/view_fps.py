@@ -18,8 +18,6 @@ process) on a short and the full log shows whether memory grows with the log's l
 from __future__ import annotations
 
 import argparse
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
@@ -31,18 +29,7 @@ from replay import open_reader
 from replay.export import LoggerOptions, view_logs
 from replay.export.images import COLOR_MODELS
 
-from .report import emit
-
-#: VmHWM, not ru_maxrss: ru_maxrss survives fork + exec, so a child would report the
-#: benchmark's own peak; VmHWM belongs to the new address space.
-PEAK_RSS = (
-    "import re, sys\n"
-    "from camlog.cli import main\n"
-    "code = main(sys.argv[1:])\n"
-    "status = open('/proc/self/status').read()\n"
-    "print(re.search(r'VmHWM:\\s*(\\d+)', status).group(1))\n"
-    "sys.exit(code)\n"
-)
+from .report import cli_peak_rss_mb, emit
 
 
 def record_log(path: Path, duration_s: float) -> None:
@@ -84,10 +71,7 @@ def view_s(log: Path, out: Path, jpeg_quality: int | None) -> tuple[float, int]:
 
 def peak_rss_mb(log: Path, out: Path) -> float:
     """Peak resident memory (MB) of ``camlog view`` in a fresh process."""
-    done = subprocess.run([sys.executable, "-c", PEAK_RSS, "view", str(log), "-o", str(out),
-                           "--overwrite", "--no-progress"], check=True, capture_output=True,
-                          text=True)
-    return int(done.stdout.strip().splitlines()[-1]) / 1024
+    return cli_peak_rss_mb(["view", str(log), "-o", str(out), "--overwrite", "--no-progress"])
 
 
 def main() -> None:
