@@ -333,8 +333,9 @@ def solve_stereo(left: CameraStream, right: CameraStream, board: Board,
                                                                       list[tuple[int, int]]]:
     pairs = stereo_pairs(left, right, approximate_s)
     joint = [(li, ri) for li, ri in pairs
-             if left.frames[li].detection is not None and right.frames[ri].detection is not None
-             and left.frames[li].detection.accepted and right.frames[ri].detection.accepted
+             if (dl := left.frames[li].detection) is not None
+             and (dr := right.frames[ri].detection) is not None
+             and dl.accepted and dr.accepted
              and not (left.frames[li].duplicate and right.frames[ri].duplicate)
              and not left.frames[li].reason and not right.frames[ri].reason]
     assert left.size is not None and left.result is not None and right.result is not None
@@ -457,11 +458,11 @@ def write_calibrated_log(reader: LogReader, path: Path, cameras: list[CameraStre
     counters = dict.fromkeys(by_topic, 0)
     rectify_maps: dict[str, tuple[np.ndarray, np.ndarray]] = {}
     if stereo is not None:
-        for camera in cameras:
-            info = camera.camera_info
-            assert info is not None and camera.size is not None
-            rectify_maps[camera.namespace] = cv2.initUndistortRectifyMap(
-                info.k, info.d, info.r, info.p[:, :3], camera.size, cv2.CV_16SC2)
+        for stream in cameras:
+            info = stream.camera_info
+            assert info is not None and stream.size is not None
+            rectify_maps[stream.namespace] = cv2.initUndistortRectifyMap(
+                info.k, info.d, info.r, info.p[:, :3], stream.size, cv2.CV_16SC2)
     bar = tqdm(total=reader.message_count, unit="msg", desc="write", leave=False,
                disable=None if progress is None else not progress)
     with open_writer(path) as writer:
@@ -500,7 +501,8 @@ def write_calibrated_log(reader: LogReader, path: Path, cameras: list[CameraStre
             if used and corners is not None:
                 residual = result.residuals_px[frame.index]
                 writer.write(f"{ns}/calibration/view_error", PointStamped(
-                    stamp, image.frame_id, [result.view_rms_px[frame.index], 0.0, 0.0]),
+                    stamp, image.frame_id,
+                    np.array([result.view_rms_px[frame.index], 0.0, 0.0], dtype=np.float64)),
                     log_time_ns=raw.log_time_ns)
                 writer.write(f"{ns}/calibration/residuals", Text(json.dumps({
                     "stamp_ns": stamp, "frame_id": image.frame_id,

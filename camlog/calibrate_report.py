@@ -272,7 +272,7 @@ def write_files(folder: Path, cameras: list[CameraStream], *, stereo: StereoResu
                 rectified = []
                 for camera, image in zip(cameras, images, strict=True):
                     info = camera.camera_info
-                    assert info is not None and camera.size is not None
+                    assert info is not None and camera.size is not None and image is not None
                     maps = cv2.initUndistortRectifyMap(info.k, info.d, info.r, info.p[:, :3],
                                                        camera.size, cv2.CV_16SC2)
                     rectified.append(cv2.remap(image, maps[0], maps[1], cv2.INTER_LINEAR))

@@ -74,8 +74,10 @@ def check_detection(gray: np.ndarray, corners_px: F64, board: Board) -> Detectio
     if u.min() < BORDER_PX or v.min() < BORDER_PX or u.max() > w - 1 - BORDER_PX \
             or v.max() > h - 1 - BORDER_PX:
         return Detection(corners_px, False, "touches the image border")
-    grid = corners_px.reshape(board.rows, board.cols, 2)
-    dx, dy = np.gradient(grid, axis=1), np.gradient(grid, axis=0)  # local grid axes
+    grid: F64 = corners_px.reshape(board.rows, board.cols, 2)
+    # local grid axes; with one axis np.gradient returns a single array
+    dx: F64 = np.gradient(grid, axis=1)
+    dy: F64 = np.gradient(grid, axis=0)
     rows, cols = np.meshgrid(np.arange(board.rows), np.arange(board.cols), indexing="ij")
     parity = np.where((rows + cols) % 2 == 0, 1.0, -1.0)
     blurred = cv2.blur(gray, (3, 3)).astype(np.float32)

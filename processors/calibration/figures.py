@@ -25,7 +25,7 @@ def _text(img: np.ndarray, text: str, org: tuple[int, int], scale: float = 0.5,
 
 
 def _hue(i: int, n: int) -> tuple[int, int, int]:
-    hsv = np.uint8([[[int(170 * i / max(1, n - 1)), 200, 200]]])
+    hsv = np.array([[[int(170 * i / max(1, n - 1)), 200, 200]]], dtype=np.uint8)
     b, g, r = cv2.cvtColor(hsv, cv2.COLOR_HSV2BGR)[0, 0]
     return int(b), int(g), int(r)
 

@@ -109,14 +109,15 @@ def _solve(points_in_board: F64, corners: list[F64], size: tuple[int, int],
     except cv2.error as err:
         raise ProcessorError(f"calibration failed: {str(err).strip().splitlines()[-1]}") from None
     d = np.asarray(d, dtype=np.float64).reshape(-1)[:n_d]
-    model = CameraModel(size[0], size[1], k, options.distortion_model, d)
+    model = CameraModel(size[0], size[1], np.asarray(k, dtype=np.float64),
+                        options.distortion_model, d)
     poses = [_pose(r, t) for r, t in zip(rvecs, tvecs, strict=True)]
     residuals = []
     for pose, c in zip(poses, corners, strict=True):
         projected = model.project(points_in_board @ pose[:3, :3].T + pose[:3, 3])
         residuals.append(c - projected)
-    return float(rms), model, poses, np.asarray(std_in).reshape(-1), \
-        np.asarray(per_view).reshape(-1), residuals
+    return float(rms), model, poses, np.asarray(std_in, dtype=np.float64).reshape(-1), \
+        np.asarray(per_view, dtype=np.float64).reshape(-1), residuals
 
 
 def calibrate_mono(points_in_board: F64, corners: list[F64], size: tuple[int, int],

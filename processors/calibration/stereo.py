@@ -82,13 +82,15 @@ def calibrate_stereo(points_in_board: F64, left: list[F64], right: list[F64], *,
             left_model.k, left_model.d, right_model.k, right_model.d, size,
             flags=cv2.CALIB_FIX_INTRINSIC, criteria=CRITERIA,
         )
-        r1, r2, p1, p2, _q, _roi1, _roi2 = cv2.stereoRectify(
+        r1_cv, r2_cv, p1_cv, p2_cv, _q, _roi1, _roi2 = cv2.stereoRectify(
             left_model.k, left_model.d, right_model.k, right_model.d, size, rot, trans,
             flags=cv2.CALIB_ZERO_DISPARITY, alpha=0.0,
         )
     except cv2.error as err:
         raise ProcessorError(f"stereo calibration failed: {str(err).strip().splitlines()[-1]}") \
             from None
+    r1, r2 = np.asarray(r1_cv, dtype=np.float64), np.asarray(r2_cv, dtype=np.float64)
+    p1, p2 = np.asarray(p1_cv, dtype=np.float64), np.asarray(p2_cv, dtype=np.float64)
     pose = np.eye(4)
     pose[:3, :3] = rot
     pose[:3, 3] = np.asarray(trans).reshape(3)

@@ -355,9 +355,12 @@ def test_resynced_rig_calibrates(unsynced_log: Path, tmp_path: Path) -> None:
     assert run("resync", unsynced_log, "-o", synced).code == 0
     out = calibrate(synced, tmp_path / "out", "--left", "/stereo_sync/left", "--right",
                     "/stereo_sync/right")
-    s = summary(out)["stereo"]
-    # no ground truth under the new namespaces: the rig is the spec's 0.02 m one
-    assert "truth" not in s
+    full = summary(out)
+    s = full["stereo"]
+    # resync renames the topics but keeps the frame ids, by which the truth is still found
+    assert s["truth"]["baseline_m"] == pytest.approx(BASELINE_M, rel=1e-9)
+    assert abs(s["truth"]["baseline_error_percent"]) < 0.5
+    assert all("truth" in cam["parameters"]["fx"] for cam in full["cameras"])
     assert s["baseline_m"] == pytest.approx(BASELINE_M, rel=0.005)
     assert s["epipolar_rms_px"] < 0.1
 
