@@ -16,7 +16,6 @@ import os
 import shutil
 import time
 from collections import deque
-from collections.abc import Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -39,10 +38,11 @@ from processors.calibration.solve import (
     max_projection_difference,
 )
 from processors.calibration.stereo import StereoResult, calibrate_stereo
-from processors.errors import InputError, ProcessorError
+from processors.errors import InputError
 from processors.resync import pair_stamps
 from replay.camera import CameraModel
 from replay.codec import decode_compressed, to_bgr_or_mono, to_mono8
+from replay.errors import ReplayError
 from replay.formats import LogReader, open_reader, open_writer
 from replay.messages import CameraInfo, CompressedImage, Image, PointStamped, Text
 
@@ -192,9 +192,7 @@ def _as_image(message: object, reader: LogReader, topic: str) -> Image:
     if isinstance(message, CompressedImage):
         try:
             return decode_compressed(message)
-        except ProcessorError:
-            raise
-        except Exception as err:
+        except ReplayError as err:
             raise InputError(f"{reader.path}: {topic}: {err}") from None
     if not isinstance(message, Image):
         raise InputError(f"{reader.path}: {topic} does not hold images")
@@ -521,11 +519,6 @@ def _annotate(bgr: np.ndarray, corners: np.ndarray | None, board: Board, status:
     from processors.calibration.figures import annotate_detection
 
     return annotate_detection(bgr, corners, board.pattern_size, status, used)
-
-
-def iter_used_views(camera: CameraStream) -> Iterator[int]:
-    assert camera.result is not None
-    yield from camera.result.view_ids
 
 
 def outlier_limit(camera: CameraStream) -> float:

@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from processors.errors import ConfigError
+
 from .demo import run_demo
 
 
@@ -24,7 +26,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Run the demo, printing where each output went."""
     if args.duration <= 0:
-        raise SystemExit("camlog demo: error: --duration must be positive")
+        raise ConfigError(f"--duration must be positive, got {args.duration:g}")
     result = run_demo(args.output, duration_s=args.duration, seed=args.seed,
                       progress=False if args.no_progress else None)
     print(f"done in {result.wall_s:.0f} s; everything is in {args.output}/")

@@ -180,11 +180,6 @@ STEPS: dict[str, tuple[frozenset[str], Runner]] = {
 }
 
 
-def register_step(kind: str, keys: frozenset[str], runner: Runner) -> None:
-    """Add a step kind (one function and its option names)."""
-    STEPS[kind] = (keys, runner)
-
-
 def run_step(step: Step, log: Path, out: Path, workers: int) -> StepOutcome:
     """Run one step on ``log``, writing under the folder ``out``."""
     out.mkdir(parents=True, exist_ok=True)

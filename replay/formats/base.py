@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import os
 import shutil
-import sys
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -268,7 +267,3 @@ class LogWriter:
         else:
             self.abort()
 
-
-def warn(message: str) -> None:
-    """One warning line on stderr."""
-    print(f"camlog: warning: {message}", file=sys.stderr)

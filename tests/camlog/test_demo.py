@@ -34,3 +34,13 @@ def test_demo_runs_every_step_and_says_where_outputs_went(
     assert (out / "demo.rrd").stat().st_size > 100_000
     # a second run replaces the demo's own outputs
     assert main(["demo", "-o", str(out), "--duration", "4", "--no-progress"]) == 0
+
+
+def test_demo_rejects_a_bad_duration_in_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "demo"
+    assert main(["demo", "-o", str(out), "--duration", "0"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["camlog demo: error: --duration must be positive, got 0"]
+    assert not out.exists()
