@@ -10,7 +10,7 @@ import numpy as np
 
 from processors.calibration.board import Board
 from processors.calibration.check import linearity_error, reprojection_rms
-from processors.calibration.stereo import epipolar_errors
+from processors.calibration.stereo import epipolar_errors, orient_right_views
 from processors.errors import InputError
 from replay.calibration_yaml import load_calibration
 from replay.camera import CameraModel
@@ -73,9 +73,12 @@ def check_log(log: Path, *, board: Board, cameras: list[str], calibrations: list
                  if left.frames[li].candidate and right.frames[ri].candidate]
         if not pairs:
             raise InputError("no stereo pair shows the whole board in both cameras")
-        epipolar = epipolar_errors(
-            [left.frames[li].detection.corners_px for li, _ in pairs],  # type: ignore[union-attr]
+        left_views = [left.frames[li].detection.corners_px for li, _ in pairs]  # type: ignore[union-attr]
+        right_views = orient_right_views(
+            board.points_in_board(), left_views,
             [right.frames[ri].detection.corners_px for _, ri in pairs],  # type: ignore[union-attr]
-            left_model=models[0], right_model=models[1], r1=infos[0].r, p1=infos[0].p,
-            r2=infos[1].r, p2=infos[1].p)
+            left_model=models[0], right_model=models[1])
+        epipolar = epipolar_errors(left_views, right_views, left_model=models[0],
+                                   right_model=models[1], r1=infos[0].r, p1=infos[0].p,
+                                   r2=infos[1].r, p2=infos[1].p)
     return CheckResult(len(first), linear, reproj, epipolar)

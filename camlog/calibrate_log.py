@@ -37,7 +37,7 @@ from processors.calibration.solve import (
     cross_validate,
     max_projection_difference,
 )
-from processors.calibration.stereo import StereoResult, calibrate_stereo
+from processors.calibration.stereo import StereoResult, calibrate_stereo, orient_right_views
 from processors.errors import InputError
 from processors.resync import pair_stamps
 from replay.camera import CameraModel
@@ -283,12 +283,13 @@ def solve_camera(camera: CameraStream, board: Board, options: CalibrationOptions
         std=result.std,
         camera_from_board={frame_of[i]: p for i, p in result.camera_from_board.items()},
         residuals_px={frame_of[i]: r for i, r in result.residuals_px.items()},
+        options=result.options, tangential_test=result.tangential_test,
     )
     used = [camera.frames[i].detection.corners_px for i in camera.result.view_ids]  # type: ignore[union-attr]
     used_params = np.array([view_parameters(c, board, camera.size) for c in used])
     camera.coverage = coverage(used_params, used, camera.size)
     camera.cross_validation_px = cross_validate(board.points_in_board(), used, camera.size,
-                                                options)
+                                                result.options)
 
 
 def mono_camera_info(model: CameraModel, frame_id: str) -> CameraInfo:
@@ -341,12 +342,14 @@ def solve_stereo(left: CameraStream, right: CameraStream, board: Board,
                        for li, _ in joint]) if joint else np.zeros((0, 4))
     chosen = [joint[i] for i in select_views(params, max_views=max_views,
                                              min_distance=MIN_VIEW_DISTANCE)]
-    result = calibrate_stereo(
-        board.points_in_board(),
-        [left.frames[li].detection.corners_px for li, _ in chosen],  # type: ignore[union-attr]
+    left_views = [left.frames[li].detection.corners_px for li, _ in chosen]  # type: ignore[union-attr]
+    right_views = orient_right_views(
+        board.points_in_board(), left_views,
         [right.frames[ri].detection.corners_px for _, ri in chosen],  # type: ignore[union-attr]
-        left_model=left.result.model, right_model=right.result.model, square_m=board.square_m,
-    )
+        left_model=left.result.model, right_model=right.result.model)
+    result = calibrate_stereo(board.points_in_board(), left_views, right_views,
+                              left_model=left.result.model, right_model=right.result.model,
+                              square_m=board.square_m)
     return result, chosen
 
 
@@ -580,11 +583,14 @@ def calibrate_log(
                                          stream.log_info.frame_id if stream.log_info else None)
             stereo: StereoResult | None = None
             pairs: list[tuple[int, int]] = []
+            stereo_rejected: list[tuple[tuple[int, int], str]] = []
             frame_id = {s.namespace: (s.log_info.frame_id if s.log_info else s.name)
                         for s in streams}
             if stereo_mode:
                 left, right = streams
-                stereo, pairs = solve_stereo(left, right, board, approximate_s, max_views)
+                stereo, joint = solve_stereo(left, right, board, approximate_s, max_views)
+                pairs = [joint[i] for i in stereo.view_ids]
+                stereo_rejected = [(joint[i], why) for i, why in sorted(stereo.rejected.items())]
                 for stream, r, p in ((left, stereo.r1, stereo.p1), (right, stereo.r2, stereo.p2)):
                     m = stream.result.model  # type: ignore[union-attr]
                     stream.camera_info = CameraInfo(0, frame_id[stream.namespace], m.width,
@@ -592,7 +598,8 @@ def calibrate_log(
             else:
                 m = streams[0].result.model  # type: ignore[union-attr]
                 streams[0].camera_info = mono_camera_info(m, frame_id[streams[0].namespace])
-            summary = build_summary(streams, stereo, truth, board, options)
+            summary = build_summary(streams, stereo, truth, board, options,
+                                    stereo_rejected=stereo_rejected)
             stereo_frames = {(streams[0].namespace, li) for li, _ in pairs} | \
                 {(streams[-1].namespace, ri) for _, ri in pairs} if stereo_mode else set()
             write_calibrated_log(reader, staging.path / "calibration.mcap", streams, board=board,

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from processors.calibration.board import PATTERNS, make_board
-from processors.calibration.solve import CalibrationOptions
+from processors.calibration.solve import CalibrationOptions, tangential_mode
 from processors.errors import InputError
 from replay.formats import open_reader
 
@@ -40,6 +40,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fix-aspect-ratio", action="store_true", help="force fx = fy")
     p.add_argument("--zero-tangent-dist", action="store_true",
                    help="hold tangential distortion p1 = p2 = 0")
+    p.add_argument("--tangent-dist", action="store_true",
+                   help="always estimate tangential distortion p1, p2 (camera_calibration's "
+                        "default; by default they are estimated only when the views show "
+                        "them, by a likelihood-ratio test)")
     p.add_argument("-k", "--k-coefficients", type=int, default=2, metavar="N",
                    help="radial coefficients to estimate: <= 3 plumb_bob, > 3 "
                         "rational_polynomial (default 2)")
@@ -93,7 +97,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     options = CalibrationOptions(
         fix_principal_point=args.fix_principal_point, fix_aspect_ratio=args.fix_aspect_ratio,
-        zero_tangent_dist=args.zero_tangent_dist, k_coefficients=args.k_coefficients)
+        tangential=tangential_mode(args.zero_tangent_dist, args.tangent_dist),
+        k_coefficients=args.k_coefficients)
     output = args.output or args.log.with_name(f"{args.log.stem}_calibration")
     run_ = calibrate_log(
         args.log, board=board, cameras=cameras, output_dir=output, options=options,
@@ -109,11 +114,14 @@ def run(args: argparse.Namespace) -> int:
         print(f"  fx {p['fx']['value']:.3f} ± {p['fx']['std']:.3f}  fy {p['fy']['value']:.3f} ± "
               f"{p['fy']['std']:.3f}  cx {p['cx']['value']:.3f} ± {p['cx']['std']:.3f}  "
               f"cy {p['cy']['value']:.3f} ± {p['cy']['std']:.3f}")
+        if "summary" in camera["tangential"]:
+            print(f"  {camera['tangential']['summary']}")
         if "max_projection_difference_vs_truth_px" in camera:
             print(f"  vs simulator truth: max projection difference "
-                  f"{camera['max_projection_difference_vs_truth_covered_px']:.3f} px where "
-                  f"corners were seen, {camera['max_projection_difference_vs_truth_px']:.3f} px "
-                  "over the whole image")
+                  f"{camera['max_projection_difference_vs_truth_covered_aligned_px']:.3f} px "
+                  "where corners were seen, "
+                  f"{camera['max_projection_difference_vs_truth_aligned_px']:.3f} px over the "
+                  "whole image (camera frames aligned by a rotation)")
     if "stereo" in run_.summary:
         s = run_.summary["stereo"]
         print(f"stereo: baseline {s['baseline_m']:.5f} m, epipolar RMS "

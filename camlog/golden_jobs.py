@@ -72,7 +72,9 @@ CAMERA_KEYS = ("namespace", "image_topic", "width", "height", "frames", "distinc
                "boards_found", "candidate_views", "selected_views", "used_views", "rejected",
                "rms_px", "distortion_model", "parameters", "cross_validation_px",
                "max_projection_difference_vs_truth_px",
-               "max_projection_difference_vs_truth_covered_px")
+               "max_projection_difference_vs_truth_covered_px",
+               "max_projection_difference_vs_truth_aligned_px",
+               "max_projection_difference_vs_truth_covered_aligned_px")
 STEREO_KEYS = ("rms_px", "epipolar_rms_px", "baseline_m", "baseline_std_m", "square_m",
                "rotation_deg", "translation_m", "joint_views")
 

@@ -94,7 +94,7 @@ def _resync(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcom
 
 def _calibrate(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
     from processors.calibration.board import make_board
-    from processors.calibration.solve import CalibrationOptions
+    from processors.calibration.solve import CalibrationOptions, tangential_mode
 
     from .calibrate_log import calibrate_log
 
@@ -110,7 +110,8 @@ def _calibrate(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOut
         options=CalibrationOptions(
             fix_principal_point=bool(o.get("fix_principal_point", False)),
             fix_aspect_ratio=bool(o.get("fix_aspect_ratio", False)),
-            zero_tangent_dist=bool(o.get("zero_tangent_dist", False)),
+            tangential=tangential_mode(bool(o.get("zero_tangent_dist", False)),
+                                       bool(o.get("tangent_dist", False))),
             k_coefficients=int(o.get("k_coefficients", 2))),
         approximate_s=o.get("approximate"), camera_name=o.get("camera_name"),
         max_views=int(o.get("max_views", 150)), overwrite=True, workers=workers,
@@ -173,7 +174,8 @@ STEPS: dict[str, tuple[frozenset[str], Runner]] = {
     "resync": (frozenset({"left", "right", "slop", "out_prefix"}), _resync),
     "calibrate": (frozenset({"size", "square", "camera", "left", "right", "approximate",
                              "fix_principal_point", "fix_aspect_ratio", "zero_tangent_dist",
-                             "k_coefficients", "camera_name", "max_views"}), _calibrate),
+                             "tangent_dist", "k_coefficients", "camera_name", "max_views"}),
+                  _calibrate),
     "process": (frozenset({"topic", "red_pixels", "edges", "rectify", "every", "rate",
                            "compress"}), _process),
     "info": (frozenset(), _info),

@@ -14,7 +14,10 @@ from .errors import ScenarioError
 from .scenario import CameraSpec, TargetSpec
 from .scene import outline_in_target
 
+#: a fully visible board keeps this margin (px at 640 px width, scaled with the width) from
+#: the image border: the calibration's detector drops corners within 8 px of it
 IN_VIEW_MARGIN_PX = 8.0
+REFERENCE_WIDTH_PX = 640
 MAX_TRIES = 5000
 
 
@@ -35,9 +38,11 @@ def visible_fraction(
     world_from_target: F64, points_in_target: F64, cameras: tuple[CameraSpec, ...],
     margin_px: float = IN_VIEW_MARGIN_PX,
 ) -> float:
-    """Smallest fraction, over cameras, of the points that project inside the image."""
+    """Smallest fraction, over cameras, of the points that project inside the image, at
+    least ``margin_px`` (scaled to a 640 px wide image) from its border."""
     worst = 1.0
     for camera in cameras:
+        margin = margin_px * min(1.0, camera.model.width / REFERENCE_WIDTH_PX)
         camera_from_target = invert(camera.world_from_camera) @ world_from_target
         pts = points_in_target @ camera_from_target[:3, :3].T + camera_from_target[:3, 3]
         if np.any(pts[:, 2] <= 0.01):
@@ -45,8 +50,8 @@ def visible_fraction(
         uv = camera.model.project(pts)
         w, h = camera.model.width, camera.model.height
         inside = (
-            (uv[:, 0] >= margin_px) & (uv[:, 0] <= w - 1 - margin_px)
-            & (uv[:, 1] >= margin_px) & (uv[:, 1] <= h - 1 - margin_px)
+            (uv[:, 0] >= margin) & (uv[:, 0] <= w - 1 - margin)
+            & (uv[:, 1] >= margin) & (uv[:, 1] <= h - 1 - margin)
         )
         worst = min(worst, float(np.mean(inside)))
     return worst

@@ -1,13 +1,19 @@
 """Intrinsic calibration of one camera: OpenCV's solver, outlier rejection, uncertainty.
 
 Options keep camera_calibration's meaning: ``fix_principal_point`` holds (cx, cy) at the
-image centre, ``fix_aspect_ratio`` forces fx = fy, ``zero_tangent_dist`` holds p1 = p2 = 0,
-and ``k_coefficients`` radial terms are estimated (<= 3: plumb_bob, > 3:
-rational_polynomial, up to 6).
+image centre, ``fix_aspect_ratio`` forces fx = fy, and ``k_coefficients`` radial terms are
+estimated (<= 3: plumb_bob, > 3: rational_polynomial, up to 6). Tangential distortion
+(p1, p2) is held at zero (``"zero"``, camera_calibration's --zero-tangent-dist), always
+estimated (``"estimate"``, camera_calibration's default) or, by default (``"auto"``),
+estimated only when the views show it: a likelihood-ratio test of the two fits. At a narrow
+field of view p1, p2 trade almost freely against the principal point and a small turn of
+the camera, so estimating them when the lens has none costs principal point accuracy.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from dataclasses import dataclass, field
 
 import cv2
@@ -24,19 +30,47 @@ STD_NAMES = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "k5", "
 OUTLIER_FACTOR = 3.0
 OUTLIER_FLOOR_PX = 0.3
 MIN_VIEWS = 5
+#: rounds of removing views far above the rest, each followed by a fresh solve
+REJECTION_ROUNDS = 3
+TANGENTIAL_MODES = ("auto", "estimate", "zero")
+#: "auto" keeps p1, p2 when holding them at zero raises the residual more than noise would
+#: with this probability (the residual is not quite independent noise: views share small
+#: biases, so the test is strict)
+TANGENTIAL_P_VALUE = 1e-3
 CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-12)
+
+
+def tangential_mode(zero_tangent_dist: bool, tangent_dist: bool) -> str:
+    """The tangential mode of camera_calibration-style flags: --zero-tangent-dist holds
+    p1 = p2 = 0, --tangent-dist always estimates them, neither lets the views decide."""
+    if zero_tangent_dist and tangent_dist:
+        raise ProcessorError("--zero-tangent-dist and --tangent-dist contradict each other")
+    return "zero" if zero_tangent_dist else "estimate" if tangent_dist else "auto"
 
 
 @dataclass(frozen=True)
 class CalibrationOptions:
     fix_principal_point: bool = False
     fix_aspect_ratio: bool = False
-    zero_tangent_dist: bool = False
+    tangential: str = "auto"
     k_coefficients: int = 2
 
     def __post_init__(self) -> None:
         if not 0 <= self.k_coefficients <= 6:
             raise ProcessorError(f"--k-coefficients must be 0..6, got {self.k_coefficients}")
+        if self.tangential not in TANGENTIAL_MODES:
+            raise ProcessorError(f"tangential distortion must be one of "
+                                 f"{', '.join(TANGENTIAL_MODES)}, got {self.tangential!r}")
+
+    def with_tangential(self, mode: str) -> CalibrationOptions:
+        return dataclasses.replace(self, tangential=mode)
+
+    @property
+    def free_intrinsics(self) -> int:
+        """How many intrinsic parameters the solver estimates."""
+        focal = 1 if self.fix_aspect_ratio else 2
+        centre = 0 if self.fix_principal_point else 2
+        return focal + centre + self.k_coefficients + (0 if self.tangential == "zero" else 2)
 
     @property
     def distortion_model(self) -> str:
@@ -49,7 +83,7 @@ class CalibrationOptions:
             flags |= cv2.CALIB_FIX_PRINCIPAL_POINT
         if self.fix_aspect_ratio:
             flags |= cv2.CALIB_FIX_ASPECT_RATIO
-        if self.zero_tangent_dist:
+        if self.tangential == "zero":
             flags |= cv2.CALIB_ZERO_TANGENT_DIST
         if self.k_coefficients > 3:
             flags |= cv2.CALIB_RATIONAL_MODEL
@@ -58,6 +92,27 @@ class CalibrationOptions:
             if self.k_coefficients < n:
                 flags |= flag
         return flags
+
+
+@dataclass(frozen=True)
+class TangentialTest:
+    """Does the fit need p1, p2? ``chi2`` is the rise in the residual sum of squares when
+    they are held at zero, in units of the free fit's residual variance; under "no
+    tangential distortion" it follows a chi-square law with 2 degrees of freedom."""
+
+    chi2: float
+    estimated: bool  # the outcome: p1, p2 kept
+
+    @property
+    def p_value(self) -> float:
+        return math.exp(-max(self.chi2, 0.0) / 2.0)
+
+    def describe(self) -> str:
+        verdict = ("estimated" if self.estimated
+                   else "held at zero (the views do not show any)")
+        return (f"tangential distortion {verdict}: holding p1 = p2 = 0 raises the residual by "
+                f"chi2(2) = {self.chi2:.1f}, p = {self.p_value:.2g} "
+                f"(kept when p < {TANGENTIAL_P_VALUE:g})")
 
 
 @dataclass
@@ -72,6 +127,9 @@ class MonoResult:
     std: dict[str, float]  # standard deviation of every estimated parameter
     camera_from_board: dict[int, F64]  # (4, 4) per used view
     residuals_px: dict[int, F64] = field(default_factory=dict)  # (N, 2) per used view
+    #: the options solved with: "auto" tangential distortion resolved to what was chosen
+    options: CalibrationOptions = field(default_factory=CalibrationOptions)
+    tangential_test: TangentialTest | None = None
 
     def parameters(self) -> dict[str, float]:
         m = self.model
@@ -120,34 +178,54 @@ def _solve(points_in_board: F64, corners: list[F64], size: tuple[int, int],
         np.asarray(per_view, dtype=np.float64).reshape(-1), residuals
 
 
+def far_above_the_rest(view_ids: list[int], view_rms_px: F64, what: str) -> dict[int, str]:
+    """Views whose RMS error exceeds max(OUTLIER_FACTOR x the median, OUTLIER_FLOOR_PX),
+    with why; none when removing them would leave fewer than MIN_VIEWS."""
+    median = float(np.median(view_rms_px))
+    limit = max(OUTLIER_FACTOR * median, OUTLIER_FLOOR_PX)
+    bad = {i: (f"{what} RMS {e:.3f} px > {limit:.3f} px "
+               f"({OUTLIER_FACTOR:g}x the median {median:.3f} px)")
+           for i, e in zip(view_ids, view_rms_px, strict=True) if e > limit}
+    return bad if len(view_ids) - len(bad) >= MIN_VIEWS else {}
+
+
 def calibrate_mono(points_in_board: F64, corners: list[F64], size: tuple[int, int],
                    options: CalibrationOptions, *, reject_outliers: bool = True) -> MonoResult:
     """Calibrate from views ``corners[i]`` ``(N, 2)`` of the board points ``(N, 3)``.
 
     Views whose RMS error lies far above the rest are removed and the camera re-solved,
-    up to three rounds.
+    up to three rounds. With ``tangential="auto"`` this is done with p1, p2 free; then the
+    kept views are solved again with p1 = p2 = 0 and the better-supported model is returned.
     """
     if len(corners) < MIN_VIEWS:
         raise ProcessorError(
             f"too few good views to calibrate: {len(corners)} (need at least {MIN_VIEWS}); "
             "record more board poses"
         )
+    solve_options = options.with_tangential("estimate") if options.tangential == "auto" \
+        else options
     active = list(range(len(corners)))
     rejected: dict[int, str] = {}
-    for _round in range(4):
-        rms, model, poses, std, per_view, residuals = _solve(
-            points_in_board, [corners[i] for i in active], size, options)
-        if not reject_outliers:
+    for round_ in range(REJECTION_ROUNDS + 1):
+        solution = _solve(points_in_board, [corners[i] for i in active], size, solve_options)
+        bad = far_above_the_rest(active, solution[4], "reprojection") \
+            if reject_outliers and round_ < REJECTION_ROUNDS else {}
+        if not bad:
             break
-        median = float(np.median(per_view))
-        limit = max(OUTLIER_FACTOR * median, OUTLIER_FLOOR_PX)
-        bad = [(i, e) for i, e in zip(active, per_view, strict=True) if e > limit]
-        if not bad or len(active) - len(bad) < MIN_VIEWS:
-            break
-        for i, e in bad:
-            rejected[i] = (f"reprojection RMS {e:.3f} px > {limit:.3f} px "
-                           f"({OUTLIER_FACTOR:g}x the median {median:.3f} px)")
+        rejected |= bad
         active = [i for i in active if i not in rejected]
+    test = None
+    if options.tangential == "auto":
+        zero_options = options.with_tangential("zero")
+        without = _solve(points_in_board, [corners[i] for i in active], size, zero_options)
+        observed = 2 * sum(len(corners[i]) for i in active)
+        dof = observed - solve_options.free_intrinsics - 6 * len(active)
+        chi2 = (without[0] ** 2 - solution[0] ** 2) / max(solution[0] ** 2, 1e-300) * dof
+        test = TangentialTest(chi2, estimated=False)
+        test = dataclasses.replace(test, estimated=test.p_value < TANGENTIAL_P_VALUE)
+        if not test.estimated:
+            solution, solve_options = without, zero_options
+    rms, model, poses, std, per_view, residuals = solution
     names = ["fx", "fy", "cx", "cy", *_distortion_names(model.distortion_model)]
     opencv_index = {n: STD_NAMES.index(n) for n in names}
     sigma = {n: float(std[opencv_index[n]]) for n in names}
@@ -157,15 +235,23 @@ def calibrate_mono(points_in_board: F64, corners: list[F64], size: tuple[int, in
         rejected=rejected, std=sigma,
         camera_from_board=dict(zip(active, poses, strict=True)),
         residuals_px=dict(zip(active, residuals, strict=True)),
+        options=solve_options, tangential_test=test,
     )
 
 
 def max_projection_difference(a: CameraModel, b: CameraModel, step_px: int = 8,
-                              within: F64 | None = None) -> float:
+                              within: F64 | None = None, *, align_rotation: bool = False) -> float:
     """Largest pixel distance between where ``a`` and ``b`` image the same ray.
 
     Over the whole image, or only inside the convex hull of the points ``within`` (N, 2),
     e.g. every corner the calibration saw: outside it a model only extrapolates.
+
+    With ``align_rotation`` the rays of ``a`` are first turned by the rotation that best
+    maps them onto ``b`` (least squares in pixels). Intrinsic calibration cannot observe a
+    rotation of the camera frame: the board poses absorb it, and a principal point shift of
+    δ px with tangential distortion is nearly such a rotation at a narrow field of view. The
+    aligned difference is what two models disagree on once their frames agree, as mrcal's
+    projection difference with an implied rotation.
     """
     us, vs = np.meshgrid(np.arange(0, a.width, step_px, dtype=np.float64),
                          np.arange(0, a.height, step_px, dtype=np.float64))
@@ -175,13 +261,30 @@ def max_projection_difference(a: CameraModel, b: CameraModel, step_px: int = 8,
         inside = [cv2.pointPolygonTest(hull, (float(u), float(v)), False) >= 0
                   for u, v in pixels]
         pixels = pixels[np.asarray(inside, dtype=bool)]
-    rays = a.undistort_pixels(pixels)
-    return float(np.linalg.norm(b.distort_normalized(rays) - pixels, axis=1).max())
+    rays_in_a = np.column_stack([a.undistort_pixels(pixels), np.ones(len(pixels))])
+    rvec_b_from_a = _best_rotation(rays_in_a, pixels, b) if align_rotation else np.zeros(3)
+    uv, _ = cv2.projectPoints(rays_in_a, rvec_b_from_a, np.zeros(3), b.k, b.d)
+    return float(np.linalg.norm(uv.reshape(-1, 2) - pixels, axis=1).max())
+
+
+def _best_rotation(rays: F64, pixels: F64, model: CameraModel, iterations: int = 20) -> F64:
+    """Rotation vector ``r`` minimising the pixel error of ``model`` imaging ``R(r) rays``
+    at ``pixels`` (Gauss-Newton; the rotation is small, so it starts from zero)."""
+    rvec = np.zeros(3)
+    for _ in range(iterations):
+        uv, jacobian = cv2.projectPoints(rays, rvec, np.zeros(3), model.k, model.d)
+        error = (uv.reshape(-1, 2) - pixels).reshape(-1)
+        step = np.linalg.lstsq(jacobian[:, :3], -error, rcond=None)[0]
+        rvec = rvec + step
+        if np.abs(step).max() < 1e-12:
+            break
+    return rvec
 
 
 def cross_validate(points_in_board: F64, corners: list[F64], size: tuple[int, int],
                    options: CalibrationOptions, seed: int = 0) -> float | None:
-    """Calibrate two disjoint halves separately; their max projection difference (px)."""
+    """Calibrate two disjoint halves separately; their max projection difference (px) over
+    the image, after aligning their camera frames (see :func:`max_projection_difference`)."""
     if len(corners) < 2 * MIN_VIEWS:
         return None
     order = np.random.default_rng(seed).permutation(len(corners))
@@ -191,4 +294,4 @@ def cross_validate(points_in_board: F64, corners: list[F64], size: tuple[int, in
                        reject_outliers=False).model
         for h in halves
     ]
-    return max_projection_difference(models[0], models[1])
+    return max_projection_difference(models[0], models[1], align_rotation=True)

@@ -9,7 +9,7 @@ rotation and translation come from the joint views with those intrinsics held fi
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -18,11 +18,13 @@ from replay.camera import CameraModel
 from replay.messages import F64
 
 from ..errors import ProcessorError
-from .solve import CRITERIA, MIN_VIEWS
+from .solve import CRITERIA, MIN_VIEWS, REJECTION_ROUNDS, far_above_the_rest
 
 #: stereo re-solves for the baseline's standard deviation, each on this many views at most
 BOOTSTRAP_RESAMPLES = 30
 BOOTSTRAP_VIEWS = 40
+#: views whose rig rotation lies within this angle of another's support it
+ORIENTATION_AGREEMENT_RAD = math.radians(10.0)
 
 
 @dataclass
@@ -39,7 +41,9 @@ class StereoResult:
     baseline_m: float
     baseline_std_m: float
     square_m: float  # square size re-estimated by triangulating the joint views
-    view_epipolar_px: list[float]
+    view_epipolar_px: list[float]  # per used joint view
+    view_ids: list[int] = field(default_factory=list)  # indices of the joint views used
+    rejected: dict[int, str] = field(default_factory=dict)  # joint view index -> why
 
     @property
     def rotation_deg(self) -> float:
@@ -64,36 +68,105 @@ def epipolar_errors(left: list[F64], right: list[F64], *, left_model: CameraMode
     return errors
 
 
+def _board_rotation(points_in_board: F64, corners_px: F64, model: CameraModel) -> F64:
+    """``camera_from_board`` rotation (3, 3) of one view."""
+    _ok, rvec, _tvec = cv2.solvePnP(points_in_board.astype(np.float64),
+                                    corners_px.astype(np.float64), model.k, model.d)
+    return np.asarray(cv2.Rodrigues(rvec)[0], dtype=np.float64)
+
+
+def _angle_rad(a: F64, b: F64) -> float:
+    return math.acos(max(-1.0, min(1.0, (float(np.trace(a @ b.T)) - 1) / 2)))
+
+
+def orient_right_views(points_in_board: F64, left: list[F64], right: list[F64], *,
+                       left_model: CameraModel, right_model: CameraModel) -> list[F64]:
+    """The right views ``(N, 2)`` numbered from the same board corner as the left ones.
+
+    A chessboard turned by 180 degrees looks the same, so each camera's detection may start
+    from either end of it; near the turn where the two choices meet, the two cameras of a
+    pair can disagree. The rig's rotation (right from left) is the same in every view: each
+    right view is kept or reversed, whichever gives the rotation that most views support.
+    """
+    candidates = []
+    for cl, cr in zip(left, right, strict=True):
+        left_from_board = _board_rotation(points_in_board, cl, left_model)
+        candidates.append([_board_rotation(points_in_board, c, right_model) @ left_from_board.T
+                           for c in (cr, cr[::-1])])
+    if not candidates:
+        return []
+    flat = [rotation for pair in candidates for rotation in pair]
+    support = [sum(min(_angle_rad(r, a), _angle_rad(r, b)) < ORIENTATION_AGREEMENT_RAD
+                   for a, b in candidates) for r in flat]
+    consensus = flat[int(np.argmax(support))]
+    return [cr if _angle_rad(a, consensus) <= _angle_rad(b, consensus)
+            else np.ascontiguousarray(cr[::-1])
+            for cr, (a, b) in zip(right, candidates, strict=True)]
+
+
+def _stereo_solve(points_in_board: F64, left: list[F64], right: list[F64], *,
+                  left_model: CameraModel, right_model: CameraModel
+                  ) -> tuple[float, F64, F64, F64]:
+    """R, T of the rig with the intrinsics held; RMS and per-view RMS (px, worse camera)."""
+    size = (left_model.width, left_model.height)
+    objects = [points_in_board.astype(np.float32)] * len(left)
+    try:
+        out = cv2.stereoCalibrateExtended(
+            objects, [c.reshape(-1, 1, 2).astype(np.float32) for c in left],
+            [c.reshape(-1, 1, 2).astype(np.float32) for c in right],
+            left_model.k, left_model.d, right_model.k, right_model.d, size, np.eye(3),
+            np.zeros(3), flags=cv2.CALIB_FIX_INTRINSIC, criteria=CRITERIA,
+        )
+    except cv2.error as err:
+        raise ProcessorError(f"stereo calibration failed: {str(err).strip().splitlines()[-1]}") \
+            from None
+    rms, rot, trans, per_view = out[0], out[5], out[6], out[11]
+    return (float(rms), np.asarray(rot, dtype=np.float64),
+            np.asarray(trans, dtype=np.float64).reshape(3),
+            np.asarray(per_view, dtype=np.float64).reshape(len(left), 2).max(axis=1))
+
+
 def calibrate_stereo(points_in_board: F64, left: list[F64], right: list[F64], *,
                      left_model: CameraModel, right_model: CameraModel,
                      square_m: float) -> StereoResult:
-    """Extrinsics and rectification from joint views ``left[i]``, ``right[i]`` ``(N, 2)``."""
+    """Extrinsics and rectification from joint views ``left[i]``, ``right[i]`` ``(N, 2)``.
+
+    Joint views whose error lies far above the rest (e.g. two frames paired across a move
+    of the board) are removed and the rig re-solved, up to three rounds.
+    """
     if len(left) < MIN_VIEWS:
         raise ProcessorError(
             f"too few joint stereo views: {len(left)} (need at least {MIN_VIEWS}); "
             "both cameras must see the whole board at the same time"
         )
+    active = list(range(len(left)))
+    rejected: dict[int, str] = {}
+    for round_ in range(REJECTION_ROUNDS + 1):
+        rms, rot, trans, per_view = _stereo_solve(
+            points_in_board, [left[i] for i in active], [right[i] for i in active],
+            left_model=left_model, right_model=right_model)
+        bad = far_above_the_rest(active, per_view, "stereo reprojection") \
+            if round_ < REJECTION_ROUNDS else {}
+        if not bad:
+            break
+        rejected |= {i: f"{why}: the two frames do not show the board at one pose"
+                     for i, why in bad.items()}
+        active = [i for i in active if i not in rejected]
+    left, right = [left[i] for i in active], [right[i] for i in active]
     size = (left_model.width, left_model.height)
-    objects = [points_in_board.astype(np.float32)] * len(left)
     try:
-        rms, _k1, _d1, _k2, _d2, rot, trans, _e, _f = cv2.stereoCalibrate(
-            objects, [c.reshape(-1, 1, 2).astype(np.float32) for c in left],
-            [c.reshape(-1, 1, 2).astype(np.float32) for c in right],
-            left_model.k, left_model.d, right_model.k, right_model.d, size,
-            flags=cv2.CALIB_FIX_INTRINSIC, criteria=CRITERIA,
-        )
         r1_cv, r2_cv, p1_cv, p2_cv, _q, _roi1, _roi2 = cv2.stereoRectify(
-            left_model.k, left_model.d, right_model.k, right_model.d, size, rot, trans,
-            flags=cv2.CALIB_ZERO_DISPARITY, alpha=0.0,
+            left_model.k, left_model.d, right_model.k, right_model.d, size, rot,
+            trans.reshape(3, 1), flags=cv2.CALIB_ZERO_DISPARITY, alpha=0.0,
         )
     except cv2.error as err:
-        raise ProcessorError(f"stereo calibration failed: {str(err).strip().splitlines()[-1]}") \
-            from None
+        raise ProcessorError(f"stereo rectification failed: "
+                             f"{str(err).strip().splitlines()[-1]}") from None
     r1, r2 = np.asarray(r1_cv, dtype=np.float64), np.asarray(r2_cv, dtype=np.float64)
     p1, p2 = np.asarray(p1_cv, dtype=np.float64), np.asarray(p2_cv, dtype=np.float64)
     pose = np.eye(4)
     pose[:3, :3] = rot
-    pose[:3, 3] = np.asarray(trans).reshape(3)
+    pose[:3, 3] = trans
     view_errors = epipolar_errors(left, right, left_model=left_model, right_model=right_model,
                                   r1=r1, p1=p1, r2=r2, p2=p2)
     squared = np.concatenate([
@@ -102,7 +175,7 @@ def calibrate_stereo(points_in_board: F64, left: list[F64], right: list[F64], *,
         for cl, cr in zip(left, right, strict=True)
     ])
     return StereoResult(
-        right_from_left=pose, rms_px=float(rms), r1=r1, r2=r2, p1=p1, p2=p2,
+        right_from_left=pose, rms_px=rms, r1=r1, r2=r2, p1=p1, p2=p2,
         epipolar_rms_px=float(np.sqrt(squared.mean())),
         baseline_m=float(np.linalg.norm(trans)),
         baseline_std_m=_baseline_std(points_in_board, left, right, left_model=left_model,
@@ -110,7 +183,7 @@ def calibrate_stereo(points_in_board: F64, left: list[F64], right: list[F64], *,
         square_m=_square_size(left, right, left_model=left_model, right_model=right_model,
                               r1=r1, p1=p1, r2=r2, p2=p2, points_in_board=points_in_board,
                               square_m=square_m),
-        view_epipolar_px=view_errors,
+        view_epipolar_px=view_errors, view_ids=active, rejected=rejected,
     )
 
 

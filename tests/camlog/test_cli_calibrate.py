@@ -97,8 +97,14 @@ def out_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="module")
 def mono(rig_log: Path, out_dir: Path) -> Path:
-    """The rig's left camera alone, default options (tangential distortion estimated)."""
+    """The rig's left camera alone, default options (tangential distortion if the views
+    show it: this simulated lens has none)."""
     return calibrate(rig_log, out_dir / "mono", "--camera", LEFT)
+
+
+@pytest.fixture(scope="module")
+def mono_tangent(rig_log: Path, out_dir: Path) -> Path:
+    return calibrate(rig_log, out_dir / "mono_tangent", "--camera", LEFT, "--tangent-dist")
 
 
 @pytest.fixture(scope="module")
@@ -133,13 +139,35 @@ def test_mono_focal_length(mono: Path, rig_log: Path) -> None:
         assert p[name]["value"] == pytest.approx(FOCAL_PX, rel=0.001)
 
 
-def test_mono_every_parameter_within_3_sigma(mono: Path, rig_log: Path) -> None:
+@pytest.mark.parametrize("folder", ["mono", "mono_tangent"])
+def test_mono_every_parameter_within_3_sigma(folder: str, rig_log: Path,
+                                             request: pytest.FixtureRequest) -> None:
     truth = true_parameters(true_model(rig_log, LEFT))
-    parameters = camera_summary(mono, LEFT)["parameters"]
-    assert parameters["p1"]["std"] > 0  # tangential distortion estimated by default
+    entry = camera_summary(request.getfixturevalue(folder), LEFT)
+    parameters = entry["parameters"]
     for name, p in parameters.items():
         assert p["truth"] == truth[name]  # the summary's truth is the scenario's
     assert_within_3_sigma(parameters, truth)
+    estimated = folder == "mono_tangent"
+    assert (parameters["p1"]["std"] > 0) == estimated
+    assert entry["tangential"]["estimated"] == estimated
+
+
+def test_default_drops_tangential_distortion_the_lens_does_not_have(
+    mono: Path, mono_tangent: Path
+) -> None:
+    entry = camera_summary(mono, LEFT)
+    p = entry["parameters"]
+    assert p["p1"]["value"] == p["p2"]["value"] == 0.0
+    test = entry["tangential"]
+    assert test["p_value"] >= 1e-3 and test["chi2"] < 13.9
+    assert "held at zero" in test["summary"] and "held at zero" in (mono / "report.md").read_text()
+    assert "chi2" not in camera_summary(mono_tangent, LEFT)["tangential"]
+    # without p1, p2 to trade against, the principal point is pinned down better
+    free = camera_summary(mono_tangent, LEFT)["parameters"]
+    for name, centre in (("cx", 319.5), ("cy", 239.5)):
+        assert p[name]["std"] < free[name]["std"]
+        assert abs(p[name]["value"] - centre) < 0.5
 
 
 def test_mono_zero_tangent_principal_point(mono_zero_tangent: Path) -> None:

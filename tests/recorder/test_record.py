@@ -145,7 +145,7 @@ def test_noise_has_the_requested_standard_deviation(recording: Callable[..., Log
         diff = b.pixels.astype(np.int16) - reference
         # away from 0 and 255, so that clipping does not shrink the noise
         unclipped = (reference > 5 * sigma) & (reference < 255 - 5 * sigma)
-        assert unclipped.mean() > 0.5
+        assert unclipped.sum() > 10_000  # the ground around the board: plenty of samples
         assert diff[unclipped].std() == pytest.approx(sigma, rel=0.15)
         assert abs(diff[unclipped].mean()) < 0.1 * sigma
 

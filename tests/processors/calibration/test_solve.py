@@ -8,11 +8,13 @@ import numpy as np
 import pytest
 
 from processors.calibration.solve import (
+    TANGENTIAL_P_VALUE,
     CalibrationOptions,
     MonoResult,
     calibrate_mono,
     cross_validate,
     max_projection_difference,
+    tangential_mode,
 )
 from processors.errors import ProcessorError
 from replay.camera import CameraModel
@@ -97,7 +99,7 @@ def test_fix_aspect_ratio_forces_square_pixels(poses: list[np.ndarray]) -> None:
 def test_zero_tangent_dist_holds_p1_p2_at_zero(poses: list[np.ndarray]) -> None:
     model = true_model(d=np.array([-0.2, 0.05, 0.0, 0.0, 0.0]))
     result = solve(views(model, poses, NOISE_PX, seed=3),
-                   CalibrationOptions(zero_tangent_dist=True))
+                   CalibrationOptions(tangential="zero"))
     assert result.model.d[2] == result.model.d[3] == 0.0
     assert result.std["p1"] == result.std["p2"] == 0.0
     assert abs(result.model.d[0] + 0.2) < 4 * result.std["k1"]
@@ -145,7 +147,7 @@ def test_too_few_views(poses: list[np.ndarray]) -> None:
 def test_cross_validation_vanishes_without_noise_and_grows_with_it(
     poses: list[np.ndarray]
 ) -> None:
-    options = CalibrationOptions()
+    options = CalibrationOptions(tangential="estimate")  # the same model in every half
     points = BOARD.points_in_board()
     exact = cross_validate(points, views(true_model(), poses, 0.0, seed=6), (W, H), options)
     assert exact is not None and exact < 0.01
@@ -176,3 +178,60 @@ def test_max_projection_difference() -> None:
     disc = np.column_stack([320 + 50 * np.cos(angles), 240 + 50 * np.sin(angles)])
     within = max_projection_difference(a, b, step_px=2, within=disc)
     assert within == pytest.approx(df * 50 / f, rel=0.05)
+
+
+def test_aligned_projection_difference_discounts_only_a_rotation() -> None:
+    f = 800.0
+    k = np.array([[f, 0, 320.0], [0, f, 240.0], [0, 0, 1]])
+    a = CameraModel(W, H, k)
+    # a principal point shift moves every pixel by the same 1 px; turning the camera by
+    # 1/f rad explains all of it but the perspective term, 1 px * x^2 at most (x <= 0.4)
+    shifted = CameraModel(W, H, k + np.array([[0, 0, 1.0], [0, 0, 0], [0, 0, 0]]))
+    assert max_projection_difference(a, shifted) == pytest.approx(1.0, abs=1e-6)
+    aligned = max_projection_difference(a, shifted, align_rotation=True)
+    assert 0.01 < aligned < 0.4 ** 2
+    # a focal length change is radial: no rotation explains any of it
+    longer = CameraModel(W, H, k + np.diag([2.0, 2.0, 0]))
+    assert max_projection_difference(a, longer, step_px=4, align_rotation=True) == \
+        pytest.approx(max_projection_difference(a, longer, step_px=4), rel=0.02)
+
+
+def test_auto_tangential_drops_p1_p2_when_the_lens_has_none(poses: list[np.ndarray]) -> None:
+    model = true_model(d=np.array([-0.2, 0.05, 0.0, 0.0, 0.0]))
+    corners = views(model, poses, NOISE_PX, seed=3)
+    auto = solve(corners)
+    free = solve(corners, CalibrationOptions(tangential="estimate"))
+    assert auto.tangential_test is not None and not auto.tangential_test.estimated
+    assert auto.tangential_test.p_value >= TANGENTIAL_P_VALUE
+    assert auto.options.tangential == "zero" and free.tangential_test is None
+    assert auto.model.d[2] == auto.model.d[3] == 0.0
+    # the principal point is better determined without p1, p2 to trade against
+    assert auto.std["cx"] < 0.95 * free.std["cx"] and auto.std["cy"] < 0.95 * free.std["cy"]
+    assert abs(auto.model.cx - K_TRUE[0, 2]) < 3 * auto.std["cx"]
+
+
+def test_auto_tangential_statistic_follows_chi_square_2(poses: list[np.ndarray]) -> None:
+    """Without tangential distortion, the statistic is chi-square with 2 degrees of freedom
+    (mean 2) over noise draws; with the lens's p1, p2 it is far above the threshold."""
+    model = true_model(d=np.array([-0.2, 0.05, 0.0, 0.0, 0.0]))
+    chi2 = []
+    for seed in range(20):
+        test = solve(views(model, poses, NOISE_PX, seed=200 + seed),
+                     reject_outliers=False).tangential_test
+        assert test is not None
+        chi2.append(test.chi2)
+    assert 1.0 < float(np.mean(chi2)) < 3.5
+    tangential = solve(views(true_model(), poses, NOISE_PX, seed=3))
+    assert tangential.tangential_test is not None and tangential.tangential_test.estimated
+    assert tangential.options.tangential == "estimate"
+    assert abs(tangential.model.d[2] - D_TRUE[2]) < 4 * tangential.std["p1"]
+
+
+def test_tangential_mode_flags() -> None:
+    assert tangential_mode(False, False) == "auto"
+    assert tangential_mode(True, False) == "zero"
+    assert tangential_mode(False, True) == "estimate"
+    with pytest.raises(ProcessorError, match="contradict"):
+        tangential_mode(True, True)
+    with pytest.raises(ProcessorError, match="tangential"):
+        CalibrationOptions(tangential="sometimes")

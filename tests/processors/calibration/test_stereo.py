@@ -11,6 +11,7 @@ from processors.calibration.stereo import (
     StereoResult,
     calibrate_stereo,
     epipolar_errors,
+    orient_right_views,
     rectified_points,
 )
 from processors.errors import ProcessorError
@@ -101,3 +102,32 @@ def test_too_few_joint_views(rig: tuple[list[np.ndarray], list[np.ndarray]]) -> 
     with pytest.raises(ProcessorError, match="too few joint stereo views"):
         calibrate_stereo(BOARD.points_in_board(), left[:4], right[:4], left_model=LEFT,
                          right_model=RIGHT, square_m=BOARD.square_m)
+
+
+def test_a_pair_from_two_board_poses_is_rejected(
+    result: StereoResult, rig: tuple[list[np.ndarray], list[np.ndarray]]
+) -> None:
+    """Two frames paired across a move of the board (approximate pairing) show different
+    poses: that joint view is left out and the rig is the one the good views give."""
+    left, right = rig
+    mixed = list(right)
+    mixed[4] = right[5]
+    out = calibrate_stereo(BOARD.points_in_board(), left, mixed, left_model=LEFT,
+                           right_model=RIGHT, square_m=BOARD.square_m)
+    assert set(out.rejected) == {4} and "one pose" in out.rejected[4]
+    assert out.view_ids == [i for i in range(len(left)) if i != 4]
+    assert len(out.view_epipolar_px) == len(left) - 1
+    assert out.baseline_m == pytest.approx(result.baseline_m, abs=2 * result.baseline_std_m)
+    assert out.epipolar_rms_px < 2 * result.epipolar_rms_px
+    assert not result.rejected and result.view_ids == list(range(len(left)))
+
+
+def test_right_views_numbered_from_the_other_end_are_turned_back(
+    rig: tuple[list[np.ndarray], list[np.ndarray]]
+) -> None:
+    left, right = rig
+    flipped = [c[::-1].copy() if i % 3 == 0 else c for i, c in enumerate(right)]
+    oriented = orient_right_views(BOARD.points_in_board(), left, flipped, left_model=LEFT,
+                                  right_model=RIGHT)
+    for a, b in zip(oriented, right, strict=True):
+        np.testing.assert_array_equal(a, b)
