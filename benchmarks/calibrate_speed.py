@@ -64,7 +64,7 @@ def main() -> None:
     board = make_board("7x6", 0.01)
     print(f"{'case':24} {'seed':>4} {'frames':>6} {'decode s':>8} {'calib s':>8} "
           f"{'fx err %':>9} {'fy err %':>9} {'cx err':>13} {'cy err':>13} {'maxdiff':>13} "
-          f"{'stereo':>26}")
+          f"{'err/σ':>5} {'stereo':>26}")
     worst: dict[str, list[float]] = {}
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
@@ -91,8 +91,12 @@ def main() -> None:
                 aligned = cam["max_projection_difference_vs_truth_covered_aligned_px"]
                 raw = cam["max_projection_difference_vs_truth_covered_px"]
                 stereo = ""
+                # the worst estimated parameter's error in units of its sigma, over cameras
+                sigmas = max(abs(q["error"]) / q["std"] for c in run.summary["cameras"]
+                             for q in c["parameters"].values() if q["std"] > 0)
                 errors = [abs(p["cx"]["error"]), abs(p["cy"]["error"]), aligned,
-                          100 * max(abs(p[n]["error"]) / p[n]["truth"] for n in ("fx", "fy"))]
+                          100 * max(abs(p[n]["error"]) / p[n]["truth"] for n in ("fx", "fy")),
+                          sigmas]
                 if "stereo" in run.summary:
                     s = run.summary["stereo"]
                     stereo = (f"B {s['truth']['baseline_error_percent']:+.3f}% "
@@ -105,7 +109,7 @@ def main() -> None:
                       f"{100 * p['fy']['error'] / p['fy']['truth']:+9.4f} "
                       f"{p['cx']['error']:+6.3f}±{p['cx']['std']:.3f} "
                       f"{p['cy']['error']:+6.3f}±{p['cy']['std']:.3f} "
-                      f"{aligned:6.3f}/{raw:6.3f} {stereo:>26}", flush=True)
+                      f"{aligned:6.3f}/{raw:6.3f} {sigmas:5.2f} {stereo:>26}", flush=True)
                 if seed == 0 and label in ("mono", "stereo"):
                     minutes = frames / len(cameras) / 30.0 / 60.0
                     emit(f"calibrate {label} ({frames // len(cameras) / 30:.0f} s log)",
@@ -113,8 +117,8 @@ def main() -> None:
                          measured_value=wall, unit="s", ratio=wall / decode,
                          target=f"<= {20 if label == 'mono' else 40} s per minute of log "
                                 f"(here {wall / minutes:.1f} s/min)")
-        print(f"worst over seeds {list(seeds)}: |cx|, |cy| px, maxdiff px, |fx|,|fy| %"
-              "[, |baseline| %, epipolar px]")
+        print(f"worst over seeds {list(seeds)}: |cx|, |cy| px, maxdiff px, |fx|,|fy| %, "
+              "err/σ[, |baseline| %, epipolar px]")
         for label, values in worst.items():
             print(f"  {label:24} " + "  ".join(f"{v:.3f}" for v in values))
         short = tmp / "short.mcap"
