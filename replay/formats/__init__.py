@@ -48,8 +48,11 @@ def detect_format(path: Path) -> str:
     if path.is_dir():
         if (path / "metadata.yaml").exists():
             return "rosbag2"
-        mcaps = sorted(path.glob("*.mcap"))
-        hint = f" (it holds {mcaps[0].name}; open that file)" if mcaps else ""
+        if _storage_without_metadata(path) is not None:
+            return "mcap"
+        db3 = sorted(path.glob("*.db3")) + sorted(path.glob("*/*.db3"))
+        hint = f" (it holds {db3[0].relative_to(path)}: run `ros2 bag reindex` on it)" \
+            if db3 else ""
         raise LogFormatError(f"{path} is a directory without rosbag2 metadata.yaml{hint}")
     try:
         with path.open("rb") as f:
@@ -67,10 +70,25 @@ def detect_format(path: Path) -> str:
     raise LogFormatError(f"{path} is not a log camlog can read (MCAP, rosbag2 directory, ROS1 bag)")
 
 
+def _storage_without_metadata(path: Path) -> Path | None:
+    """The one MCAP storage file of a rosbag2 directory that has no metadata.yaml — a
+    recording cut short (a camlog ``NAME.partial`` holds it one folder down)."""
+    mcaps = sorted(path.glob("*.mcap")) or sorted(path.glob("*/*.mcap"))
+    return mcaps[0] if len(mcaps) == 1 else None
+
+
 def open_reader(path: str | Path, *, recover: bool = False) -> LogReader:
     """Open any supported log for streaming reads."""
     path = Path(path)
     fmt = detect_format(path)
+    if path.is_dir() and fmt == "mcap":
+        storage = _storage_without_metadata(path)
+        assert storage is not None
+        reader = McapLogReader(storage, recover=recover)
+        reader.warnings.insert(0, f"{path} has no metadata.yaml (its recording was cut "
+                                  f"short?); reading its storage file "
+                                  f"{storage.relative_to(path)} directly")
+        return reader
     if fmt == "rosbag2" and path.is_file():
         path = path.parent
     return READERS[fmt](path, recover=recover)

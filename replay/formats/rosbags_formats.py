@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 import contextlib
+import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
 from rosbags.rosbag1 import Reader as Reader1
 from rosbags.rosbag1 import Writer as Writer1
+from rosbags.rosbag1.reader import Header, ReaderError, RecordType
 from rosbags.rosbag2 import Reader as Reader2
 from rosbags.rosbag2 import Writer as Writer2
 from rosbags.rosbag2.enums import StoragePlugin
@@ -16,6 +18,7 @@ from rosbags.rosbag2.enums import StoragePlugin
 from ..codec import CDR, ROS1, ros1_typestore, ros2_typestore
 from ..errors import LogReadError, LogWriteError
 from .base import LogReader, LogWriter, RawMessage, TopicInfo
+from .ros1_reindex import reindexed_copy
 
 
 class _RosbagsReader(LogReader):
@@ -87,17 +90,58 @@ class Rosbag2LogReader(_RosbagsReader):
 
 
 class Ros1LogReader(_RosbagsReader):
-    """Reader for a ROS1 ``.bag`` file (v2.0)."""
+    """Reader for a ROS1 ``.bag`` file (v2.0).
+
+    A bag without its index (the recording was killed) is read through an indexed copy in a
+    temporary folder, made from its complete chunks, with a warning.
+    """
 
     format_name = "ros1"
     serialization = ROS1
 
     def __init__(self, path: Path, *, recover: bool = False) -> None:
+        self._scratch: tempfile.TemporaryDirectory[str] | None = None
+        note = ""
+        if _unindexed_ros1(path):
+            self._scratch = tempfile.TemporaryDirectory(prefix="camlog-reindex-")
+            copy = Path(self._scratch.name) / path.name
+            try:
+                done = reindexed_copy(path, copy)
+            except Exception as err:
+                self._scratch.cleanup()
+                raise LogReadError(f"cannot reindex {path}: {_first_line(err)}") from None
+            note = (f"{path} has no index (its recording was cut short); reading the "
+                    f"{done.messages} messages of its complete chunks, up to byte "
+                    f"{done.stopped_at} of {path.stat().st_size}")
+            opened = copy
+        else:
+            opened = path
         try:
-            reader = Reader1(path)
-        except Exception as err:
-            raise LogReadError(f"cannot read {path}: {_first_line(err)}") from None
-        super().__init__(path, reader)
+            reader = Reader1(opened)
+            super().__init__(path, reader)
+        except BaseException:
+            if self._scratch is not None:
+                self._scratch.cleanup()
+            raise
+        if note:
+            self.warnings.append(note)
+
+    def close(self) -> None:
+        try:
+            super().close()
+        finally:
+            if self._scratch is not None:
+                self._scratch.cleanup()
+
+
+def _unindexed_ros1(path: Path) -> bool:
+    """Whether a ROS1 bag's header says it has no index (``index_pos`` 0)."""
+    try:
+        with path.open("rb") as src:
+            src.readline()
+            return Header.read(src, RecordType.BAGHEADER).get_uint64("index_pos") == 0
+    except (OSError, ReaderError):
+        return False  # the reader reports what is wrong
 
 
 class _RosbagsWriter(LogWriter):

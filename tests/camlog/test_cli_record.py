@@ -136,18 +136,29 @@ def test_existing_output_needs_overwrite(
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run.mcap"]
 
 
-def test_killed_recording_leaves_a_readable_partial(tmp_path: Path) -> None:
-    output = tmp_path / "crash.mcap"
-    partial = tmp_path / "crash.mcap.partial"
+def _size(path: Path) -> int:
+    if path.is_dir():
+        return sum(p.stat().st_size for p in path.rglob("*") if p.is_file())
+    return path.stat().st_size if path.exists() else 0
+
+
+@pytest.mark.parametrize(("name", "written"), [("crash.mcap", 300_000),
+                                               ("crash.bag", 2_500_000),  # 1 MiB chunks
+                                               ("crash", 300_000)],
+                         ids=["mcap", "ros1", "rosbag2"])
+def test_killed_recording_leaves_a_readable_partial(tmp_path: Path, name: str,
+                                                    written: int) -> None:
+    output = tmp_path / name
+    partial = tmp_path / f"{name}.partial"
     process = subprocess.Popen(
         [sys.executable, "-m", "camlog.cli", "record", "mono_checkerboard", "-o", str(output),
          "--frames", "5000", "--resolution", "320x240", "--no-progress"],
         cwd=REPO_ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
     )
     try:
-        # wait until a few compressed chunks of frames are on disk
+        # wait until a few chunks of frames are on disk
         deadline = time.monotonic() + 90
-        while not (partial.exists() and partial.stat().st_size > 300_000):
+        while _size(partial) < written:
             assert process.poll() is None, process.stderr.read() if process.stderr else ""
             assert time.monotonic() < deadline, "the recording wrote nothing"
             time.sleep(0.05)
@@ -161,6 +172,7 @@ def test_killed_recording_leaves_a_readable_partial(tmp_path: Path) -> None:
     assert not output.exists()
     with open_reader(partial) as reader:
         images = [r.message for r in reader.messages(["/simple_camera/image_raw"])]
+        assert reader.warnings  # says that the log is incomplete
     assert len(images) > 0
     stamps = [i.stamp_ns for i in images if isinstance(i, Image)]
     assert len(stamps) == len(images)

@@ -207,10 +207,54 @@ def test_open_errors_name_the_path(
     assert "\n" not in str(raised.value)
 
 
-def test_directory_holding_an_mcap_points_at_it(tmp_path: Path) -> None:
-    write_log(_dir(tmp_path / "rec") / "x.mcap", [("/text", 1, Text("x"))])
-    with pytest.raises(LogFormatError, match=r"holds x\.mcap; open that file"):
-        open_reader(tmp_path / "rec")
+def test_rosbag2_directory_without_metadata_reads_its_mcap_storage(tmp_path: Path) -> None:
+    """A rosbag2 recording cut short has its MCAP storage file but no metadata.yaml (a
+    camlog NAME.partial keeps it one folder down)."""
+    write_log(_dir(_dir(tmp_path / "rec.partial") / "rec") / "rec.mcap",
+              [("/text", 1, Text("x"))])
+    for path in (tmp_path / "rec.partial", tmp_path / "rec.partial" / "rec"):
+        with open_reader(path) as reader:
+            assert [r.message for r in reader.messages()] == [Text("x")]
+            assert "has no metadata.yaml" in reader.warnings[0]
+            assert str(path) in reader.warnings[0]
+
+
+def test_rosbag2_sqlite_directory_without_metadata_says_reindex(tmp_path: Path) -> None:
+    write_log(tmp_path / "bag", [("/text", 5, Text("x"))], fmt="rosbag2-sqlite3")
+    (tmp_path / "bag" / "metadata.yaml").unlink()
+    with pytest.raises(LogFormatError, match="ros2 bag reindex"):
+        open_reader(tmp_path / "bag")
+
+
+def _without_index(bag: bytes) -> bytes:
+    """A ROS1 bag as a killed recording leaves it: header index_pos 0, no index at the end."""
+    field = bag.index(b"index_pos=") + len(b"index_pos=")
+    index_pos = int.from_bytes(bag[field:field + 8], "little")
+    assert 0 < index_pos < len(bag)
+    return bag[:field] + bytes(8) + bag[field + 8:index_pos]
+
+
+def test_ros1_bag_without_index_is_read_from_its_chunks(tmp_path: Path) -> None:
+    entries: list[Entry] = [
+        ("/cam/image_raw", T0_NS + i, Image(T0_NS + i, "cam", "rgb8",
+                                            random_pixels("rgb8", height=240, width=320, seed=i)))
+        for i in range(12)  # 2.8 MB: three 1 MiB chunks
+    ]
+    complete = tmp_path / "complete.bag"
+    write_log(complete, entries)
+    cut = _file(tmp_path / "cut.bag.partial", _without_index(complete.read_bytes()))
+    with open_reader(cut) as reader:
+        assert "has no index" in reader.warnings[0] and "12 messages" in reader.warnings[0]
+        read = [(r.topic, r.log_time_ns, r.message) for r in reader.messages()]
+    assert read == read_log(complete)
+    assert cut.read_bytes() == _without_index(complete.read_bytes())  # input untouched
+    # cut inside the last chunk: the complete chunks before it are read
+    torn = _file(tmp_path / "torn.bag", cut.read_bytes()[:-1000])
+    with open_reader(torn) as reader:
+        partial = [(r.topic, r.log_time_ns, r.message) for r in reader.messages()]
+        assert f"of {torn.stat().st_size}" in reader.warnings[0]
+    assert 0 < len(partial) < len(entries)
+    assert partial == read[:len(partial)]
 
 
 def test_rosbag2_storage_file_opens_its_directory(tmp_path: Path) -> None:
