@@ -15,7 +15,7 @@ import time
 from .report import PREFIX
 
 #: module -> (full arguments, quick arguments)
-BENCHMARKS = {
+BENCHMARKS: dict[str, tuple[list[str], list[str]]] = {
     "record_fps": ([], ["--frames", "150", "--repeats", "1"]),
     "process_fps": ([], ["--frames", "100", "--repeats", "1"]),
     "calibrate_speed": ([], ["--quick"]),

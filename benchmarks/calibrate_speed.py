@@ -27,14 +27,15 @@ from replay import open_reader
 
 from .report import cli_peak_rss_mb, emit
 
-CASES = [
+CASES: list[tuple[str, str, dict[str, object], list[str], CalibrationOptions]] = [
     # label, scenario, overrides, cameras, options
-    ("mono", "mono_checkerboard", {}, ["/simple_camera"], {}),
+    ("mono", "mono_checkerboard", {}, ["/simple_camera"], CalibrationOptions()),
     ("mono --tangent-dist", "mono_checkerboard", {}, ["/simple_camera"],
-     {"tangential": "estimate"}),
+     CalibrationOptions(tangential="estimate")),
     ("mono plumb_bob k1=-0.2", "mono_checkerboard",
-     {"distortion": [-0.2, 0.05, 0.0, 0.0, 0.0]}, ["/simple_camera"], {}),
-    ("stereo", "stereo_checkerboard", {}, ["/stereo_camera/left", "/stereo_camera/right"], {}),
+     {"distortion": [-0.2, 0.05, 0.0, 0.0, 0.0]}, ["/simple_camera"], CalibrationOptions()),
+    ("stereo", "stereo_checkerboard", {}, ["/stereo_camera/left", "/stereo_camera/right"],
+     CalibrationOptions()),
 ]
 
 
@@ -82,7 +83,7 @@ def main() -> None:
                 decode = decode_only_s(path, topics)
                 started = time.perf_counter()
                 run = calibrate_log(path, board=board, cameras=cameras,
-                                    output_dir=tmp / "out", options=CalibrationOptions(**options),
+                                    output_dir=tmp / "out", options=options,
                                     overwrite=True, progress=False)
                 wall = time.perf_counter() - started
                 cam = run.summary["cameras"][0]

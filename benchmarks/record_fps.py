@@ -78,7 +78,7 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=600)
     parser.add_argument("--repeats", type=int, default=2)
     args = parser.parse_args()
-    rows = [
+    rows: list[tuple[str, dict[str, object]]] = [
         ("ideal camera", {}),
         ("plumb_bob k1=-0.2, supersample 2", {"distortion": [-0.2, 0.05, 0.0, 0.0, 0.0]}),
     ]

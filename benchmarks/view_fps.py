@@ -20,12 +20,13 @@ from __future__ import annotations
 import argparse
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
 import rerun as rr
 
-from replay import open_reader
+from replay import Image, open_reader
 from replay.export import LoggerOptions, view_logs
 from replay.export.images import COLOR_MODELS
 
@@ -52,6 +53,7 @@ def baseline_s(log: Path, out: Path) -> tuple[float, int]:
         for record in reader.images():
             rec.set_time("log_time", timestamp=np.datetime64(record.log_time_ns, "ns"))
             image = record.message
+            assert isinstance(image, Image)
             rec.log(record.topic, rr.Image(image.pixels,
                                            color_model=COLOR_MODELS[image.encoding]))
             images += 1
@@ -93,9 +95,11 @@ def main() -> None:
         counts: dict[str, int] = {}
         sizes: dict[str, float] = {}
         for _ in range(args.repeats):  # interleaved so that drifting load hits all three
-            for name, run in (("baseline", lambda o: baseline_s(log, o)),
-                              ("view", lambda o: view_s(log, o, None)),
-                              ("jpeg", lambda o: view_s(log, o, 90))):
+            runs: tuple[tuple[str, Callable[[Path], tuple[float, int]]], ...] = (
+                ("baseline", lambda o: baseline_s(log, o)),
+                ("view", lambda o: view_s(log, o, None)),
+                ("jpeg", lambda o: view_s(log, o, 90)))
+            for name, run in runs:
                 out = tmp / f"{name}.rrd"
                 out.unlink(missing_ok=True)
                 seconds, counts[name] = run(out)
