@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 
+import cv2
 import numpy as np
 import pytest
 
@@ -40,22 +41,38 @@ def test_ideal_camera_renders_directly() -> None:
 
 
 def ideal_rays(optics: Optics) -> F64:
-    """Normalized ideal coordinates (N, 2) of every map sample, from the render geometry."""
+    """Normalized ideal coordinates (N, 2) of every output pixel's ray, from the render
+    geometry (the maps read the box-filtered render, shifted by its anchor)."""
     assert optics.map_x is not None and optics.map_y is not None
     f_render = (optics.render_height / 2) / math.tan(math.radians(optics.fovy_deg) / 2)
-    cx = (optics.render_width - 1) / 2
-    cy = (optics.render_height - 1) / 2
+    cx = (optics.render_width - 1) / 2 + optics.box_offset_px
+    cy = (optics.render_height - 1) / 2 + optics.box_offset_px
     x = (optics.map_x.astype(np.float64) - cx) / f_render
     y = (optics.map_y.astype(np.float64) - cy) / f_render
     return np.column_stack([x.ravel(), y.ravel()])
 
 
-def sample_positions(s: int) -> F64:
-    """Sub-pixel sample centres (N, 2), row-major: pixel u covers [u - 0.5, u + 0.5]."""
+def pixel_centres() -> F64:
+    """Output pixel centres (N, 2), row-major."""
+    grid_u, grid_v = np.meshgrid(np.arange(W, dtype=np.float64), np.arange(H, dtype=np.float64))
+    return np.column_stack([grid_u.ravel(), grid_v.ravel()])
+
+
+def supersampled_reference(optics: Optics, camera: CameraModel, rendered: np.ndarray) -> F64:
+    """The definition the warp implements: the mean of s x s bilinear samples of the render
+    at the ideal rays of each output pixel's sub-pixel centres (float, no rounding)."""
+    s = optics.supersample
+    f_render = (optics.render_height / 2) / math.tan(math.radians(optics.fovy_deg) / 2)
     us = (np.arange(W * s) + 0.5) / s - 0.5
     vs = (np.arange(H * s) + 0.5) / s - 0.5
     grid_u, grid_v = np.meshgrid(us, vs)
-    return np.column_stack([grid_u.ravel(), grid_v.ravel()])
+    xy = camera.undistort_pixels(np.column_stack([grid_u.ravel(), grid_v.ravel()]))
+    map_x = (f_render * xy[:, 0] + (optics.render_width - 1) / 2).reshape(H * s, W * s)
+    map_y = (f_render * xy[:, 1] + (optics.render_height - 1) / 2).reshape(H * s, W * s)
+    samples = cv2.remap(rendered.astype(np.float32), map_x.astype(np.float32),
+                        map_y.astype(np.float32), cv2.INTER_LINEAR,
+                        borderMode=cv2.BORDER_REPLICATE)
+    return np.asarray(samples.reshape(H, s, W, s, -1).mean(axis=(1, 3)), dtype=np.float64)
 
 
 WARPED = {
@@ -100,13 +117,39 @@ def test_every_map_sample_comes_from_its_ideal_ray(case: str, s: int) -> None:
     assert optics.supersample == s
     assert optics.output_size == (W, H)
     assert optics.map_x is not None and optics.map_y is not None
-    assert optics.map_x.shape == optics.map_y.shape == (H * s, W * s)
-    # every sample lies inside the render, so no border pixel is ever replicated
-    assert optics.map_x.min() >= 0 and optics.map_x.max() <= optics.render_width - 1
-    assert optics.map_y.min() >= 0 and optics.map_y.max() <= optics.render_height - 1
+    assert optics.map_x.shape == optics.map_y.shape == (H, W)
+    # every footprint, box filter included, lies inside the render: no border is replicated
+    reach = s / 2 + 1
+    assert optics.map_x.min() >= reach and optics.map_x.max() <= optics.render_width - 1 - reach
+    assert optics.map_y.min() >= reach and optics.map_y.max() <= optics.render_height - 1 - reach
     redistorted = camera.distort_normalized(ideal_rays(optics))
-    error = np.abs(redistorted - sample_positions(s)).max()
+    error = np.abs(redistorted - pixel_centres()).max()
     assert error < 1e-3
+
+
+@pytest.mark.parametrize(("s", "exact"), [(2, True), (3, True), (2, False)])
+def test_warp_is_the_mean_of_supersampled_bilinear_samples(s: int, exact: bool) -> None:
+    """Where the footprint is one render pixel per sub-sample (a shifted principal point),
+    box filter + one sample equals the s x s samples' mean; through a k1 = -0.2 lens only
+    the averaging width changes, a little."""
+    camera = model(cx=331.25, cy=228.5) if exact else model(d=[-0.2, 0.05, 0.0, 0.0, 0.0])
+    optics = plan_optics(camera, s)
+    rng = np.random.default_rng(s)
+    coarse = rng.integers(0, 256, (optics.render_height // 8 + 2, optics.render_width // 8 + 2,
+                                   3)).astype(np.uint8)
+    rendered = cv2.resize(coarse, (optics.render_width, optics.render_height),
+                          interpolation=cv2.INTER_CUBIC)  # detail at a few render pixels
+    reference = supersampled_reference(optics, camera, rendered)
+    # in float, so that only the method differs (a 0.25 render px shift would differ by ~2.6)
+    image = optics.apply(rendered.astype(np.float32)).astype(np.float64)
+    difference = np.abs(image - reference)
+    if exact:
+        assert difference.max() < 1e-3
+    else:
+        assert difference.mean() < 0.1 and np.percentile(difference, 99) < 0.5
+    # the uint8 images a recording writes differ from it by rounding only
+    rounded = np.abs(optics.apply(rendered).astype(np.float64) - image)
+    assert rounded.max() < 2.0 and rounded.mean() < 0.5
 
 
 def test_warp_output_has_the_camera_size() -> None:
