@@ -28,12 +28,13 @@ from .report import emit
 def bare_render_fps(scenario: Scenario) -> float:
     """Frames per second of rendering alone, over the recording's own shots."""
     optics = [plan_optics(c.model, c.supersample) for c in scenario.cameras]
-    duration_s = scenario.frame_count / scenario.rate_hz
+    duration_s = max(n / c.rate_hz + c.phase_s
+                     for n, c in zip(scenario.frame_counts, scenario.cameras, strict=True))
     trajectories = [
         plan_trajectory(t, scenario.cameras, duration_s, rng_for(scenario, MOTION_STREAM, i))
         for i, t in enumerate(scenario.targets)
     ]
-    shots, _ = schedule(scenario.cameras, scenario.frame_count,
+    shots, _ = schedule(scenario.cameras, scenario.frame_counts,
                         [rng_for(scenario, CLOCK_STREAM, i) for i in range(len(scenario.cameras))])
     renderer = SceneRenderer(scenario, optics)
     try:

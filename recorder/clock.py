@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -40,12 +41,15 @@ def camera_times(
 
 
 def schedule(
-    cameras: tuple[CameraSpec, ...], frame_count: int, rngs: list[np.random.Generator]
+    cameras: tuple[CameraSpec, ...], frame_counts: Sequence[int],
+    rngs: list[np.random.Generator],
 ) -> tuple[list[Shot], dict[int, np.ndarray]]:
-    """All shots in time order (cameras in spec order at equal times), and drops per camera."""
+    """All shots in time order (cameras in spec order at equal times), and drops per camera;
+    camera ``i`` takes ``frame_counts[i]`` frames before drops."""
     shots: list[Shot] = []
     drops: dict[int, np.ndarray] = {}
-    for index, (camera, rng) in enumerate(zip(cameras, rngs, strict=True)):
+    for index, (camera, frame_count, rng) in enumerate(zip(cameras, frame_counts, rngs,
+                                                           strict=True)):
         times, dropped = camera_times(camera, frame_count, rng)
         kept = np.setdiff1d(np.arange(frame_count), dropped)
         shots += [Shot(float(t), index, int(k)) for t, k in zip(times, kept, strict=True)]

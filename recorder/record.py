@@ -226,14 +226,15 @@ def record(
     output = Path(output)
     started = time.perf_counter()
     optics = [plan_optics(c.model, c.supersample) for c in scenario.cameras]
-    frame_count = scenario.frame_count
-    duration_s = frame_count / scenario.rate_hz + max(c.phase_s for c in scenario.cameras)
+    frame_counts = scenario.frame_counts
+    duration_s = max(n / c.rate_hz + c.phase_s
+                     for n, c in zip(frame_counts, scenario.cameras, strict=True))
     trajectories: list[Trajectory] = [
         plan_trajectory(t, scenario.cameras, duration_s, rng_for(scenario, MOTION_STREAM, i))
         for i, t in enumerate(scenario.targets)
     ]
     shots, dropped = schedule(
-        scenario.cameras, frame_count,
+        scenario.cameras, frame_counts,
         [rng_for(scenario, CLOCK_STREAM, i) for i in range(len(scenario.cameras))],
     )
     renderer = SceneRenderer(scenario, optics)  # first: it sets MUJOCO_GL before the import

@@ -105,10 +105,18 @@ class Scenario:
 
     @property
     def frame_count(self) -> int:
-        """Frames per camera before drops."""
+        """Frames of the first camera before drops (``frames``, or the duration at its rate)."""
         if self.frames is not None:
             return self.frames
         return max(1, round(self.duration_s * self.rate_hz))
+
+    @property
+    def frame_counts(self) -> tuple[int, ...]:
+        """Frames per camera before drops: every camera records over the first one's span, so
+        a camera at half the rate records half as many frames."""
+        span_s = self.frame_count / self.rate_hz
+        return tuple(self.frame_count if i == 0 else max(1, round(span_s * c.rate_hz))
+                     for i, c in enumerate(self.cameras))
 
 
 # --- loading -------------------------------------------------------------------------------

@@ -54,13 +54,13 @@ def test_drops_are_a_share_of_the_frames() -> None:
 
 def test_schedule_orders_shots_by_time_then_camera() -> None:
     stereo = load_scenario("stereo_checkerboard").cameras
-    shots, drops = schedule(stereo, 5, [np.random.default_rng(i) for i in range(2)])
+    shots, drops = schedule(stereo, (5, 5), [np.random.default_rng(i) for i in range(2)])
     assert [(s.camera_index, s.frame_index) for s in shots] == [
         (c, k) for k in range(5) for c in (0, 1)
     ]
     assert all(d.size == 0 for d in drops.values())
     unsynced = load_scenario("stereo_unsynced").cameras
-    shots, _ = schedule(unsynced, 300, [np.random.default_rng(i) for i in range(2)])
+    shots, _ = schedule(unsynced, (300, 300), [np.random.default_rng(i) for i in range(2)])
     times = [s.t_s for s in shots]
     assert times == sorted(times)
 

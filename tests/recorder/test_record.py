@@ -14,7 +14,7 @@ import pytest
 from recorder.errors import RenderError
 from recorder.record import _Pipeline, record
 from recorder.render import SceneRenderer
-from recorder.scenario import load_scenario
+from recorder.scenario import builtin_dir, load_scenario
 from replay import FORMATS, Image, LogWriteError, open_reader
 
 from .logs import SCENARIO_TOPIC, Log, record_log, transform, translation
@@ -130,6 +130,27 @@ def test_stereo_truth_differs_by_the_baseline(stereo: Log) -> None:
     world_from_right = np.array(stereo.camera("right")["world_from_camera"])
     np.testing.assert_allclose(world_from_right, world_from_left @ translation(x=BASELINE_M),
                                atol=1e-12)
+
+
+def test_cameras_at_different_rates_cover_the_same_span(
+    recording: Callable[..., Log], tmp_path: Path
+) -> None:
+    """A 15 Hz right camera beside the 30 Hz left one records half as many frames over the
+    same time, and the board moves for both until the end."""
+    text = (builtin_dir() / "stereo_checkerboard.toml").read_text()
+    assert text.count('relative_to = "left"') == 1
+    spec = tmp_path / "mixed.toml"
+    spec.write_text(text.replace('relative_to = "left"', 'relative_to = "left"\nrate_hz = 15.0'))
+    scenario = load_scenario(str(spec), {"frames": 60, **SMALL})
+    assert scenario.frame_counts == (60, 30)
+    log = recording(spec, frames=60, **SMALL)
+    left = [m.stamp_ns for m in log.images("/stereo_camera/left")]
+    right = [m.stamp_ns for m in log.images("/stereo_camera/right")]
+    assert (len(left), len(right)) == (60, 30)
+    assert right == left[::2]  # same start, twice the period
+    poses = log.truths("/stereo_camera/right", "checkerboard")
+    # 0.5 s holds: the right camera's last second still sees new poses
+    assert not np.allclose(transform(poses[-1]), transform(poses[-16]))
 
 
 # --- options --------------------------------------------------------------------------------
