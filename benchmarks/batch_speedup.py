@@ -13,8 +13,8 @@ import argparse
 import tempfile
 from pathlib import Path
 
-from camlog.batch import run_batch
-from camlog.pipeline import parse_pipeline
+from camlog.batch.pipeline import parse_pipeline
+from camlog.batch.run import run_batch
 from recorder.record import record
 from recorder.scenario import load_scenario
 

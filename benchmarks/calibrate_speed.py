@@ -18,7 +18,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from camlog.calibrate_log import calibrate_log
+from camlog.calibrate.flow import calibrate_log
 from processors.calibration.board import make_board
 from processors.calibration.solve import CalibrationOptions
 from recorder.record import record

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from camlog.process_log import process_log
+from camlog.processing.process_log import process_log
 from processors.base import Output, Processor
 from processors.edges import EDGES, Edges
 from processors.red_pixels import CENTROID, COUNT, OUTPUT_VIDEO, RedPixels

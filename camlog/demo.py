@@ -24,9 +24,9 @@ from recorder.record import record
 from recorder.scenario import load_scenario
 from replay.export import view_logs
 
-from .calibrate_log import calibrate_log
-from .process_log import process_log
-from .resync_log import resync_log
+from .calibrate.flow import calibrate_log
+from .processing.process_log import process_log
+from .processing.resync_log import resync_log
 
 
 @dataclass

@@ -1,0 +1,7 @@
+"""``python -m camlog``: the command line."""
+
+import sys
+
+from camlog.cli import main
+
+sys.exit(main())

@@ -1,0 +1,1 @@
+"""Batch runs: pipelines of steps over many logs, in parallel processes or on Ray."""

@@ -1,0 +1,246 @@
+"""Pipelines: a small TOML/YAML file naming steps (resync, calibrate, process, …) and options.
+
+```toml
+[[steps]]
+run = "resync"                       # left/right/slop/out_prefix as for camlog resync
+
+[[steps]]
+run = "calibrate"                    # input: the previous step's log (here, the resync output)
+size = "7x6"
+square = 0.01
+left = "/stereo_sync/left"
+right = "/stereo_sync/right"
+
+[[steps]]
+run = "process"
+input = "log"                        # "log" (the batch input), "previous", or a step name
+topic = "/unsynced/left/image_raw"
+red_pixels = true
+edges = {low = 50, high = 150}
+```
+
+Each step runs one of camlog's functions on an input log and may produce a log that later
+steps read. :func:`run_step` is the only place that knows the step kinds.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import tomllib
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from processors.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class Step:
+    """One step: what to ``run``, on which ``input``, with which options."""
+
+    name: str
+    run: str
+    input: str
+    options: dict[str, Any]
+
+
+@dataclass
+class StepOutcome:
+    """What a step produced: a log later steps can read, key figures, files."""
+
+    log: Path | None
+    figures: dict[str, Any] = field(default_factory=dict)
+    files: list[Path] = field(default_factory=list)
+
+
+@dataclass(frozen=True)
+class Pipeline:
+    steps: tuple[Step, ...]
+    source: str
+
+    def digest(self) -> str:
+        """Hash of everything that shapes the outputs (for up-to-date checks)."""
+        from replay._version import VERSION
+
+        text = json.dumps([[s.name, s.run, s.input, s.options] for s in self.steps],
+                          sort_keys=True, default=str)
+        return hashlib.sha256(f"{VERSION}\n{text}".encode()).hexdigest()[:16]
+
+
+# --- step kinds --------------------------------------------------------------------------
+
+def _bool_or_table(value: Any, key: str, step: str) -> dict[str, Any] | None:
+    if value is False or value is None:
+        return None
+    if value is True:
+        return {}
+    if isinstance(value, dict):
+        return dict(value)
+    raise ConfigError(f"step {step!r}: {key} must be true, false or a table of options")
+
+
+def _resync(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
+    from ..processing.resync_log import resync_log
+
+    result = resync_log(log, out / "synced.mcap", left=o.get("left", "/unsynced/left"),
+                        right=o.get("right", "/unsynced/right"),
+                        out_prefix=o.get("out_prefix", "/stereo_sync"), slop_s=o.get("slop"),
+                        overwrite=True)
+    stats = result.stats
+    return StepOutcome(result.output, {"pairs": stats.get("pairs")}, [result.output])
+
+
+def _calibrate(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
+    from processors.calibration.board import make_board
+    from processors.calibration.solve import CalibrationOptions, tangential_mode
+
+    from ..calibrate.flow import calibrate_log
+
+    if "left" in o or "right" in o:
+        cameras = [o.get("left", ""), o.get("right", "")]
+    elif "camera" in o:
+        cameras = [o["camera"]]
+    else:
+        raise ConfigError("calibrate: give camera = NS, or left and right")
+    run = calibrate_log(
+        log, board=make_board(str(o.get("size", "")), float(o.get("square", 0))),
+        cameras=cameras, output_dir=out,
+        options=CalibrationOptions(
+            fix_principal_point=bool(o.get("fix_principal_point", False)),
+            fix_aspect_ratio=bool(o.get("fix_aspect_ratio", False)),
+            tangential=tangential_mode(bool(o.get("zero_tangent_dist", False)),
+                                       bool(o.get("tangent_dist", False))),
+            k_coefficients=int(o.get("k_coefficients", 2))),
+        approximate_s=o.get("approximate"), camera_name=o.get("camera_name"),
+        max_views=int(o.get("max_views", 150)), overwrite=True, workers=workers,
+        progress=False)
+    summary = run.summary
+    figures: dict[str, Any] = {}
+    for camera in summary["cameras"]:
+        key = camera["namespace"].strip("/").split("/")[-1]
+        figures[f"{key}_rms_px"] = round(camera["rms_px"], 4)
+        figures[f"{key}_fx"] = round(camera["parameters"]["fx"]["value"], 3)
+    if "stereo" in summary:
+        figures["baseline_m"] = round(summary["stereo"]["baseline_m"], 6)
+        figures["epipolar_px"] = round(summary["stereo"]["epipolar_rms_px"], 4)
+    return StepOutcome(out / "calibration.mcap", figures, run.files)
+
+
+def _process(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
+    from processors.registry import make_processor
+    from processors.throttle import make_throttle
+
+    from ..processing.process_log import process_log
+
+    if "topic" not in o:
+        raise ConfigError("process: give topic = the image topic to process")
+    chosen = []
+    for key, name in (("red_pixels", "red_pixels"), ("edges", "edges")):
+        options = _bool_or_table(o.get(key), key, "process")
+        if options is not None:
+            chosen.append(make_processor(name, **options))
+    if o.get("rectify"):
+        from replay.calibration_yaml import load_calibration
+
+        chosen.append(make_processor(
+            "rectify", camera_info=load_calibration(Path(o["rectify"])).camera_info))
+    if not chosen:
+        raise ConfigError("process: enable at least one of red_pixels, edges, rectify")
+    result = process_log(log, out / "processed.mcap", topic=o["topic"], processors=chosen,
+                         throttle=make_throttle(every=o.get("every"), rate_hz=o.get("rate")),
+                         compress=o.get("compress"), overwrite=True, workers=workers)
+    return StepOutcome(result.output, {"frames": result.frames_processed,
+                                       "fps": round(result.fps, 1)}, [result.output])
+
+
+def _info(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
+    from replay.formats import open_reader
+    from replay.info import format_summary, summarize
+
+    with open_reader(log) as reader:
+        text = format_summary(summarize(reader))
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "info.txt"
+    path.write_text(text + "\n")
+    return StepOutcome(None, {}, [path])
+
+
+Runner = Callable[[Path, Path, dict[str, Any], int], StepOutcome]
+
+#: step kind -> (allowed option keys, runner)
+STEPS: dict[str, tuple[frozenset[str], Runner]] = {
+    "resync": (frozenset({"left", "right", "slop", "out_prefix"}), _resync),
+    "calibrate": (frozenset({"size", "square", "camera", "left", "right", "approximate",
+                             "fix_principal_point", "fix_aspect_ratio", "zero_tangent_dist",
+                             "tangent_dist", "k_coefficients", "camera_name", "max_views"}),
+                  _calibrate),
+    "process": (frozenset({"topic", "red_pixels", "edges", "rectify", "every", "rate",
+                           "compress"}), _process),
+    "info": (frozenset(), _info),
+}
+
+
+def run_step(step: Step, log: Path, out: Path, workers: int) -> StepOutcome:
+    """Run one step on ``log``, writing under the folder ``out``."""
+    out.mkdir(parents=True, exist_ok=True)
+    return STEPS[step.run][1](log, out, step.options, workers)
+
+
+# --- loading -----------------------------------------------------------------------------
+
+def parse_pipeline(raw: Any, source: str) -> Pipeline:
+    """Validate raw pipeline data (from TOML or YAML)."""
+    if not isinstance(raw, dict) or not isinstance(raw.get("steps"), list) or not raw["steps"]:
+        raise ConfigError(f"{source}: a pipeline needs a non-empty list of [[steps]]")
+    unknown_top = set(raw) - {"steps", "description"}
+    if unknown_top:
+        raise ConfigError(f"{source}: unknown key {sorted(unknown_top)[0]!r}")
+    steps: list[Step] = []
+    for index, table in enumerate(raw["steps"]):
+        where = f"{source}: steps[{index}]"
+        if not isinstance(table, dict) or "run" not in table:
+            raise ConfigError(f"{where}: each step needs run = one of {', '.join(STEPS)}")
+        kind = table["run"]
+        if kind not in STEPS:
+            raise ConfigError(f"{where}: unknown step {kind!r} (known: {', '.join(STEPS)})")
+        name = str(table.get("name", kind))
+        if any(s.name == name for s in steps):
+            raise ConfigError(f"{where}: step name {name!r} is used twice; give name = ...")
+        source_step = str(table.get("input", "previous"))
+        known = {"log", "previous", *(s.name for s in steps)}
+        if source_step not in known:
+            raise ConfigError(f"{where}: input {source_step!r} is not 'log', 'previous' or an "
+                              "earlier step's name")
+        options = {k: v for k, v in table.items() if k not in ("run", "name", "input")}
+        bad = sorted(set(options) - STEPS[kind][0])
+        if bad:
+            raise ConfigError(f"{where}: {kind} has no option {bad[0]!r} "
+                              f"(options: {', '.join(sorted(STEPS[kind][0])) or 'none'})")
+        steps.append(Step(name, kind, source_step, options))
+    return Pipeline(tuple(steps), source)
+
+
+def load_pipeline(path: Path) -> Pipeline:
+    """Read a pipeline from a .toml, .yaml or .yml file."""
+    try:
+        text = path.read_text()
+    except FileNotFoundError:
+        raise ConfigError(f"pipeline file {path} does not exist") from None
+    except (OSError, UnicodeDecodeError) as err:
+        raise ConfigError(f"cannot read pipeline {path}: {err}") from None
+    if path.suffix in (".yaml", ".yml"):
+        from ruamel.yaml import YAML
+        from ruamel.yaml.error import YAMLError
+
+        try:
+            raw = YAML(typ="safe", pure=True).load(text)
+        except YAMLError as err:
+            raise ConfigError(f"{path}: not valid YAML: {str(err).splitlines()[0]}") from None
+    else:
+        try:
+            raw = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as err:
+            raise ConfigError(f"{path}: not valid TOML: {err}") from None
+    return parse_pipeline(raw, str(path))

@@ -1,0 +1,1 @@
+"""Calibration of cameras from a log: detect, select, solve, write the evidence, report."""

@@ -1,0 +1,131 @@
+"""``camlog calibrate``: intrinsic calibration of a mono camera or a stereo pair from a log."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from processors.calibration.board import PATTERNS, make_board
+from processors.calibration.solve import CalibrationOptions, tangential_mode
+from processors.errors import InputError
+from replay.formats import open_reader
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Register the ``calibrate`` arguments (camera_calibration's vocabulary)."""
+    p.epilog = (
+        "Mono: --camera NS (the namespace that owns image_raw[/compressed] and camera_info). "
+        "Stereo: --left NS --right NS; frames pair by identical stamps, or within "
+        "--approximate SEC. Writes OUTDIR/{ost.yaml | left.yaml, right.yaml}, ost.txt, "
+        "calibration.mcap (the log plus detections, residuals, calibrated camera_info and "
+        "rectified images), calibration.json, report.md and PNG figures."
+    )
+    p.add_argument("log", metavar="LOG", type=Path, help="input log (never modified)")
+    p.add_argument("--size", required=True, metavar="COLSxROWS",
+                   help="board size in inner corners, e.g. 7x6")
+    p.add_argument("--square", required=True, type=float, metavar="M",
+                   help="square side in metres, e.g. 0.01")
+    p.add_argument("--pattern", default="chessboard", choices=PATTERNS,
+                   help="calibration target (default chessboard)")
+    p.add_argument("--camera", metavar="NS", help="mono camera namespace, e.g. /simple_camera "
+                   "(default: the log's only camera)")
+    p.add_argument("--left", metavar="NS", help="stereo left camera namespace")
+    p.add_argument("--right", metavar="NS", help="stereo right camera namespace")
+    p.add_argument("--approximate", type=float, metavar="SEC",
+                   help="pair stereo frames whose stamps differ by at most SEC")
+    p.add_argument("-o", "--output", type=Path, metavar="OUTDIR",
+                   help="output folder (default: LOG_calibration next to the log)")
+    p.add_argument("--fix-principal-point", action="store_true",
+                   help="hold the principal point at the image centre")
+    p.add_argument("--fix-aspect-ratio", action="store_true", help="force fx = fy")
+    p.add_argument("--zero-tangent-dist", action="store_true",
+                   help="hold tangential distortion p1 = p2 = 0")
+    p.add_argument("--tangent-dist", action="store_true",
+                   help="always estimate tangential distortion p1, p2 (camera_calibration's "
+                        "default; by default they are estimated only when the views show "
+                        "them, by a likelihood-ratio test)")
+    p.add_argument("-k", "--k-coefficients", type=int, default=2, metavar="N",
+                   help="radial coefficients to estimate: <= 3 plumb_bob, > 3 "
+                        "rational_polynomial (default 2)")
+    p.add_argument("--camera-name", help="camera_name written in the YAML files")
+    p.add_argument("--max-chessboard-speed", type=float, metavar="PX",
+                   help="reject views whose board moves more than PX pixels per frame")
+    p.add_argument("--max-views", type=int, default=150, metavar="N",
+                   help="most views given to the solver, chosen for coverage (default 150)")
+    p.add_argument("--check", action="store_true",
+                   help="measure --calibration files on LOG instead of calibrating")
+    p.add_argument("--calibration", type=Path, action="append", metavar="YAML",
+                   help="with --check: calibration file (twice for stereo: left, right)")
+    p.add_argument("--overwrite", action="store_true", help="replace existing output files")
+    p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
+    p.add_argument("--no-progress", action="store_true", help="hide progress bars")
+
+
+def cameras_from(args: argparse.Namespace) -> list[str]:
+    """The camera namespaces to calibrate, from the options or the log's only camera."""
+    if args.left or args.right:
+        if not (args.left and args.right):
+            raise InputError("stereo needs both --left and --right")
+        if args.camera:
+            raise InputError("give either --camera or --left/--right")
+        return [args.left, args.right]
+    if args.camera:
+        return [args.camera]
+    with open_reader(args.log, recover=args.recover) as reader:
+        spaces = sorted({t.rsplit("/image_raw", 1)[0] for t, i in reader.topics.items()
+                         if "/image_raw" in t and i.count})
+    if len(spaces) != 1:
+        raise InputError(f"name the camera with --camera (or --left/--right); image_raw "
+                         f"namespaces in {args.log}: {', '.join(spaces) or 'none'}")
+    return spaces
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..calibrate.check import check_log
+    from ..calibrate.flow import calibrate_log
+
+    board = make_board(args.size, args.square, args.pattern)
+    cameras = cameras_from(args)
+    progress = False if args.no_progress else None
+    if args.check:
+        if not args.calibration:
+            raise InputError("--check needs --calibration FILE (twice for stereo)")
+        result = check_log(args.log, board=board, cameras=cameras,
+                           calibrations=args.calibration, approximate_s=args.approximate,
+                           progress=progress, recover=args.recover)
+        print("\n".join(result.lines()))
+        return 0
+    options = CalibrationOptions(
+        fix_principal_point=args.fix_principal_point, fix_aspect_ratio=args.fix_aspect_ratio,
+        tangential=tangential_mode(args.zero_tangent_dist, args.tangent_dist),
+        k_coefficients=args.k_coefficients)
+    output = args.output or args.log.with_name(f"{args.log.stem}_calibration")
+    run_ = calibrate_log(
+        args.log, board=board, cameras=cameras, output_dir=output, options=options,
+        approximate_s=args.approximate, camera_name=args.camera_name,
+        max_speed_px=args.max_chessboard_speed, max_views=args.max_views,
+        overwrite=args.overwrite, progress=progress, recover=args.recover)
+    for camera in run_.summary["cameras"]:
+        p = camera["parameters"]
+        print(f"{camera['namespace']}: {camera['used_views']} views "
+              f"({camera['boards_found']} boards in {camera['distinct_frames']} distinct of "
+              f"{camera['frames']} frames, {len(camera['rejected'])} rejected), "
+              f"RMS {camera['rms_px']:.4f} px")
+        print(f"  fx {p['fx']['value']:.3f} ± {p['fx']['std']:.3f}  fy {p['fy']['value']:.3f} ± "
+              f"{p['fy']['std']:.3f}  cx {p['cx']['value']:.3f} ± {p['cx']['std']:.3f}  "
+              f"cy {p['cy']['value']:.3f} ± {p['cy']['std']:.3f}")
+        if "summary" in camera["tangential"]:
+            print(f"  {camera['tangential']['summary']}")
+        if "max_projection_difference_vs_truth_px" in camera:
+            print(f"  vs simulator truth: max projection difference "
+                  f"{camera['max_projection_difference_vs_truth_covered_aligned_px']:.3f} px "
+                  "where corners were seen, "
+                  f"{camera['max_projection_difference_vs_truth_aligned_px']:.3f} px over the "
+                  "whole image (camera frames aligned by a rotation)")
+    if "stereo" in run_.summary:
+        s = run_.summary["stereo"]
+        print(f"stereo: baseline {s['baseline_m']:.5f} m, epipolar RMS "
+              f"{s['epipolar_rms_px']:.4f} px, square {s['square_m']:.5f} m")
+    print(f"wrote {run_.output_dir}/ ({', '.join(f.name for f in run_.files)}) "
+          f"in {run_.wall_s:.1f} s")
+    return 0

@@ -1,0 +1,50 @@
+"""``camlog convert IN OUT``: between MCAP, rosbag2 and ROS1, filtered, images re-encoded."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from replay.convert import COMPRESSIONS, convert_log
+from replay.formats import FORMATS
+
+from .args import add_selection, print_warnings
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Register the ``convert`` arguments."""
+    p.epilog = (
+        "Messages are copied as stored (byte for byte between CDR formats; ROS1 <-> CDR "
+        "re-serialized by rosbags, which drops ROS1's Header.seq). --compress stores Image "
+        "topics T as CompressedImage on T/compressed, --decompress the reverse, as "
+        "image_transport names them."
+    )
+    p.add_argument("input", metavar="IN", type=Path, help="MCAP file, rosbag2 directory or .bag")
+    p.add_argument("output", metavar="OUT", type=Path,
+                   help="output log: .mcap, .bag or a directory name (rosbag2)")
+    p.add_argument("--format", choices=sorted(FORMATS), help="output format (default: from OUT)")
+    add_selection(p)
+    codec = p.add_mutually_exclusive_group()
+    codec.add_argument("--compress", choices=COMPRESSIONS,
+                       help="store raw images compressed on TOPIC/compressed")
+    codec.add_argument("--decompress", action="store_true",
+                       help="store compressed images raw (TOPIC/compressed -> TOPIC)")
+    p.add_argument("--overwrite", action="store_true", help="replace an existing output")
+    p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Call :func:`replay.convert.convert_log`."""
+    result = convert_log(
+        args.input, args.output, fmt=args.format, topics=args.topics, start_s=args.start,
+        end_s=args.end, compress=args.compress, decompress=args.decompress,
+        overwrite=args.overwrite, recover=args.recover,
+        progress=False if args.no_progress else None)
+    print(f"converted {result.messages} messages ({result.reencoded} images re-encoded) to "
+          f"{result.format_name} in {result.wall_s:.2f} s")
+    for before, after in sorted(result.renamed.items()):
+        print(f"renamed {before} -> {after}")
+    print_warnings(result.warnings)
+    print(f"wrote {result.output}")
+    return 0

@@ -1,0 +1,63 @@
+"""``camlog play LOG``: replay a log in (scaled) real time to a viewer, an .rrd or a log."""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from replay.formats import FORMATS
+from replay.play import LOG_TIMES, play_log
+
+from .args import add_selection, add_viewer_destination, bounded_int, print_warnings
+
+
+def _rate(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"the rate must be > 0, got {value}")
+    return value
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Register the ``play`` arguments."""
+    p.epilog = (
+        "Messages are emitted when due: (log time - first log time) / RATE after the start. "
+        "-o OUT.rrd records the replay for rerun (timelines log_time, header_stamp and "
+        "replay_time); any other -o OUT is a log that receives the messages as they are "
+        "played, bytes and header stamps unchanged, log time = the wall-clock time of "
+        "emission (--log-time original keeps the input's). An endless --loop ends with "
+        "Ctrl-C, keeping what was played."
+    )
+    p.add_argument("logs", metavar="LOG", type=Path, nargs="+",
+                   help="log(s) to replay (several are merged in log time)")
+    p.add_argument("--rate", type=_rate, default=1.0, metavar="R",
+                   help="speed factor (default 1: real time; 2: twice as fast)")
+    add_selection(p)
+    p.add_argument("--loop", nargs="?", const=0, default=1, type=bounded_int(1, None),
+                   metavar="N", help="replay N times, or until interrupted without N")
+    add_viewer_destination(p, what="replay (.rrd: rerun recording; else a log)")
+    p.add_argument("--log-time", choices=LOG_TIMES, default="replay",
+                   help="log time written to a log output (default: replay wall clock)")
+    p.add_argument("--format", choices=sorted(FORMATS),
+                   help="log output format (default: from OUT)")
+    p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
+    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Call :func:`replay.play.play_log` and report the pacing."""
+    result = play_log(
+        args.logs, rate=args.rate, start_s=args.start, end_s=args.end, topics=args.topics,
+        loops=args.loop, output=args.output, spawn=args.spawn, connect=args.connect,
+        log_time=args.log_time, fmt=args.format, overwrite=args.overwrite,
+        recover=args.recover, progress=False if args.no_progress else None)
+    print(f"played {result.messages} messages ({result.loops} loop(s) of "
+          f"{result.log_span_s:.3f} s at {args.rate:g}x) in {result.wall_s:.2f} s; "
+          f"latest message {result.late_s * 1e3:.1f} ms late")
+    print_warnings(result.warnings)
+    if result.output:
+        print(f"wrote {result.output}")
+    return 0

@@ -1,0 +1,1 @@
+"""Golden-log regression: committed inputs, expected outputs, comparison with tolerances."""

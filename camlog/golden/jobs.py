@@ -1,0 +1,243 @@
+"""Golden jobs: run one camlog step over a golden input and reduce its outputs to artifacts.
+
+A job writes below ``FOLDER/NAME`` (FOLDER is the input's work folder) and returns its
+artifacts named relative to that folder. Artifacts hold what a regression would change and
+nothing that is brittle: numbers, calibration YAML, the first and last output frames, and
+text summaries of output logs (topics, types, counts, log-time spans) instead of their
+compressed bytes.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from processors.base import Processor
+from processors.errors import InputError
+from processors.registry import make_processor
+from replay.formats import open_reader
+from replay.info import summarize
+from replay.messages import Image, PointStamped, Text
+
+from .artifacts import Artifacts, dumps_json
+
+__all__ = [
+    "Calibrate",
+    "GoldenError",
+    "Job",
+    "Process",
+    "Resync",
+    "calibration_numbers",
+    "log_summary",
+    "pair_table",
+]
+
+
+class GoldenError(InputError):
+    """The golden inputs do not match their manifest, or a golden job cannot run."""
+
+
+class Job(Protocol):
+    """One step over a golden input; writes below ``folder / name`` and returns artifacts
+    named relative to that folder."""
+
+    @property
+    def name(self) -> str: ...
+
+    def run(self, log: Path, folder: Path, workers: int) -> Artifacts: ...
+
+
+def _json(value: Any) -> Any:
+    """A JSON artifact exactly as it reads back from its file."""
+    return json.loads(dumps_json(value))
+
+
+def log_summary(path: Path) -> str:
+    """Topics of a log with type, count, log-time span and stream detail, one per line."""
+    with open_reader(path) as reader:
+        summary = summarize(reader)
+    lines = [f"{summary.message_count} messages on {len(summary.topics)} topics"]
+    for t in summary.topics:
+        span = f"{t.first_ns}..{t.last_ns}" if t.first_ns is not None else "-"
+        lines.append(f"{t.name}  {t.msgtype}  {t.count}  {span}  {t.detail}".rstrip())
+    return "\n".join(lines) + "\n"
+
+
+#: calibration.json keys kept per camera and for the pair (inputs and figures left out)
+CAMERA_KEYS = ("namespace", "image_topic", "width", "height", "frames", "distinct_frames",
+               "boards_found", "candidate_views", "selected_views", "used_views", "rejected",
+               "rms_px", "distortion_model", "parameters", "cross_validation_px",
+               "max_projection_difference_vs_truth_px",
+               "max_projection_difference_vs_truth_covered_px",
+               "max_projection_difference_vs_truth_aligned_px",
+               "max_projection_difference_vs_truth_covered_aligned_px")
+STEREO_KEYS = ("rms_px", "epipolar_rms_px", "baseline_m", "baseline_std_m", "square_m",
+               "rotation_deg", "translation_m", "joint_views")
+
+
+def calibration_numbers(summary: dict[str, Any]) -> dict[str, Any]:
+    """The key numbers of ``calibration.json``: views, RMS, parameters with their sigma."""
+    cameras = []
+    for camera in summary["cameras"]:
+        entry = {k: camera[k] for k in CAMERA_KEYS if k in camera}
+        entry["parameters"] = {name: {"value": p["value"], "std": p["std"]}
+                               for name, p in camera["parameters"].items()}
+        cameras.append(entry)
+    out: dict[str, Any] = {"cameras": cameras}
+    if "stereo" in summary:
+        out["stereo"] = {k: summary["stereo"][k] for k in STEREO_KEYS}
+    return out
+
+
+@dataclass(frozen=True)
+class Calibrate:
+    """``camlog calibrate`` of one camera or a pair (7x6 inner corners, 1 cm squares)."""
+
+    name: str
+    cameras: tuple[str, ...]
+    log: str | None = None  # another job's output log, relative to the input's folder
+
+    def run(self, log: Path, folder: Path, workers: int) -> Artifacts:
+        from processors.calibration.board import make_board
+        from processors.calibration.solve import CalibrationOptions
+
+        from ..calibrate.flow import calibrate_log
+
+        out = folder / self.name
+        calibrate_log(
+            folder / self.log if self.log else log, board=make_board("7x6", 0.01),
+            cameras=list(self.cameras), output_dir=out, options=CalibrationOptions(),
+            overwrite=True, workers=workers, progress=False)
+        yamls = ("left.yaml", "right.yaml") if len(self.cameras) == 2 else ("ost.yaml",)
+        return {name: (out / name).read_text() for name in yamls} | {
+            "calibration.json": _json(calibration_numbers(
+                json.loads((out / "calibration.json").read_text()))),
+            "calibration_mcap.txt": log_summary(out / "calibration.mcap"),
+        }
+
+
+@dataclass(frozen=True)
+class Resync:
+    """``camlog resync``: the pair table rebuilt from the output log, its stats and summary."""
+
+    name: str
+    left: str
+    right: str
+
+    def run(self, log: Path, folder: Path, workers: int) -> Artifacts:
+        from ..processing.resync_log import resync_log
+
+        output = folder / self.name / "output.mcap"
+        output.parent.mkdir(parents=True, exist_ok=True)
+        resync_log(log, output, left=self.left, right=self.right, overwrite=True)
+        return {"pairs.json": _json(pair_table(log, output, self.left, self.right)),
+                "stats.json": _json(_stats(output)),
+                "output.txt": log_summary(output)}
+
+
+def _image_stamps(path: Path, topic: str) -> list[int]:
+    with open_reader(path) as reader:
+        return [r.message.stamp_ns for r in reader.messages([topic])
+                if isinstance(r.message, Image)]
+
+
+def pair_table(log: Path, output: Path, left: str, right: str,
+               prefix: str = "/stereo_sync") -> dict[str, Any]:
+    """Per pair (left stamp, right stamp, output stamp), and the unpaired input stamps.
+
+    The output holds the common stamp (the later one) and ``x = right - left`` in seconds,
+    which is exact in float64 for offsets under a second; the two input stamps follow.
+    """
+    offsets: dict[int, int] = {}
+    with open_reader(output) as reader:
+        for record in reader.messages([f"{prefix}/offset_s"]):
+            if isinstance(record.message, PointStamped):
+                offsets[record.message.stamp_ns] = round(float(record.message.point[0]) * 1e9)
+    rows = []
+    for out_ns in _image_stamps(output, f"{prefix}/left/image_raw"):
+        offset = offsets[out_ns]
+        left_ns, right_ns = (out_ns - offset, out_ns) if offset >= 0 else (out_ns,
+                                                                             out_ns + offset)
+        rows.append([left_ns, right_ns, out_ns])
+    paired = [{r[0] for r in rows}, {r[1] for r in rows}]
+    inputs = [_image_stamps(log, f"{ns.rstrip('/')}/image_raw") for ns in (left, right)]
+    return {"columns": ["left_stamp_ns", "right_stamp_ns", "output_stamp_ns"], "pairs": rows,
+            "left_unpaired_stamps_ns": [s for s in inputs[0] if s not in paired[0]],
+            "right_unpaired_stamps_ns": [s for s in inputs[1] if s not in paired[1]]}
+
+
+def _stats(output: Path, topic: str = "/stereo_sync/stats") -> Any:
+    with open_reader(output) as reader:
+        for record in reader.messages([topic]):
+            if isinstance(record.message, Text):
+                return json.loads(record.message.data)
+    raise GoldenError(f"{output} has no {topic}")
+
+
+@dataclass(frozen=True)
+class Process:
+    """``camlog process`` of one topic: first and last output frames, the red centroid and
+    edge-pixel tracks per frame, and the output log's summary."""
+
+    name: str
+    topic: str
+    processors: tuple[str, ...]
+    calibration: str | None = None  # for rectify: another job's YAML, relative to the folder
+
+    def build(self, folder: Path) -> list[Processor]:
+        from replay.calibration_yaml import load_calibration
+
+        options: dict[str, dict[str, Any]] = {}
+        if self.calibration is not None:
+            info = load_calibration(folder / self.calibration).camera_info
+            options["rectify"] = {"camera_info": info}
+        return [make_processor(name, **options.get(name, {})) for name in self.processors]
+
+    def run(self, log: Path, folder: Path, workers: int) -> Artifacts:
+        from ..processing.process_log import process_log
+
+        processors = self.build(folder)
+        output = folder / self.name / "output.mcap"
+        output.parent.mkdir(parents=True, exist_ok=True)
+        process_log(log, output, topic=self.topic, processors=processors, overwrite=True,
+                    workers=workers)
+        topics = {t: kind for p in processors for t, kind in p.outputs().items()}
+        return _frame_artifacts(output, topics) | {"output.txt": log_summary(output)}
+
+
+def _frame_artifacts(output: Path, topics: dict[str, str]) -> Artifacts:
+    first: dict[str, np.ndarray] = {}
+    last: dict[str, np.ndarray] = {}
+    centroid: dict[int, tuple[float, float]] = {}
+    counts: list[tuple[int, int]] = []
+    edges: list[dict[str, int]] = []
+    with open_reader(output) as reader:
+        for record in reader.messages(sorted(topics)):
+            leaf, message = record.topic.rsplit("/", 1)[-1], record.message
+            if isinstance(message, Image):
+                pixels = np.array(message.pixels)  # a copy: views pin the reader's chunk
+                first.setdefault(leaf, pixels)
+                last[leaf] = pixels
+                if leaf == "edges":
+                    edges.append({"stamp_ns": message.stamp_ns,
+                                  "edge_pixels": int(np.count_nonzero(message.pixels))})
+            elif isinstance(message, PointStamped) and leaf == "red_centroid":
+                centroid[message.stamp_ns] = (float(message.point[0]), float(message.point[1]))
+            elif isinstance(message, PointStamped) and leaf == "red_count":
+                counts.append((message.stamp_ns, round(float(message.point[0]))))
+    out: Artifacts = {}
+    for leaf, pixels in first.items():
+        out[f"{leaf}-first.png"], out[f"{leaf}-last.png"] = pixels, last[leaf]
+    if counts:
+        out["red_centroid.json"] = _json({"frames": [
+            {"stamp_ns": s, "u_px": centroid.get(s, (None, None))[0],
+             "v_px": centroid.get(s, (None, None))[1], "count": n} for s, n in counts]})
+    if edges:
+        out["edges.json"] = _json({"frames": edges})
+    return out
+
+

@@ -1,0 +1,1 @@
+"""Streaming a log through processors (process, resync) into a new log."""

@@ -1,0 +1,242 @@
+"""Pair the images of two unsynchronised cameras in a log and write them re-stamped.
+
+Pass 1 reads only the header stamps of both image and camera_info topics (images are not
+decompressed; a raw image decodes to a view of its buffer). The stamps are paired with
+:func:`processors.resync.pair_stamps`. Pass 2 copies every input message through and, as
+the members of a pair arrive, writes both images and their camera_info (matched by identical
+stamp) under ``OUT_PREFIX/{left,right}/...`` with the pair's common stamp. Only the members
+of pairs not yet complete are held, so memory is bounded by the slop, not the log length.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from processors.errors import InputError, SyncError
+from processors.resync import default_slop_ns, pair_stamp_ns, pair_stamps, pairing_stats
+from replay.formats import LogReader, LogWriter, open_reader, open_writer
+from replay.messages import CameraInfo, CompressedImage, Image, Message, PointStamped, Text
+
+from .checks import IMAGE_TYPES, require_free_topics, require_messages, require_new_output
+
+INFO_TYPE = "sensor_msgs/msg/CameraInfo"
+SIDES = ("left", "right")
+
+
+@dataclass(frozen=True)
+class ResyncResult:
+    """What :func:`resync_log` did; ``stats`` is the JSON stored on ``PREFIX/stats``."""
+
+    output: Path
+    stats: dict[str, Any]
+    wall_s: float
+
+
+@dataclass
+class _Side:
+    """Input and output topics of one camera, and the stamps pass 1 found."""
+
+    name: str
+    image_topic: str
+    info_topic: str | None
+    out_image: str
+    out_info: str
+    image_stamps: list[int] = field(default_factory=list)
+    info_stamps: set[int] = field(default_factory=set)
+
+
+def _side(reader: LogReader, name: str, namespace: str, prefix: str) -> _Side:
+    namespace = namespace.rstrip("/")
+    candidates = [f"{namespace}/image_raw", f"{namespace}/image_raw/compressed"]
+    found = [t for t in candidates if t in reader.topics and reader.topics[t].count]
+    if not found:
+        listed = ", ".join(sorted(t for t, i in reader.topics.items() if i.count)) or "none"
+        raise InputError(f"{reader.path} has no {name} images {candidates[0]} "
+                         f"(topics: {listed})")
+    image_topic = found[0]
+    if reader.topics[image_topic].msgtype not in IMAGE_TYPES:
+        raise InputError(f"{reader.path}: {image_topic} is {reader.topics[image_topic].msgtype}"
+                         ", not an image topic")
+    info = f"{namespace}/camera_info"
+    has_info = info in reader.topics and reader.topics[info].msgtype == INFO_TYPE
+    suffix = image_topic.removeprefix(f"{namespace}/")
+    return _Side(name, image_topic, info if has_info else None,
+                 f"{prefix}/{name}/{suffix}", f"{prefix}/{name}/camera_info")
+
+
+def _read_stamps(reader: LogReader, sides: list[_Side]) -> None:
+    images = {s.image_topic: s for s in sides}
+    infos = {s.info_topic: s for s in sides if s.info_topic}
+    for raw in reader.raw_messages([*images, *infos]):
+        stamp = _stamp(reader.decode(raw))
+        if raw.topic in images:
+            images[raw.topic].image_stamps.append(stamp)
+        else:
+            infos[raw.topic].info_stamps.add(stamp)
+
+
+def _stamp(message: Message) -> int:
+    stamp = getattr(message, "stamp_ns", None)
+    assert stamp is not None, "image and camera_info messages have a header"
+    return int(stamp)
+
+
+def _keys(stamps: list[int]) -> tuple[np.ndarray, list[tuple[int, int]]]:
+    """Sorted stamps and, per sorted position, ``(stamp, occurrence)`` naming the message
+    (repeated stamps are told apart by their order in the log)."""
+    order = np.argsort(np.asarray(stamps, dtype=np.int64), kind="stable")
+    sorted_ns = np.asarray(stamps, dtype=np.int64)[order]
+    keys: list[tuple[int, int]] = []
+    seen: dict[int, int] = {}
+    for stamp in sorted_ns.tolist():
+        seen[stamp] = seen.get(stamp, -1) + 1
+        keys.append((stamp, seen[stamp]))
+    return sorted_ns, keys
+
+
+def resync_log(
+    input_path: Path,
+    output: Path,
+    *,
+    left: str = "/unsynced/left",
+    right: str = "/unsynced/right",
+    out_prefix: str = "/stereo_sync",
+    slop_s: float | None = None,
+    fmt: str | None = None,
+    overwrite: bool = False,
+    recover: bool = False,
+) -> ResyncResult:
+    """Pair ``left``/``right`` camera namespaces of ``input_path`` and write ``output``.
+
+    ``slop_s`` bounds ``|right - left|`` of a pair; default half the median frame period.
+    Pairs are re-stamped with the later stamp. Every input message is kept; the output adds
+    ``PREFIX/{left,right}/{image_raw,camera_info}``, ``PREFIX/offset_s``
+    (``PointStamped``, x = right - left stamp in s, per pair) and ``PREFIX/stats`` (JSON).
+    """
+    started = time.perf_counter()
+    require_new_output(input_path, output)
+    prefix = "/" + out_prefix.strip("/")
+    with open_reader(input_path, recover=recover) as reader:
+        require_messages(reader)
+        sides = [_side(reader, name, ns, prefix) for name, ns in zip(SIDES, (left, right),
+                                                                    strict=True)]
+        offset_topic, stats_topic = f"{prefix}/offset_s", f"{prefix}/stats"
+        new_topics = [t for s in sides for t in (s.out_image, s.out_info)]
+        require_free_topics(reader, [*new_topics, offset_topic, stats_topic],
+                            hint="choose another --out-prefix")
+        _read_stamps(reader, sides)
+        (left_ns, left_keys), (right_ns, right_keys) = (_keys(s.image_stamps) for s in sides)
+        slop_ns = default_slop_ns(left_ns, right_ns) if slop_s is None else round(slop_s * 1e9)
+        pairing = pair_stamps(left_ns, right_ns, slop_ns=slop_ns)
+        stats = pairing_stats(left_ns, right_ns, pairing)
+        stats |= {"left_topic": sides[0].image_topic, "right_topic": sides[1].image_topic,
+                  "slop_source": "default: half the median frame period"
+                  if slop_s is None else "given"}
+        if not len(pairing):
+            raise SyncError(
+                f"{reader.path}: no {sides[0].image_topic} frame has a {sides[1].image_topic} "
+                f"partner within {slop_ns / 1e6:.3f} ms ({len(left_ns)} left, "
+                f"{len(right_ns)} right frames); try a larger --slop"
+            )
+        common_ns = pair_stamp_ns(left_ns[pairing.left_index], right_ns[pairing.right_index])
+        pair_of, needed = _plan(sides, [left_keys, right_keys],
+                                [pairing.left_index, pairing.right_index])
+        with open_writer(output, fmt=fmt, overwrite=overwrite) as writer:
+            stats["peak_buffered_messages"] = _write_pairs(
+                reader, writer=writer, sides=sides, pair_of=pair_of, needed=needed,
+                common_ns=common_ns.tolist(), offset_topic=offset_topic)
+            writer.write(stats_topic, Text(json.dumps(stats)),
+                         log_time_ns=reader.end_ns or int(common_ns[-1]))
+    return ResyncResult(output, stats, time.perf_counter() - started)
+
+
+def _plan(
+    sides: list[_Side], keys: list[list[tuple[int, int]]], picked: list[np.ndarray]
+) -> tuple[list[dict[tuple[int, int], int]], list[set[tuple[int, str]]]]:
+    """Per side, message key -> pair number; per pair, the ``(side, kind)`` it waits for
+    (its images, and the camera_info of the first image with that stamp when one exists)."""
+    pair_of: list[dict[tuple[int, int], int]] = [{}, {}]
+    needed: list[set[tuple[int, str]]] = [set() for _ in picked[0]]
+    for index, side in enumerate(sides):
+        for k, i in enumerate(picked[index].tolist()):
+            stamp, occurrence = keys[index][i]
+            pair_of[index][(stamp, occurrence)] = k
+            needed[k].add((index, "image"))
+            if occurrence == 0 and stamp in side.info_stamps:
+                needed[k].add((index, "info"))
+    return pair_of, needed
+
+
+def _write_pairs(
+    reader: LogReader,
+    *,
+    writer: LogWriter,
+    sides: list[_Side],
+    pair_of: list[dict[tuple[int, int], int]],
+    needed: list[set[tuple[int, str]]],
+    common_ns: list[int],
+    offset_topic: str,
+) -> int:
+    """Pass 2: copy everything, write each pair once complete; returns the peak buffer."""
+    roles = {}
+    for index, side in enumerate(sides):
+        roles[side.image_topic] = (index, "image")
+        if side.info_topic:
+            roles[side.info_topic] = (index, "info")
+    occurrences: list[dict[int, int]] = [{}, {}]
+    pending: dict[int, dict[tuple[int, str], tuple[int, Message]]] = {}
+    info_used: list[set[int]] = [set(), set()]
+    buffered = peak = 0
+    for raw in reader.raw_messages():
+        writer.write_raw(raw)
+        role = roles.get(raw.topic)
+        if role is None:
+            continue
+        index, kind = role
+        message = reader.decode(raw)
+        stamp = _stamp(message)
+        if kind == "image":
+            seen = occurrences[index][stamp] = occurrences[index].get(stamp, -1) + 1
+            pair = pair_of[index].get((stamp, seen))
+        else:
+            if stamp in info_used[index]:
+                continue  # a second camera_info with the same stamp: the first one is used
+            info_used[index].add(stamp)
+            pair = pair_of[index].get((stamp, 0))
+        if pair is None:
+            continue
+        members = pending.setdefault(pair, {})
+        members[(index, kind)] = (raw.log_time_ns, message)
+        buffered += 1
+        peak = max(peak, buffered)
+        if needed[pair] <= members.keys():
+            _write_pair(writer, sides, members, common_ns[pair], offset_topic)
+            buffered -= len(members)
+            del pending[pair]
+    return peak
+
+
+def _write_pair(
+    writer: LogWriter,
+    sides: list[_Side],
+    members: dict[tuple[int, str], tuple[int, Message]],
+    stamp_ns: int,
+    offset_topic: str,
+) -> None:
+    log_time = max(t for t, _ in members.values())
+    for (index, kind), (_, message) in sorted(members.items()):
+        assert isinstance(message, Image | CompressedImage | CameraInfo)
+        topic = sides[index].out_image if kind == "image" else sides[index].out_info
+        writer.write(topic, dataclasses.replace(message, stamp_ns=stamp_ns), log_time_ns=log_time)
+    left, right = (members[(i, "image")][1] for i in range(2))
+    offset_s = (_stamp(right) - _stamp(left)) / 1e9
+    frame_id = getattr(left, "frame_id", "")
+    writer.write(offset_topic, PointStamped(stamp_ns, frame_id, np.array([offset_s, 0.0, 0.0])),
+                 log_time_ns=log_time)

@@ -1,0 +1,79 @@
+"""Pipeline files: parsing, validation and step wiring."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from camlog.batch.pipeline import load_pipeline, parse_pipeline
+from processors.errors import ConfigError
+
+GOOD = """
+[[steps]]
+run = "resync"
+
+[[steps]]
+run = "calibrate"
+size = "7x6"
+square = 0.01
+left = "/stereo_sync/left"
+right = "/stereo_sync/right"
+
+[[steps]]
+run = "process"
+name = "edges_on_input"
+input = "log"
+topic = "/unsynced/left/image_raw"
+edges = {low = 40, high = 120}
+"""
+
+
+def test_toml_and_yaml_give_the_same_pipeline(tmp_path: Path) -> None:
+    toml = tmp_path / "p.toml"
+    toml.write_text(GOOD)
+    yaml = tmp_path / "p.yaml"
+    yaml.write_text(
+        "steps:\n"
+        "  - run: resync\n"
+        "  - {run: calibrate, size: 7x6, square: 0.01, left: /stereo_sync/left,"
+        " right: /stereo_sync/right}\n"
+        "  - {run: process, name: edges_on_input, input: log, topic: /unsynced/left/image_raw,"
+        " edges: {low: 40, high: 120}}\n"
+    )
+    a, b = load_pipeline(toml), load_pipeline(yaml)
+    assert [(s.name, s.run, s.input, s.options) for s in a.steps] == \
+        [(s.name, s.run, s.input, s.options) for s in b.steps]
+    assert [s.input for s in a.steps] == ["previous", "previous", "log"]
+    assert a.digest() == b.digest()
+
+
+def test_digest_changes_with_any_option() -> None:
+    import tomllib
+
+    raw = tomllib.loads(GOOD)
+    base = parse_pipeline(raw, "p").digest()
+    raw["steps"][1]["square"] = 0.02
+    assert parse_pipeline(raw, "p").digest() != base
+
+
+@pytest.mark.parametrize(("text", "message"), [
+    ("", "non-empty list"),
+    ("[[steps]]\nsize = 1\n", "needs run"),
+    ("[[steps]]\nrun = 'fly'\n", "unknown step 'fly'"),
+    ("[[steps]]\nrun = 'resync'\nspeed = 3\n", "resync has no option 'speed'"),
+    ("[[steps]]\nrun = 'resync'\ninput = 'calibrate'\n", "input 'calibrate'"),
+    ("[[steps]]\nrun = 'resync'\n[[steps]]\nrun = 'resync'\n", "used twice"),
+    ("steps = 3\n", "non-empty list"),
+    ("[[steps]\n", "not valid TOML"),
+])
+def test_bad_pipelines_name_the_problem(tmp_path: Path, text: str, message: str) -> None:
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=message):
+        load_pipeline(path)
+
+
+def test_missing_pipeline_file(tmp_path: Path) -> None:
+    with pytest.raises(ConfigError, match="does not exist"):
+        load_pipeline(tmp_path / "none.toml")

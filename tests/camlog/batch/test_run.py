@@ -1,0 +1,122 @@
+"""camlog batch: parallel runs, failures, skipping, and the Ray engine."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from camlog.batch.pipeline import load_pipeline
+from camlog.batch.run import run_batch
+from camlog.cli import main
+
+SCENARIOS = Path(__file__).resolve().parents[3] / "datasets" / "scenarios"
+PIPELINE = """
+[[steps]]
+run = "resync"
+
+[[steps]]
+run = "process"
+topic = "/stereo_sync/left/image_raw"
+edges = true
+
+[[steps]]
+run = "info"
+"""
+
+
+@pytest.fixture(scope="module")
+def logs(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
+    tmp = tmp_path_factory.mktemp("batch_logs")
+    made = []
+    for seed in (1, 2):
+        path = tmp / f"cam{seed}.mcap"
+        assert main(["record", str(SCENARIOS / "stereo_unsynced.toml"), "-o", str(path),
+                     "--frames", "20", "--resolution", "160x120", "--seed", str(seed),
+                     "--no-progress"]) == 0
+        made.append(path)
+    corrupt = tmp / "corrupt.mcap"
+    corrupt.write_bytes(b"\x89MCAP0\r\n" + bytes(range(256)) * 64)
+    made.append(corrupt)
+    return made
+
+
+@pytest.fixture
+def pipeline(tmp_path: Path) -> Path:
+    path = tmp_path / "pipe.toml"
+    path.write_text(PIPELINE)
+    return path
+
+
+def test_batch_survives_a_corrupt_log_and_reports_it(
+    logs: list[Path], pipeline: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "out"
+    code = main(["batch", str(pipeline), *map(str, logs), "-o", str(out), "-j", "2",
+                 "--no-progress"])
+    assert code == 1  # some failed
+    table = capsys.readouterr().out
+    assert "2 of 3 logs done (1 failed)" in table
+    summary = json.loads((out / "batch_summary.json").read_text())
+    status = {Path(s["log"]).name: s for s in summary["logs"]}
+    assert status["corrupt.mcap"]["status"] == "failed"
+    assert "corrupt.mcap" in status["corrupt.mcap"]["error"]
+    for name in ("cam1.mcap", "cam2.mcap"):
+        s = status[name]
+        assert s["status"] == "ok"
+        assert [step["name"] for step in s["steps"]] == ["resync", "process", "info"]
+        assert s["steps"][0]["figures"]["pairs"] > 10
+        assert s["steps"][1]["figures"]["frames"] == s["steps"][0]["figures"]["pairs"]
+        info = Path(s["steps"][2]["files"][0]).read_text()
+        assert "/image_converter/edges" in info and "/stereo_sync/left/image_raw" in info
+    # per-log folders, one per step
+    assert sorted(p.name for p in (out / "cam1").iterdir()) == [
+        "01_resync", "02_process", "03_info", "batch_status.json"]
+
+
+def test_rerun_skips_completed_logs_and_redoes_changed_ones(
+    logs: list[Path], pipeline: Path, tmp_path: Path
+) -> None:
+    good = logs[:2]
+    out = tmp_path / "out"
+    first = run_batch(load_pipeline(pipeline), good, out, jobs=1, progress=False)
+    assert [s["status"] for s in first.statuses] == ["ok", "ok"]
+    second = run_batch(load_pipeline(pipeline), good, out, jobs=1, progress=False)
+    assert [s["status"] for s in second.statuses] == ["skipped", "skipped"]
+    # a changed pipeline redoes everything
+    pipeline.write_text(PIPELINE.replace("edges = true", "edges = {low = 10, high = 30}"))
+    third = run_batch(load_pipeline(pipeline), good, out, jobs=1, progress=False)
+    assert [s["status"] for s in third.statuses] == ["ok", "ok"]
+    # a missing output redoes that log only
+    Path(third.statuses[0]["steps"][1]["files"][0]).unlink()
+    fourth = run_batch(load_pipeline(pipeline), good, out, jobs=1, progress=False)
+    assert [s["status"] for s in fourth.statuses] == ["ok", "skipped"]
+
+
+def test_ray_engine_gives_the_same_results(logs: list[Path], pipeline: Path,
+                                           tmp_path: Path) -> None:
+    import ray  # the test extra installs the optional 'ray' extra
+
+    assert ray.__version__
+    local = run_batch(load_pipeline(pipeline), logs, tmp_path / "local", jobs=2,
+                      progress=False)
+    ray_run = run_batch(load_pipeline(pipeline), logs, tmp_path / "ray", jobs=2,
+                        engine="ray", progress=False)
+    assert [s["status"] for s in ray_run.statuses] == [s["status"] for s in local.statuses]
+    for a, b in zip(local.statuses, ray_run.statuses, strict=True):
+        assert [st["figures"] | {"fps": None} for st in a.get("steps", [])] == \
+            [st["figures"] | {"fps": None} for st in b.get("steps", [])]
+
+
+def test_bad_batch_arguments_are_one_line(
+    logs: list[Path], pipeline: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bad = tmp_path / "bad.toml"
+    bad.write_text("[[steps]]\nrun = 'fly'\n")
+    assert main(["batch", str(bad), str(logs[0]), "-o", str(tmp_path / "o")]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("camlog batch: error:") and "fly" in err[0]
+    assert main(["batch", str(pipeline), str(logs[0]), "-o", str(tmp_path / "o"),
+                 "-j", "0"]) == 1
+    assert "-j must be at least 1" in capsys.readouterr().err
