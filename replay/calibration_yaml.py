@@ -18,7 +18,8 @@ from typing import Any
 
 import numpy as np
 
-from .errors import ReplayError
+from .atomic import write_text_atomic
+from .errors import OutputError, ReplayError
 from .messages import F64, CameraInfo
 
 __all__ = [
@@ -137,10 +138,7 @@ def load_calibration(path: str | Path) -> Calibration:
 def save_calibration(path: str | Path, info: CameraInfo, *, camera_name: str) -> None:
     """Write a calibration file (replaced atomically)."""
     path = Path(path)
-    temp = path.with_name(f"{path.name}.partial")
     try:
-        temp.write_text(calibration_to_yaml(info, camera_name=camera_name))
-        temp.replace(path)
-    except OSError as err:
-        temp.unlink(missing_ok=True)
-        raise CalibrationFileError(f"cannot write {path}: {err.strerror or err}") from None
+        write_text_atomic(path, calibration_to_yaml(info, camera_name=camera_name))
+    except OutputError as err:
+        raise CalibrationFileError(str(err)) from None

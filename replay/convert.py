@@ -15,6 +15,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from .atomic import check_not_input
 from .codec import decode_compressed, encode_compressed, ros2_typestore, serialize
 from .errors import EncodingError, LogReadError, OptionError, TopicError
 from .formats import open_reader, open_writer
@@ -114,8 +115,7 @@ def convert_log(
     ``fmt`` defaults from the output name (``.mcap``, ``.bag``, a directory for rosbag2).
     """
     started = time.perf_counter()
-    if Path(output).resolve() == Path(input_path).resolve():
-        raise OptionError(f"output {output} is the input log; choose another path")
+    check_not_input(Path(output), [Path(input_path)])
     with open_reader(input_path, recover=recover) as reader:
         if reader.message_count == 0:
             raise LogReadError(f"{reader.path} is empty (no messages)")
@@ -126,7 +126,8 @@ def convert_log(
         start_ns, end_ns = window_ns(reader.start_ns, start_s, end_s)
         total = sum(reader.topics[t].count for t in names)
         written = reencoded = 0
-        with open_writer(output, fmt=fmt, overwrite=overwrite) as writer, \
+        with open_writer(output, fmt=fmt, overwrite=overwrite,
+                         inputs=[input_path]) as writer, \
                 tqdm(total=total, unit="msg", desc="convert", leave=False,
                      disable=None if progress is None else not progress) as bar:
             for name, values in reader.metadata.items():

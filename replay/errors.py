@@ -15,7 +15,11 @@ class LogReadError(ReplayError):
     """A log could not be read (missing, corrupt, truncated)."""
 
 
-class LogWriteError(ReplayError):
+class OutputError(ReplayError):
+    """An output cannot be written where asked (exists, is an input, unwritable folder)."""
+
+
+class LogWriteError(OutputError):
     """A log could not be written (exists, unwritable, bad message)."""
 
 

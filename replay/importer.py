@@ -189,7 +189,7 @@ def import_images(
         frame_ids = [f"{frame_id}_{side}" for side in SIDES] if stereo else [frame_id]
     stamps = stamps_ns(len(frames), start_ns=start_ns, rate_hz=rate_hz)
     sizes: list[tuple[int, int] | None] = [None] * len(namespaces)
-    with open_writer(output, fmt=fmt, overwrite=overwrite) as writer, \
+    with open_writer(output, fmt=fmt, overwrite=overwrite, inputs=[folder]) as writer, \
             tqdm(total=len(frames), unit="frame", desc="import", leave=False,
                  disable=None if progress is None else not progress) as bar:
         for stamp, group in zip(stamps, frames, strict=True):

@@ -20,6 +20,7 @@ from typing import Protocol
 
 from tqdm import tqdm
 
+from .atomic import check_not_input
 from .errors import OptionError
 from .export.blueprint import REPLAY_TIME, make_blueprint
 from .export.logger import LoggerOptions, SceneLogger
@@ -132,6 +133,8 @@ def play_log(
     to_rerun = spawn or connect is not None or (output is not None and output.suffix == ".rrd")
     if output is None and not to_rerun:
         raise OptionError("choose where to play to: --spawn, --connect URL or -o OUT")
+    if output is not None:
+        check_not_input(output, paths)
     count = 0
     with contextlib.ExitStack() as stack:
         session = open_logs(stack, [Path(p) for p in paths], topics=topics, start_s=start_s,
@@ -142,14 +145,15 @@ def play_log(
             blueprint = make_blueprint(session.plan, timeline=REPLAY_TIME, follow=True)
             sink = stack.enter_context(RecordingSink(
                 output=output, connect=connect, spawn=spawn, overwrite=overwrite,
-                blueprint=blueprint))
+                blueprint=blueprint, inputs=paths))
             logger = SceneLogger(sink.rec, session.plan, options or LoggerOptions(),
                                  decode=session.decode)
             logger.log_static()
             destination = _RerunDestination(logger)
         else:
             assert output is not None
-            writer = stack.enter_context(open_writer(output, fmt=fmt, overwrite=overwrite))
+            writer = stack.enter_context(open_writer(output, fmt=fmt, overwrite=overwrite,
+                                                          inputs=paths))
             destination = _LogDestination(writer, original=log_time == "original")
         bar = stack.enter_context(tqdm(total=session.total * max(loops, 1) or None,
                                        unit="msg", desc="play", leave=False,

@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from processors.errors import ConfigError
+from replay.atomic import write_text_atomic
 
 
 @dataclass(frozen=True)
@@ -163,7 +164,7 @@ def _info(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
         text = format_summary(summarize(reader))
     out.mkdir(parents=True, exist_ok=True)
     path = out / "info.txt"
-    path.write_text(text + "\n")
+    write_text_atomic(path, text + "\n")
     return StepOutcome(None, {}, [path])
 
 

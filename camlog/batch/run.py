@@ -22,6 +22,7 @@ from tqdm import tqdm
 
 from processors.errors import ConfigError, ProcessorError
 from recorder.errors import RecorderError
+from replay.atomic import write_text_atomic
 from replay.errors import ReplayError
 
 from .pipeline import Pipeline, run_step
@@ -107,9 +108,7 @@ def run_job(job: Job) -> dict[str, Any]:
     status["seconds"] = round(time.perf_counter() - started, 3)
     status["pipeline"] = job.pipeline.digest()
     job.out_dir.mkdir(parents=True, exist_ok=True)
-    temp = job.out_dir / f"{STATUS_FILE}.partial"
-    temp.write_text(json.dumps(status, indent=1) + "\n")
-    temp.replace(job.out_dir / STATUS_FILE)
+    write_text_atomic(job.out_dir / STATUS_FILE, json.dumps(status, indent=1) + "\n")
     return status
 
 
@@ -217,9 +216,9 @@ def run_batch(pipeline: Pipeline, logs: list[Path], out_dir: Path, *, jobs: int 
     statuses = [results[str(j.out_dir)] for j in planned]
     wall = time.perf_counter() - started
     summary_path = out_dir / "batch_summary.json"
-    summary_path.write_text(json.dumps({"pipeline": pipeline.source, "engine": engine,
-                                        "jobs": jobs, "wall_s": round(wall, 3),
-                                        "logs": statuses}, indent=1) + "\n")
+    write_text_atomic(summary_path, json.dumps({"pipeline": pipeline.source, "engine": engine,
+                                                "jobs": jobs, "wall_s": round(wall, 3),
+                                                "logs": statuses}, indent=1) + "\n")
     return BatchResult(statuses, wall, summary_path)
 
 

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import os
-import shutil
 import time
 from collections import deque
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -40,6 +39,7 @@ from processors.calibration.solve import (
 from processors.calibration.stereo import StereoResult, calibrate_stereo, orient_right_views
 from processors.errors import InputError
 from processors.resync import pair_stamps
+from replay.atomic import AtomicFolder
 from replay.camera import CameraModel
 from replay.codec import decode_compressed, to_bgr_or_mono, to_mono8
 from replay.errors import ReplayError
@@ -390,40 +390,6 @@ def truth_model(camera: dict[str, Any]) -> CameraModel:
 
 # --- outputs ------------------------------------------------------------------------------
 
-class Staging:
-    """Outputs are written to a hidden sibling folder and moved into place at the end."""
-
-    def __init__(self, output_dir: Path, names: list[str], *, overwrite: bool) -> None:
-        self.output_dir = output_dir
-        if output_dir.exists() and not output_dir.is_dir():
-            raise InputError(f"output {output_dir} exists and is not a directory")
-        existing = [n for n in names if (output_dir / n).exists()]
-        if existing and not overwrite:
-            raise InputError(f"{output_dir} already holds {', '.join(existing)} "
-                             "(pass --overwrite to replace them)")
-        parent = output_dir.parent
-        if not parent.is_dir():
-            raise InputError(f"cannot write {output_dir}: {parent} is not a directory")
-        if not os.access(parent, os.W_OK):
-            raise InputError(f"cannot write {output_dir}: {parent} is not writable")
-        self.path = parent / f".{output_dir.name}.calibrate.partial"
-        shutil.rmtree(self.path, ignore_errors=True)
-        self.path.mkdir()
-
-    def commit(self) -> list[Path]:
-        self.output_dir.mkdir(exist_ok=True)
-        moved = []
-        for item in sorted(self.path.iterdir()):
-            target = self.output_dir / item.name
-            item.replace(target)
-            moved.append(target)
-        self.path.rmdir()
-        return moved
-
-    def discard(self) -> None:
-        shutil.rmtree(self.path, ignore_errors=True)
-
-
 def _bgr(image: Image) -> np.ndarray:
     array = to_bgr_or_mono(image)
     if array.ndim == 2:
@@ -556,7 +522,7 @@ def calibrate_log(
                                                             ("left", "right") for f in figures)]
              if stereo_mode else ["ost.yaml", *figures]) + \
         ["ost.txt", "calibration.mcap", "report.md", "calibration.json"]
-    staging = Staging(output_dir, names, overwrite=overwrite)
+    staging = AtomicFolder(output_dir, names, overwrite=overwrite, inputs=[log])
     try:
         with open_reader(log, recover=recover) as reader:
             if reader.message_count == 0:

@@ -23,6 +23,8 @@ from typing import Any, NamedTuple
 import cv2
 import numpy as np
 
+from replay.atomic import write_bytes_atomic, write_text_atomic
+
 __all__ = [
     "TOLERANCES",
     "Artifacts",
@@ -166,8 +168,10 @@ def _read_png(path: Path) -> np.ndarray:
 
 def _write_png(path: Path, image: np.ndarray) -> None:
     bgr = cv2.cvtColor(image, cv2.COLOR_RGB2BGR) if image.ndim == 3 else image
-    if not cv2.imwrite(str(path), bgr, [cv2.IMWRITE_PNG_COMPRESSION, 9]):
-        raise OSError(f"cannot write image {path}")
+    ok, png = cv2.imencode(".png", bgr, [cv2.IMWRITE_PNG_COMPRESSION, 9])
+    if not ok:
+        raise OSError(f"cannot encode image {path}")
+    write_bytes_atomic(path, png.tobytes())
 
 
 def _yaml_tree(text: str) -> Any:
@@ -301,7 +305,7 @@ def _read_text(path: Path) -> str:
 
 
 def _write_text(path: Path, text: str) -> None:
-    path.write_text(text)
+    write_text_atomic(path, text)
 
 
 def _read_json(path: Path) -> Any:
@@ -309,7 +313,7 @@ def _read_json(path: Path) -> Any:
 
 
 def _write_json(path: Path, value: Any) -> None:
-    path.write_text(dumps_json(value))
+    write_text_atomic(path, dumps_json(value))
 
 
 #: suffix -> how an artifact of that kind is read, written and compared

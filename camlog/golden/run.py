@@ -25,6 +25,7 @@ from typing import Any
 
 import cv2
 
+from replay.atomic import write_text_atomic
 from replay.formats import open_reader
 from replay.messages import Text
 
@@ -219,7 +220,7 @@ def record_inputs(inputs_dir: Path, only: Iterable[str] | None = None) -> list[s
                  "these files and check their sha256 first.",
         "inputs": [entries[g.file_name] for g in INPUTS if g.file_name in entries],
     }
-    (inputs_dir / MANIFEST).write_text(dumps_json(manifest))
+    write_text_atomic(inputs_dir / MANIFEST, dumps_json(manifest))
     return lines
 
 

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from collections.abc import Iterable
-from pathlib import Path
 
 from processors.errors import InputError
 from replay.formats import LogReader
@@ -30,12 +29,6 @@ def require_topic(reader: LogReader, topic: str, msgtypes: Iterable[str]) -> str
             f"{reader.path}: {topic} is {info.msgtype}, expected {' or '.join(allowed)}"
         )
     return info.msgtype
-
-
-def require_new_output(input_path: Path, output: Path) -> None:
-    """Refuse to write over the input log."""
-    if output.resolve() == input_path.resolve():
-        raise InputError(f"output {output} is the input log; choose another path")
 
 
 def require_free_topics(reader: LogReader, topics: Iterable[str], *, hint: str) -> None:

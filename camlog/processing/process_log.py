@@ -22,6 +22,7 @@ import cv2
 from processors.base import Processor
 from processors.errors import ConfigError, FrameError, ProcessorError
 from processors.throttle import KeepAll, Throttle
+from replay.atomic import check_not_input
 from replay.codec import decode_compressed, encode_compressed, msgtype_of, serialize
 from replay.errors import ReplayError
 from replay.formats import RawMessage, open_reader, open_writer
@@ -31,7 +32,6 @@ from .checks import (
     IMAGE_TYPES,
     require_free_topics,
     require_messages,
-    require_new_output,
     require_topic,
 )
 
@@ -125,7 +125,7 @@ def process_log(
     if compress is not None and compress not in COMPRESSIONS:
         raise ConfigError(f"unknown compression {compress!r} (use {' or '.join(COMPRESSIONS)})")
     throttle = throttle or KeepAll()
-    require_new_output(input_path, output)
+    check_not_input(output, [input_path])
     new_topics = output_topics(processors, compress)
     with open_reader(input_path, recover=recover) as reader:
         require_messages(reader)
@@ -135,7 +135,8 @@ def process_log(
                                 "input topics out")
         workers = workers or min(4, os.cpu_count() or 1)
         in_flight = 2 * workers + 2
-        with open_writer(output, fmt=fmt, overwrite=overwrite) as writer:
+        with open_writer(output, fmt=fmt, overwrite=overwrite,
+                         inputs=[input_path]) as writer:
             job = _Job(tuple(processors), compress, writer.serialization,
                        f"{reader.path}: {topic}")
             for first in reader.raw_messages([topic]):  # fail early; warm up serializers

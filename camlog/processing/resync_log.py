@@ -21,10 +21,11 @@ import numpy as np
 
 from processors.errors import InputError, SyncError
 from processors.resync import default_slop_ns, pair_stamp_ns, pair_stamps, pairing_stats
+from replay.atomic import check_not_input
 from replay.formats import LogReader, LogWriter, open_reader, open_writer
 from replay.messages import CameraInfo, CompressedImage, Image, Message, PointStamped, Text
 
-from .checks import IMAGE_TYPES, require_free_topics, require_messages, require_new_output
+from .checks import IMAGE_TYPES, require_free_topics, require_messages
 
 INFO_TYPE = "sensor_msgs/msg/CameraInfo"
 SIDES = ("left", "right")
@@ -121,7 +122,7 @@ def resync_log(
     (``PointStamped``, x = right - left stamp in s, per pair) and ``PREFIX/stats`` (JSON).
     """
     started = time.perf_counter()
-    require_new_output(input_path, output)
+    check_not_input(output, [input_path])
     prefix = "/" + out_prefix.strip("/")
     with open_reader(input_path, recover=recover) as reader:
         require_messages(reader)
@@ -148,7 +149,8 @@ def resync_log(
         common_ns = pair_stamp_ns(left_ns[pairing.left_index], right_ns[pairing.right_index])
         pair_of, needed = _plan(sides, [left_keys, right_keys],
                                 [pairing.left_index, pairing.right_index])
-        with open_writer(output, fmt=fmt, overwrite=overwrite) as writer:
+        with open_writer(output, fmt=fmt, overwrite=overwrite,
+                         inputs=[input_path]) as writer:
             stats["peak_buffered_messages"] = _write_pairs(
                 reader, writer=writer, sides=sides, pair_of=pair_of, needed=needed,
                 common_ns=common_ns.tolist(), offset_topic=offset_topic)

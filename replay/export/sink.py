@@ -1,13 +1,15 @@
 """Where a rerun recording goes: an ``.rrd`` file (atomically), a spawned or a running viewer.
 
-An ``.rrd`` is written to ``NAME.rrd.partial`` and renamed when the recording is complete, so
-a failed export never leaves a half-written file under the final name.
+An ``.rrd`` is written to a hidden temporary sibling (:mod:`replay.atomic`) and renamed when
+the recording is complete, so a failed export never leaves a half-written file under the final
+name.
 """
 
 from __future__ import annotations
 
 import socket
 import uuid
+from collections.abc import Iterable
 from pathlib import Path
 from types import TracebackType
 from typing import Any, Self
@@ -15,8 +17,8 @@ from urllib.parse import urlsplit
 
 import rerun as rr
 
+from ..atomic import AtomicOutput
 from ..errors import ViewerError
-from ..formats.base import AtomicPath
 
 __all__ = ["RecordingSink", "default_output", "grpc_url", "require_listening"]
 
@@ -60,11 +62,12 @@ class RecordingSink:
     """A recording stream attached to exactly one destination; use as a context manager.
 
     ``output``: an ``.rrd`` path; ``connect``: a viewer URL; ``spawn``: start a viewer.
+    ``inputs``: the logs the recording is made from (an ``.rrd`` over one is refused).
     """
 
     def __init__(self, *, output: Path | None = None, connect: str | None = None,
                  spawn: bool = False, overwrite: bool = False, blueprint: Any = None,
-                 application_id: str = APPLICATION_ID) -> None:
+                 application_id: str = APPLICATION_ID, inputs: Iterable[Path] = ()) -> None:
         chosen = sum((output is not None, connect is not None, spawn))
         if chosen != 1:
             raise ViewerError("choose one destination: -o OUT.rrd, --connect URL or --spawn")
@@ -73,7 +76,8 @@ class RecordingSink:
         self.output = output
         self._url = grpc_url(connect) if connect is not None else None
         self._spawn = spawn
-        self._atomic = AtomicPath(output, overwrite=overwrite) if output is not None else None
+        self._atomic = AtomicOutput(output, overwrite=overwrite, inputs=inputs,
+                                    what="a rerun recording") if output is not None else None
         self._blueprint = blueprint
         self.rec = rr.RecordingStream(application_id, recording_id=uuid.uuid4())
 

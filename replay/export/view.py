@@ -122,7 +122,7 @@ def view_logs(
         session = open_logs(stack, [Path(p) for p in paths], topics=topics, start_s=start_s,
                             end_s=end_s, recover=recover)
         sink = RecordingSink(output=output, connect=connect, spawn=spawn, overwrite=overwrite,
-                             blueprint=make_blueprint(session.plan))
+                             blueprint=make_blueprint(session.plan), inputs=paths)
         bar = stack.enter_context(tqdm(total=session.total, unit="msg", desc="view",
                                        leave=False, disable=None if progress is None
                                        else not progress))

@@ -6,6 +6,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from ..atomic import temp_output_of
 from ..errors import LogFormatError, LogReadError
 from .base import LogReader, LogWriter, RawMessage, Record, TopicInfo
 from .mcap import McapLogReader, McapLogWriter, is_mcap
@@ -72,7 +73,7 @@ def detect_format(path: Path) -> str:
 
 def _storage_without_metadata(path: Path) -> Path | None:
     """The one MCAP storage file of a rosbag2 directory that has no metadata.yaml — a
-    recording cut short (a camlog ``NAME.partial`` holds it one folder down)."""
+    recording cut short (camlog's temporary output holds it one folder down)."""
     mcaps = sorted(path.glob("*.mcap")) or sorted(path.glob("*/*.mcap"))
     return mcaps[0] if len(mcaps) == 1 else None
 
@@ -80,6 +81,15 @@ def _storage_without_metadata(path: Path) -> Path | None:
 def open_reader(path: str | Path, *, recover: bool = False) -> LogReader:
     """Open any supported log for streaming reads."""
     path = Path(path)
+    reader = _open(path, recover=recover)
+    final = temp_output_of(path)
+    if final is not None:
+        reader.warnings.insert(0, f"{path} is camlog's temporary output for {final.name}, "
+                                  "left by a run that did not finish")
+    return reader
+
+
+def _open(path: Path, *, recover: bool) -> LogReader:
     fmt = detect_format(path)
     if path.is_dir() and fmt == "mcap":
         storage = _storage_without_metadata(path)

@@ -1,15 +1,14 @@
-"""The interface every log format implements, and atomic output paths."""
+"""The interface every log format implements."""
 
 from __future__ import annotations
 
-import os
-import shutil
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
 from typing import Self
 
+from ..atomic import AtomicOutput
 from ..codec import decode_compressed, deserialize, msgtype_of, serialize
 from ..errors import LogWriteError, ReplayError, TopicError
 from ..messages import MSGTYPES, CompressedImage, Image, Message
@@ -123,68 +122,28 @@ class LogReader:
         self.close()
 
 
-class AtomicPath:
-    """A temporary sibling of ``final`` that replaces it only on :meth:`commit`.
-
-    A recording therefore never leaves a half-written file under its final name; the
-    temporary ``NAME.partial`` stays behind after a crash so that it can be recovered.
-    """
-
-    def __init__(self, final: Path, *, overwrite: bool) -> None:
-        self.final = final
-        if final.exists() or final.is_symlink():
-            if not overwrite:
-                raise LogWriteError(f"{final} exists (pass --overwrite to replace it)")
-            if final.is_dir() and not (final / "metadata.yaml").is_file():
-                raise LogWriteError(
-                    f"refusing to replace {final}: it is a directory but not a rosbag2 log"
-                )
-        parent = final.parent
-        if parent.exists() and not parent.is_dir():
-            raise LogWriteError(f"cannot write {final}: {parent} is not a directory")
-        if not parent.is_dir():
-            raise LogWriteError(f"cannot write {final}: directory {parent} does not exist")
-        if not os.access(parent, os.W_OK):
-            raise LogWriteError(f"cannot write {final}: directory {parent} is not writable")
-        self.temp = parent / f"{final.name}.partial"
-        _remove(self.temp)
-
-    def commit(self) -> None:
-        if self.final.exists() and self.final.is_dir() != self.temp.is_dir():
-            _remove(self.final)  # a log file replaced by a rosbag2 directory, or back
-        if self.final.is_dir() and not self.final.is_symlink():
-            old = self.final.with_name(f"{self.final.name}.replaced")
-            _remove(old)
-            self.final.rename(old)
-            self.temp.rename(self.final)
-            _remove(old)
-        else:
-            self.temp.replace(self.final)
-
-    def discard(self) -> None:
-        _remove(self.temp)
-
-
-def _remove(path: Path) -> None:
-    if path.is_dir() and not path.is_symlink():
-        shutil.rmtree(path)
-    elif path.exists() or path.is_symlink():
-        path.unlink()
+def is_rosbag2_dir(path: Path) -> bool:
+    """Whether a directory is a rosbag2 log (holds ``metadata.yaml``)."""
+    return (path / "metadata.yaml").is_file()
 
 
 class LogWriter:
     """Writer base: typed messages are serialized here, formats store raw bytes.
 
     Use as a context manager: the output appears under its final name only when the block
-    ends without an exception; otherwise the partial output is removed.
+    ends without an exception; otherwise the temporary output is removed. ``inputs`` are the
+    logs the output is made from: an output that is one of them (or lies inside one) is
+    refused.
     """
 
     format_name: str = ""
     serialization: str = ""
 
-    def __init__(self, path: Path, *, overwrite: bool = False) -> None:
+    def __init__(self, path: Path, *, overwrite: bool = False,
+                 inputs: Iterable[Path] = ()) -> None:
         self.path = path
-        self._atomic = AtomicPath(path, overwrite=overwrite)
+        self._atomic = AtomicOutput(path, overwrite=overwrite, inputs=inputs,
+                                    replaceable_dir=is_rosbag2_dir, what="a rosbag2 log")
         self._types: dict[str, str] = {}
         self.closed = False
 
@@ -231,6 +190,10 @@ class LogWriter:
     def _finish(self) -> None:
         raise NotImplementedError
 
+    def _commit(self) -> None:
+        """Move the finished output to its final name."""
+        self._atomic.commit()
+
     def _abort(self) -> None:
         """Release handles without finishing the file."""
 
@@ -241,7 +204,7 @@ class LogWriter:
         self.closed = True
         try:
             self._finish()
-            self._atomic.commit()
+            self._commit()
         except OSError as err:
             self._atomic.discard()
             raise LogWriteError(f"cannot write {self.path}: {err.strerror or err}") from None

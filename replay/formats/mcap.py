@@ -299,10 +299,11 @@ class McapLogWriter(LogWriter):
         path: Path,
         *,
         overwrite: bool = False,
+        inputs: Iterable[Path] = (),
         compression: str = "zstd",
         chunk_size: int = 4 * 1024 * 1024,
     ) -> None:
-        super().__init__(path, overwrite=overwrite)
+        super().__init__(path, overwrite=overwrite, inputs=inputs)
         if compression not in COMPRESSION:
             raise LogWriteError(f"unknown MCAP compression {compression!r}")
         try:

@@ -149,8 +149,8 @@ class _RosbagsWriter(LogWriter):
 
     _writer: Any
 
-    def __init__(self, path: Path, *, overwrite: bool) -> None:
-        super().__init__(path, overwrite=overwrite)
+    def __init__(self, path: Path, *, overwrite: bool, inputs: Iterable[Path]) -> None:
+        super().__init__(path, overwrite=overwrite, inputs=inputs)
         self._conns: dict[str, Any] = {}
 
     def _open(self, writer: Any) -> None:
@@ -186,13 +186,14 @@ class Rosbag2LogWriter(_RosbagsWriter):
     format_name = "rosbag2"
     serialization = CDR
 
-    def __init__(self, path: Path, *, overwrite: bool = False, storage: str = "mcap") -> None:
-        super().__init__(path, overwrite=overwrite)
+    def __init__(self, path: Path, *, overwrite: bool = False, inputs: Iterable[Path] = (),
+                 storage: str = "mcap") -> None:
+        super().__init__(path, overwrite=overwrite, inputs=inputs)
         plugin = {"mcap": StoragePlugin.MCAP, "sqlite3": StoragePlugin.SQLITE3}.get(storage)
         if plugin is None:
             raise LogWriteError(f"unknown rosbag2 storage {storage!r} (use mcap or sqlite3)")
-        # rosbags names the storage file after its directory; write inside a temp parent
-        # so the final directory keeps files named after itself.
+        # rosbags names the storage file after its directory: write it one folder down in
+        # the temporary output, so that the final directory holds files named after itself
         self.temp_path.mkdir()
         self._open(Writer2(self.temp_path / path.name, version=9, storage_plugin=plugin))
 
@@ -203,13 +204,8 @@ class Rosbag2LogWriter(_RosbagsWriter):
         for key, value in values.items():
             self._writer.set_custom_data(f"{name}.{key}", value)
 
-    def _finish(self) -> None:
-        super()._finish()
-        inner = self.temp_path / self.path.name
-        staged = self.temp_path.with_name(f"{self.path.name}.staged")
-        inner.rename(staged)
-        self.temp_path.rmdir()
-        staged.rename(self.temp_path)
+    def _commit(self) -> None:
+        self._atomic.commit(self.temp_path / self.path.name)
 
 
 class Ros1LogWriter(_RosbagsWriter):
@@ -218,8 +214,9 @@ class Ros1LogWriter(_RosbagsWriter):
     format_name = "ros1"
     serialization = ROS1
 
-    def __init__(self, path: Path, *, overwrite: bool = False) -> None:
-        super().__init__(path, overwrite=overwrite)
+    def __init__(self, path: Path, *, overwrite: bool = False,
+                 inputs: Iterable[Path] = ()) -> None:
+        super().__init__(path, overwrite=overwrite, inputs=inputs)
         writer = Writer1(self.temp_path)
         writer.set_compression(Writer1.CompressionFormat.LZ4)
         self._open(writer)

@@ -15,7 +15,8 @@ from recorder.errors import RenderError
 from recorder.record import _Pipeline, record
 from recorder.render import SceneRenderer
 from recorder.scenario import builtin_dir, load_scenario
-from replay import FORMATS, Image, LogWriteError, open_reader
+from replay import FORMATS, Image, OutputError, open_reader
+from tests.outputs import temp_outputs
 
 from .logs import SCENARIO_TOPIC, Log, record_log, transform, translation
 
@@ -219,7 +220,7 @@ def test_every_format_reads_back_the_same_messages(
     name = {"mcap": "log.mcap", "ros1": "log.bag"}.get(fmt, "log")
     log = record_log("stereo_checkerboard", tmp_path / name, fmt=fmt, frames=3, **SMALL)
     assert log.path.exists()
-    assert not (tmp_path / f"{name}.partial").exists()
+    assert temp_outputs(tmp_path) == []
     per_topic = {topic: len(messages) for topic, messages in log.topics.items()}
     assert log.counts == per_topic
     assert per_topic == {t: len(m) for t, m in format_reference.topics.items()}
@@ -272,7 +273,7 @@ def test_record_refuses_to_overwrite(tmp_path: Path) -> None:
     output = tmp_path / "log.mcap"
     output.write_bytes(b"keep me")
     scenario = load_scenario("mono_checkerboard", {"frames": 1, "width": 64, "height": 48})
-    with pytest.raises(LogWriteError, match="exists"):
+    with pytest.raises(OutputError, match="exists"):
         record(scenario, output, progress=False)
     assert output.read_bytes() == b"keep me"
     record(scenario, output, overwrite=True, progress=False)

@@ -16,10 +16,12 @@ from replay import (
     LogFormatError,
     LogReadError,
     OptionError,
+    OutputError,
     TopicError,
     open_reader,
 )
 from replay.convert import convert_log
+from tests.outputs import temp_outputs
 from tests.recordings import chunked_camera_log, corrupt_middle_chunk
 from tests.rrd import rerun_cli
 
@@ -149,14 +151,14 @@ def test_damaged_inputs(tmp_path: Path) -> None:
     damaged_from = corrupt_middle_chunk(log)
     with pytest.raises(LogReadError, match="corrupt"):
         convert_log(log, tmp_path / "out.bag", progress=False)
-    assert not (tmp_path / "out.bag").exists() and not (tmp_path / "out.bag.partial").exists()
+    assert not (tmp_path / "out.bag").exists() and temp_outputs(tmp_path) == []
     result = convert_log(log, tmp_path / "out.bag", recover=True, progress=False)
     intact = sum(1 for s in stamps if s < damaged_from)
     assert result.messages == 2 * intact and result.warnings
 
 
 def test_bad_arguments(red_log: Path, tmp_path: Path) -> None:
-    with pytest.raises(OptionError, match="is the input log"):
+    with pytest.raises(OutputError, match="is the input"):
         convert_log(red_log, red_log, progress=False)
     with pytest.raises(LogFormatError, match="cannot tell the log format"):
         convert_log(red_log, tmp_path / "out.txt", progress=False)

@@ -14,6 +14,7 @@ from replay import (
     LogFormatError,
     LogReadError,
     LogWriteError,
+    OutputError,
     PointStamped,
     RawMessage,
     Text,
@@ -143,7 +144,7 @@ def test_raising_inside_writer_leaves_nothing(fmt: str, log_path: Callable[[str]
 def test_existing_output_needs_overwrite(fmt: str, log_path: Callable[[str], Path]) -> None:
     path = log_path(fmt)
     write_log(path, [("/text", 1, Text("first"))], fmt=fmt)
-    with pytest.raises(LogWriteError, match=f"{path} exists"):
+    with pytest.raises(OutputError, match=f"{path} exists"):
         open_writer(path, fmt=fmt)
     assert read_log(path) == [("/text", 1, Text("first"))]
     second = [("/text", 2, Text("second")), ("/text", 3, Text("third"))]
@@ -155,11 +156,11 @@ def test_existing_output_needs_overwrite(fmt: str, log_path: Callable[[str], Pat
 @pytest.mark.parametrize("fmt", WRITE_FORMATS)
 def test_unwritable_destination(fmt: str, tmp_path: Path) -> None:
     missing = tmp_path / "missing" / "log"
-    with pytest.raises(LogWriteError, match="does not exist"):
+    with pytest.raises(OutputError, match="does not exist"):
         open_writer(missing, fmt=fmt)
     not_a_dir = tmp_path / "file.txt"
     not_a_dir.write_text("x")
-    with pytest.raises(LogWriteError, match=str(not_a_dir)):
+    with pytest.raises(OutputError, match=str(not_a_dir)):
         open_writer(not_a_dir / "log", fmt=fmt)
 
 
@@ -209,14 +210,13 @@ def test_open_errors_name_the_path(
 
 def test_rosbag2_directory_without_metadata_reads_its_mcap_storage(tmp_path: Path) -> None:
     """A rosbag2 recording cut short has its MCAP storage file but no metadata.yaml (a
-    camlog NAME.partial keeps it one folder down)."""
-    write_log(_dir(_dir(tmp_path / "rec.partial") / "rec") / "rec.mcap",
-              [("/text", 1, Text("x"))])
-    for path in (tmp_path / "rec.partial", tmp_path / "rec.partial" / "rec"):
+    camlog's temporary output keeps it one folder down)."""
+    temp = tmp_path / ".rec.camlog-0123456789abcdef.tmp"
+    write_log(_dir(_dir(temp) / "rec") / "rec.mcap", [("/text", 1, Text("x"))])
+    for path in (temp, temp / "rec"):
         with open_reader(path) as reader:
             assert [r.message for r in reader.messages()] == [Text("x")]
-            assert "has no metadata.yaml" in reader.warnings[0]
-            assert str(path) in reader.warnings[0]
+            assert any("has no metadata.yaml" in w and str(path) in w for w in reader.warnings)
 
 
 def test_rosbag2_sqlite_directory_without_metadata_says_reindex(tmp_path: Path) -> None:
@@ -242,9 +242,11 @@ def test_ros1_bag_without_index_is_read_from_its_chunks(tmp_path: Path) -> None:
     ]
     complete = tmp_path / "complete.bag"
     write_log(complete, entries)
-    cut = _file(tmp_path / "cut.bag.partial", _without_index(complete.read_bytes()))
+    cut = _file(tmp_path / ".cut.bag.camlog-0123456789abcdef.tmp",
+                _without_index(complete.read_bytes()))
     with open_reader(cut) as reader:
-        assert "has no index" in reader.warnings[0] and "12 messages" in reader.warnings[0]
+        assert "temporary output for cut.bag" in reader.warnings[0]
+        assert "has no index" in reader.warnings[1] and "12 messages" in reader.warnings[1]
         read = [(r.topic, r.log_time_ns, r.message) for r in reader.messages()]
     assert read == read_log(complete)
     assert cut.read_bytes() == _without_index(complete.read_bytes())  # input untouched
@@ -314,7 +316,7 @@ def test_overwrite_refuses_a_directory_that_is_not_a_log(tmp_path: Path) -> None
     precious = tmp_path / "home"
     precious.mkdir()
     (precious / "notes.txt").write_text("keep me")
-    with pytest.raises(LogWriteError, match="not a rosbag2 log"):
+    with pytest.raises(OutputError, match="not a rosbag2 log"):
         open_writer(precious, fmt="rosbag2", overwrite=True)
     assert (precious / "notes.txt").read_text() == "keep me"
 
@@ -335,7 +337,7 @@ def test_overwrite_replaces_a_log_of_the_other_kind(tmp_path: Path) -> None:
 def test_parent_that_is_a_file_is_named(tmp_path: Path) -> None:
     blocker = tmp_path / "file"
     blocker.write_text("")
-    with pytest.raises(LogWriteError, match="is not a directory"):
+    with pytest.raises(OutputError, match="is not a directory"):
         open_writer(blocker / "out.mcap")
 
 

@@ -12,6 +12,7 @@ from replay import CameraInfo, Image, ImageFolderError, OptionError, open_reader
 from replay.calibration_yaml import save_calibration
 from replay.camera import CameraModel
 from replay.importer import DEFAULT_START_NS, import_images, natural_key, stereo_pairs
+from tests.outputs import temp_outputs
 
 
 def pattern(seed: int, shape: tuple[int, ...], dtype: type = np.uint8) -> np.ndarray:
@@ -113,4 +114,4 @@ def test_bad_folders(tmp_path: Path) -> None:
         import_images(sizes, out, stereo=True, progress=False)
     with pytest.raises(OptionError, match="--rate"):
         import_images(sizes, out, rate_hz=0.0, progress=False)
-    assert not out.exists() and not out.with_name("out.mcap.partial").exists()
+    assert not out.exists() and temp_outputs(out.parent) == []

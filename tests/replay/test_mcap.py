@@ -14,6 +14,7 @@ import pytest
 from mcap.reader import make_reader
 
 from replay import Image, LogReadError, PointStamped, Text, open_reader, open_writer
+from tests.outputs import temp_outputs
 
 from .samples import T0_NS, Entry, read_log, write_log
 
@@ -101,7 +102,7 @@ def test_killed_writer_leaves_a_readable_partial(tmp_path: Path) -> None:
             child.wait()
     assert child.returncode == -signal.SIGKILL
     flushed = max(int(line.split()[0]) for line in lines) + 1
-    partial = tmp_path / "rec.mcap.partial"
+    (partial,) = temp_outputs(tmp_path)
     assert partial.is_file() and not out.exists()
 
     with open_reader(partial) as reader:

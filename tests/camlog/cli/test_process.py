@@ -16,6 +16,7 @@ from replay.calibration_yaml import save_calibration
 from replay.camera import CameraModel
 from replay.codec import decode_compressed, encode_compressed
 from replay.geometry import rotation_from_quat_xyzw
+from tests.outputs import temp_outputs
 
 LEFT = "/stereo_camera/left"
 IMAGE = f"{LEFT}/image_raw"
@@ -251,7 +252,7 @@ def assert_failed_cleanly(
     assert err.count("\n") == 1 and err.startswith("camlog process: error: ")
     for needle in needles:
         assert needle in err
-    assert not out.exists() and not out.with_name(out.name + ".partial").exists()
+    assert not out.exists() and temp_outputs(out.parent) == []
     return err
 
 
@@ -332,7 +333,7 @@ def test_refuses_to_overwrite_the_input_or_mix_outputs(
     before = red_block.read_bytes()
     code = main(["process", str(red_block), "--topic", IMAGE, "--edges", "--overwrite",
                  "-o", str(red_block)])
-    assert code == 1 and "is the input log" in capsys.readouterr().err
+    assert code == 1 and "is the input" in capsys.readouterr().err
     assert red_block.read_bytes() == before
     out = tmp_path / "twice.mcap"
     code = main(["process", str(processed), "--topic", IMAGE, "--edges", "-o", str(out)])

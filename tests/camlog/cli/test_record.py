@@ -17,6 +17,7 @@ import pytest
 from camlog.cli import build_parser, main
 from replay import Image, Text, open_reader
 from tests.conftest import REPO_ROOT
+from tests.outputs import temp_outputs
 
 BUILTINS = sorted(p.stem for p in (REPO_ROOT / "datasets" / "scenarios").glob("*.toml"))
 #: a recording that takes a fraction of a second
@@ -117,7 +118,7 @@ def test_output_format_follows_the_name(
     with open_reader(output) as reader:
         assert reader.format_name.split()[0] == fmt
         assert reader.topics["/simple_camera/image_raw"].count == 2
-    assert not any(p.name.endswith(".partial") for p in tmp_path.iterdir())
+    assert temp_outputs(tmp_path) == []
 
 
 def test_existing_output_needs_overwrite(
@@ -149,7 +150,6 @@ def _size(path: Path) -> int:
 def test_killed_recording_leaves_a_readable_partial(tmp_path: Path, name: str,
                                                     written: int) -> None:
     output = tmp_path / name
-    partial = tmp_path / f"{name}.partial"
     process = subprocess.Popen(
         [sys.executable, "-m", "camlog", "record", "mono_checkerboard", "-o", str(output),
          "--frames", "5000", "--resolution", "320x240", "--no-progress"],
@@ -158,7 +158,7 @@ def test_killed_recording_leaves_a_readable_partial(tmp_path: Path, name: str,
     try:
         # wait until a few chunks of frames are on disk
         deadline = time.monotonic() + 90
-        while _size(partial) < written:
+        while not temp_outputs(tmp_path) or _size(temp_outputs(tmp_path)[0]) < written:
             assert process.poll() is None, process.stderr.read() if process.stderr else ""
             assert time.monotonic() < deadline, "the recording wrote nothing"
             time.sleep(0.05)
@@ -170,6 +170,8 @@ def test_killed_recording_leaves_a_readable_partial(tmp_path: Path, name: str,
             process.stderr.close()
     assert process.returncode == -signal.SIGKILL
     assert not output.exists()
+    (partial,) = temp_outputs(tmp_path)
+    assert partial.name.startswith(f".{name}.camlog-")
     with open_reader(partial) as reader:
         images = [r.message for r in reader.messages(["/simple_camera/image_raw"])]
         assert reader.warnings  # says that the log is incomplete

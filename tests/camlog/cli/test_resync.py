@@ -10,6 +10,7 @@ import pytest
 
 from camlog.cli import main
 from replay import CameraInfo, Image, PointStamped, Text, open_reader
+from tests.outputs import temp_outputs
 
 SCENARIOS = Path(__file__).resolve().parents[3] / "datasets" / "scenarios"
 FRAMES = 90
@@ -167,7 +168,7 @@ def test_no_partner_within_slop(unsynced: Path, tmp_path: Path,
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("camlog resync: error: ")
     assert "no /unsynced/left/image_raw frame has a /unsynced/right/image_raw partner" in err
-    assert not out.exists() and not out.with_name("none.mcap.partial").exists()
+    assert not out.exists() and temp_outputs(tmp_path) == []
 
 
 def test_missing_camera_lists_the_topics(unsynced: Path, tmp_path: Path,

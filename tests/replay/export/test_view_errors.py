@@ -6,8 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from replay import LogFormatError, LogReadError, LogWriteError, TopicError, ViewerError
+from replay import LogFormatError, LogReadError, OutputError, TopicError, ViewerError
 from replay.export import view_logs
+from tests.outputs import temp_outputs
 from tests.recordings import chunked_camera_log, corrupt_middle_chunk
 from tests.rrd import load_rrd
 
@@ -56,13 +57,13 @@ def test_missing_empty_and_unknown_inputs(tmp_path: Path, content: bytes | None,
     with pytest.raises(error, match=match):
         view_logs([log], output=tmp_path / "out.rrd", progress=False)
     assert not (tmp_path / "out.rrd").exists()
-    assert not (tmp_path / "out.rrd.partial").exists()
+    assert temp_outputs(tmp_path) == []
 
 
 def test_output_rules(red_log: Path, tmp_path: Path) -> None:
     out = tmp_path / "x.rrd"
     out.write_text("keep me")
-    with pytest.raises(LogWriteError, match="exists"):
+    with pytest.raises(OutputError, match="exists"):
         view_logs([red_log], output=out, progress=False)
     assert out.read_text() == "keep me"
     with pytest.raises(ViewerError, match=r"must end in \.rrd"):
