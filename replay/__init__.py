@@ -1,6 +1,14 @@
-"""camlog's log layer: typed camera messages, MCAP / rosbag2 / ROS1 logs, replay, export."""
+"""camlog's log layer: typed camera messages, MCAP / rosbag2 / ROS1 logs, replay, export.
 
-from ._version import VERSION
+Names are loaded from their modules on first use, so that importing one light module of the
+package (``replay.errors``, ``replay.selection``) does not load numpy, OpenCV or rosbags.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
 from .errors import (
     EncodingError,
     ImageFolderError,
@@ -13,28 +21,51 @@ from .errors import (
     TopicError,
     ViewerError,
 )
-from .formats import (
-    FORMATS,
-    LogReader,
-    LogWriter,
-    RawMessage,
-    Record,
-    TopicInfo,
-    open_reader,
-    open_writer,
-)
-from .messages import (
-    IMAGE_ENCODINGS,
-    CameraInfo,
-    CompressedImage,
-    Image,
-    Message,
-    PointStamped,
-    PoseStamped,
-    Text,
-)
 
-__version__ = VERSION
+if TYPE_CHECKING:
+    from .formats import (
+        FORMATS,
+        LogReader,
+        LogWriter,
+        RawMessage,
+        Record,
+        TopicInfo,
+        open_reader,
+        open_writer,
+    )
+    from .messages import (
+        IMAGE_ENCODINGS,
+        CameraInfo,
+        CompressedImage,
+        Image,
+        Message,
+        PointStamped,
+        PoseStamped,
+        Text,
+    )
+
+#: public name -> the module that defines it
+_MODULES = {
+    **dict.fromkeys(("FORMATS", "LogReader", "LogWriter", "RawMessage", "Record", "TopicInfo",
+                     "open_reader", "open_writer"), ".formats"),
+    **dict.fromkeys(("IMAGE_ENCODINGS", "CameraInfo", "CompressedImage", "Image", "Message",
+                     "PointStamped", "PoseStamped", "Text"), ".messages"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """Load a public name (or ``__version__``) from its module on first use."""
+    if name == "__version__":
+        from ._version import VERSION
+
+        return VERSION
+    module = _MODULES.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "FORMATS",

@@ -5,8 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from ..batch.pipeline import STEPS, load_pipeline
-from ..batch.run import ENGINES, run_batch, summary_table
+from ..batch.pipeline import STEPS
+from ..batch.run import ENGINES
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -31,6 +31,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the batch and print its summary table."""
+    from ..batch.pipeline import load_pipeline
+    from ..batch.run import run_batch, summary_table
+
     pipeline = load_pipeline(args.pipeline)
     result = run_batch(pipeline, list(args.logs), args.output, jobs=args.jobs,
                        engine=args.engine, progress=False if args.no_progress else None)

@@ -5,10 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from processors.calibration.board import PATTERNS, make_board
-from processors.calibration.solve import CalibrationOptions, tangential_mode
-from processors.errors import InputError
-from replay.formats import open_reader
+from processors.calibration.board import PATTERNS
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -63,6 +60,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def cameras_from(args: argparse.Namespace) -> list[str]:
     """The camera namespaces to calibrate, from the options or the log's only camera."""
+    from processors.errors import InputError
+    from replay.formats import open_reader
+
     if args.left or args.right:
         if not (args.left and args.right):
             raise InputError("stereo needs both --left and --right")
@@ -81,6 +81,10 @@ def cameras_from(args: argparse.Namespace) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from processors.calibration.board import make_board
+    from processors.calibration.solve import CalibrationOptions, tangential_mode
+    from processors.errors import InputError
+
     from ..calibrate.check import check_log
     from ..calibrate.flow import calibrate_log
 

@@ -5,10 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from processors.errors import ConfigError
-
-from ..demo import run_demo
-
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Register the ``demo`` arguments."""
@@ -25,6 +21,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the demo, printing where each output went."""
+    from processors.errors import ConfigError
+
+    from ..demo import run_demo
+
     if args.duration <= 0:
         raise ConfigError(f"--duration must be positive, got {args.duration:g}")
     result = run_demo(args.output, duration_s=args.duration, seed=args.seed,

@@ -5,9 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from replay.formats import open_reader
-from replay.info import format_summary, summarize
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the ``info`` arguments."""
@@ -29,5 +26,8 @@ def run(args: argparse.Namespace) -> int:
 
 def info_text(path: Path, *, recover: bool = False) -> str:
     """The text ``camlog info`` prints for one log."""
+    from replay.formats import open_reader
+    from replay.info import format_summary, summarize
+
     with open_reader(path, recover=recover) as reader:
         return format_summary(summarize(reader))

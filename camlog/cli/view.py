@@ -5,8 +5,6 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from replay.export import LoggerOptions, view_logs
-
 from .args import add_selection, add_viewer_destination, bounded_int, print_warnings
 
 
@@ -40,6 +38,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Call :func:`replay.export.view_logs` and print what it logged."""
+    from replay.export import LoggerOptions, view_logs
+
     options = LoggerOptions(every=args.every, jpeg_quality=args.jpeg_quality,
                             residual_scale=args.residual_scale,
                             ground_truth=not args.no_ground_truth)

@@ -1,0 +1,57 @@
+"""Start-up stays light: the parser and the light commands load no heavy library.
+
+Each case runs in a fresh interpreter (this test process has everything loaded already) and
+reads ``sys.modules`` at exit, which is deterministic where a time would not be.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+#: libraries only the commands that compute with them may load
+HEAVY = ("cv2", "numpy", "rerun", "mujoco", "ray", "matplotlib", "scipy")
+
+SCRIPT = """
+import json, sys
+from camlog.cli import main
+try:
+    main(sys.argv[1:])
+except SystemExit:
+    pass
+print(json.dumps(sorted({name.split(".")[0] for name in sys.modules})))
+"""
+
+
+def loaded_by(*argv: str) -> set[str]:
+    """Top-level packages loaded by ``camlog ARGV...`` in a fresh interpreter."""
+    done = subprocess.run([sys.executable, "-c", SCRIPT, *argv], capture_output=True,
+                          text=True, check=True)
+    return set(json.loads(done.stdout.splitlines()[-1]))
+
+
+@pytest.mark.parametrize("argv", [
+    ["--help"],
+    [],
+    ["no-such-command"],
+    ["view", "--help"],
+    ["view"],
+    ["info"],
+    ["info", "--help"],
+    ["golden", "--no-such-option"],
+], ids=" ".join)
+def test_help_and_argument_errors_load_no_heavy_library(argv: list[str]) -> None:
+    assert loaded_by(*argv) & set(HEAVY) == set()
+
+
+def test_the_parser_is_built_without_heavy_libraries() -> None:
+    script = ("import sys; from camlog.cli import build_parser; build_parser(['view', 'info']); "
+              "print(' '.join(sorted(sys.modules)))")
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                          check=True)
+    loaded = {name.split(".")[0] for name in done.stdout.split()}
+    assert loaded & set(HEAVY) == set()
+    assert "camlog" in loaded  # the parser did load camlog's own modules
