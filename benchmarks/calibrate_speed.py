@@ -24,6 +24,7 @@ from processors.calibration.solve import CalibrationOptions
 from recorder.record import record
 from recorder.scenario import load_scenario
 from replay import open_reader
+from replay.records import ParameterEstimate
 
 from .report import cli_peak_rss_mb, emit
 
@@ -45,6 +46,18 @@ def decode_only_s(path: Path, topics: list[str]) -> float:
         for _ in reader.images(topics):
             pass
     return time.perf_counter() - started
+
+
+def error(estimate: ParameterEstimate) -> float:
+    """Estimate - truth (the benchmark's logs always have the simulator's truth)."""
+    assert estimate.error is not None, "the log has no ground truth"
+    return estimate.error
+
+
+def relative(estimate: ParameterEstimate) -> float:
+    """(estimate - truth) / truth."""
+    assert estimate.truth is not None, "the log has no ground truth"
+    return error(estimate) / estimate.truth
 
 
 def peak_rss_mb(path: Path, camera: str, out: Path) -> float:
@@ -86,30 +99,29 @@ def main() -> None:
                                     output_dir=tmp / "out", options=options,
                                     overwrite=True, progress=False)
                 wall = time.perf_counter() - started
-                cam = run.summary["cameras"][0]
-                p = cam["parameters"]
-                frames = sum(c["frames"] for c in run.summary["cameras"])
-                aligned = cam["max_projection_difference_vs_truth_covered_aligned_px"]
-                raw = cam["max_projection_difference_vs_truth_covered_px"]
+                cam = run.summary.cameras[0]
+                p = cam.parameters
+                frames = sum(c.frames for c in run.summary.cameras)
+                aligned = cam.max_projection_difference_vs_truth_covered_aligned_px
+                raw = cam.max_projection_difference_vs_truth_covered_px
+                assert aligned is not None and raw is not None, "the log has no truth"
                 stereo = ""
                 # the worst estimated parameter's error in units of its sigma, over cameras
-                sigmas = max(abs(q["error"]) / q["std"] for c in run.summary["cameras"]
-                             for q in c["parameters"].values() if q["std"] > 0)
-                errors = [abs(p["cx"]["error"]), abs(p["cy"]["error"]), aligned,
-                          100 * max(abs(p[n]["error"]) / p[n]["truth"] for n in ("fx", "fy")),
-                          sigmas]
-                if "stereo" in run.summary:
-                    s = run.summary["stereo"]
-                    stereo = (f"B {s['truth']['baseline_error_percent']:+.3f}% "
-                              f"epi {s['epipolar_rms_px']:.3f}px")
-                    errors += [abs(s["truth"]["baseline_error_percent"]), s["epipolar_rms_px"]]
+                sigmas = max(abs(error(q)) / q.std for c in run.summary.cameras
+                             for q in c.parameters.values() if q.std > 0)
+                errors = [abs(error(p["cx"])), abs(error(p["cy"])), aligned,
+                          100 * max(abs(relative(p[n])) for n in ("fx", "fy")), sigmas]
+                s = run.summary.stereo
+                if s is not None and s.truth is not None:
+                    stereo = (f"B {s.truth.baseline_error_percent:+.3f}% "
+                              f"epi {s.epipolar_rms_px:.3f}px")
+                    errors += [abs(s.truth.baseline_error_percent), s.epipolar_rms_px]
                 worst[label] = [max(a, b) for a, b in zip(worst.get(label, errors), errors,
                                                           strict=True)]
                 print(f"{label:24} {seed:4d} {frames:6d} {decode:8.2f} {wall:8.2f} "
-                      f"{100 * p['fx']['error'] / p['fx']['truth']:+9.4f} "
-                      f"{100 * p['fy']['error'] / p['fy']['truth']:+9.4f} "
-                      f"{p['cx']['error']:+6.3f}±{p['cx']['std']:.3f} "
-                      f"{p['cy']['error']:+6.3f}±{p['cy']['std']:.3f} "
+                      f"{100 * relative(p['fx']):+9.4f} {100 * relative(p['fy']):+9.4f} "
+                      f"{error(p['cx']):+6.3f}±{p['cx'].std:.3f} "
+                      f"{error(p['cy']):+6.3f}±{p['cy'].std:.3f} "
                       f"{aligned:6.3f}/{raw:6.3f} {sigmas:5.2f} {stereo:>26}", flush=True)
                 if seed == 0 and label in ("mono", "stereo"):
                     minutes = frames / len(cameras) / 30.0 / 60.0

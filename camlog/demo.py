@@ -63,19 +63,20 @@ def run_demo(out_dir: Path, *, duration_s: float = 20.0, seed: int = 0,
 
     synced = out_dir / "stereo_synced.mcap"
     sync = resync_log(unsynced, synced, overwrite=True)
-    done("resync", synced, f"{sync.stats['pairs']} pairs re-stamped")
+    done("resync", synced, f"{sync.stats.pairs} pairs re-stamped")
 
     calibration = out_dir / "calibration"
     cal = calibrate_log(synced, board=make_board("7x6", 0.01),
                         cameras=["/stereo_sync/left", "/stereo_sync/right"],
                         output_dir=calibration, options=CalibrationOptions(), overwrite=True,
                         progress=progress)
-    stereo = cal.summary["stereo"]
-    fx = cal.summary["cameras"][0]["parameters"]["fx"]
-    truth = f" (true {fx['truth']:.2f})" if "truth" in fx else ""
+    stereo = cal.summary.stereo
+    assert stereo is not None
+    fx = cal.summary.cameras[0].parameters["fx"]
+    truth = f" (true {fx.truth:.2f})" if fx.truth is not None else ""
     done("calibrate", calibration,
-         f"fx {fx['value']:.2f} ± {fx['std']:.2f} px{truth}, baseline "
-         f"{stereo['baseline_m'] * 1000:.3f} mm, epipolar RMS {stereo['epipolar_rms_px']:.3f} px; "
+         f"fx {fx.value:.2f} ± {fx.std:.2f} px{truth}, baseline "
+         f"{stereo.baseline_m * 1000:.3f} mm, epipolar RMS {stereo.epipolar_rms_px:.3f} px; "
          "see report.md")
 
     processed = out_dir / "red_block_processed.mcap"

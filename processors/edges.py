@@ -25,6 +25,7 @@ class Edges:
         self.low, self.high = low, high
 
     def outputs(self) -> dict[str, str]:
+        """Output topic -> message kind."""
         return {EDGES: "sensor_msgs/msg/Image"}
 
     def __call__(self, image: Image) -> list[Output]:

@@ -43,6 +43,7 @@ class Rectifier:
         )
 
     def outputs(self) -> dict[str, str]:
+        """Output topic -> message kind."""
         return {IMAGE_RECT: "sensor_msgs/msg/Image"}
 
     def __call__(self, image: Image) -> list[Output]:

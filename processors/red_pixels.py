@@ -81,6 +81,7 @@ class RedPixels:
         self.ratio = ratio
 
     def outputs(self) -> dict[str, str]:
+        """Output topic -> message kind."""
         return {
             OUTPUT_VIDEO: "sensor_msgs/msg/Image",
             CENTROID: "geometry_msgs/msg/PointStamped",

@@ -28,10 +28,11 @@ Example::
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+
+from replay.records import OffsetStats, ResyncStats
 
 from .errors import ConfigError, InputError
 
@@ -157,22 +158,20 @@ def pair_stamp_ns(left_ns: npt.ArrayLike, right_ns: npt.ArrayLike) -> I64:
 
 
 def pairing_stats(left_ns: npt.ArrayLike, right_ns: npt.ArrayLike,
-                  pairing: Pairing) -> dict[str, Any]:
-    """JSON-ready summary: counts, unpaired stamps, and ``right - left`` offsets in ns."""
+                  pairing: Pairing) -> ResyncStats:
+    """Counts, unpaired stamps, and ``right - left`` offsets in ns of a pairing."""
     left = np.asarray(left_ns, dtype=np.int64)
     right = np.asarray(right_ns, dtype=np.int64)
     offset_ns = right[pairing.right_index] - left[pairing.left_index]
-    summary: dict[str, int] | None = None
-    if offset_ns.size:
-        summary = {"min": int(offset_ns.min()), "median": int(np.median(offset_ns)),
-                   "max": int(offset_ns.max())}
-    return {
-        "pairs": len(pairing),
-        "slop_ns": pairing.slop_ns,
-        "stamp_policy": "later of the two stamps",
-        "left_frames": int(left.size),
-        "right_frames": int(right.size),
-        "left_unpaired_stamps_ns": left[pairing.left_unpaired].tolist(),
-        "right_unpaired_stamps_ns": right[pairing.right_unpaired].tolist(),
-        "offset_right_minus_left_ns": summary,
-    }
+    summary = OffsetStats(int(offset_ns.min()), int(np.median(offset_ns)),
+                          int(offset_ns.max())) if offset_ns.size else None
+    return ResyncStats(
+        pairs=len(pairing),
+        slop_ns=pairing.slop_ns,
+        stamp_policy="later of the two stamps",
+        left_frames=int(left.size),
+        right_frames=int(right.size),
+        left_unpaired_stamps_ns=left[pairing.left_unpaired].tolist(),
+        right_unpaired_stamps_ns=right[pairing.right_unpaired].tolist(),
+        offset_right_minus_left_ns=summary,
+    )

@@ -26,6 +26,7 @@ class KeepAll:
     """No throttling."""
 
     def keep(self, stamp_ns: int) -> bool:
+        """Always keep the frame."""
         return True
 
 
@@ -39,6 +40,7 @@ class EveryNth:
         self._seen = 0
 
     def keep(self, stamp_ns: int) -> bool:
+        """Keep every n-th frame, starting with the first."""
         kept = self._seen % self.n == 0
         self._seen += 1
         return kept
@@ -56,6 +58,7 @@ class RateLimit:
         self._last_ns: int | None = None
 
     def keep(self, stamp_ns: int) -> bool:
+        """Keep a frame when the rate allows it by its header stamp."""
         if self._last_ns is not None and stamp_ns - self._last_ns < self.period_ns:
             return False
         self._last_ns = stamp_ns

@@ -29,6 +29,7 @@ class Trajectory:
     world_from_target: F64  # (N, 4, 4)
 
     def at(self, t_s: float) -> F64:
+        """``world_from_target`` (4, 4) at time ``t_s`` (the pose held then)."""
         index = min(math.floor(max(t_s, 0.0) / self.hold_s), len(self.world_from_target) - 1)
         pose: F64 = self.world_from_target[index]
         return pose

@@ -6,7 +6,6 @@ worker thread behind a bounded queue so that they overlap rendering.
 
 from __future__ import annotations
 
-import json
 import queue
 import threading
 import time
@@ -19,34 +18,24 @@ import cv2
 import numpy as np
 from tqdm import tqdm
 
-from replay import Image, PoseStamped, Text, open_writer
+from replay import Image, PoseStamped, open_writer
 from replay._version import VERSION
 from replay.formats import LogWriter
 from replay.geometry import invert, quat_xyzw_from_rotation
+from replay.records import Scenario as ScenarioRecord
+from replay.records import ScenarioCamera, ScenarioTarget
+from replay.topics import SCENARIO, CameraTopics
 
 from .clock import Shot, schedule
 from .errors import RecorderError
 from .motion import Trajectory, plan_trajectory
 from .optics import Optics, plan_optics
 from .render import SceneRenderer, gl_backend
-from .scenario import CameraSpec, Scenario
+from .scenario import Scenario
 from .scene import board_corners_in_target
 
-SCENARIO_TOPIC = "/camlog/scenario"
 #: seed streams, so that changing one aspect of a scenario does not reshuffle the others
 MOTION_STREAM, CLOCK_STREAM, NOISE_STREAM = 1, 2, 3
-
-
-def image_topic(camera: CameraSpec) -> str:
-    return f"{camera.namespace}/image_raw"
-
-
-def info_topic(camera: CameraSpec) -> str:
-    return f"{camera.namespace}/camera_info"
-
-
-def truth_topic(camera: CameraSpec, target_name: str) -> str:
-    return f"{camera.namespace}/ground_truth/{target_name}"
 
 
 @dataclass
@@ -72,46 +61,43 @@ class RecordResult:
 
 
 def rng_for(scenario: Scenario, stream: int, index: int) -> np.random.Generator:
+    """The random generator of one seed stream (motion, clock, noise) and index."""
     return np.random.default_rng([scenario.seed, stream, index])
 
 
 def scenario_record(
     scenario: Scenario, optics: list[Optics], dropped: dict[int, np.ndarray]
-) -> dict[str, Any]:
-    """Everything that shaped the recording, stored as JSON in the log."""
+) -> ScenarioRecord:
+    """Everything that shaped the recording, stored in the log (``/camlog/scenario``)."""
     import mujoco
 
-    cameras = []
-    for index, camera in enumerate(scenario.cameras):
-        cameras.append({
-            "name": camera.name, "namespace": camera.namespace, "frame_id": camera.frame_id,
-            "width": camera.model.width, "height": camera.model.height,
-            "k": camera.model.k.tolist(), "distortion_model": camera.model.distortion_model,
-            "d": camera.model.d.tolist(), "world_from_camera": camera.world_from_camera.tolist(),
-            "render_size": [optics[index].render_width, optics[index].render_height],
-            "supersample": optics[index].supersample,
-            "dropped_frames": dropped[index].tolist(),
-        })
-    targets = []
-    for target in scenario.targets:
-        entry: dict[str, Any] = {"name": target.name, "kind": target.kind}
-        if target.kind == "checkerboard":
-            entry |= {
-                "inner_corners": list(target.inner_corners), "square_m": target.square_m,
-                "corners_in_target": board_corners_in_target(target).tolist(),
-                "frame": "origin at the first inner corner, x along cols, y along rows, "
-                         "z into the board",
-            }
-        else:
-            entry |= {"size_m": target.size_m.tolist(), "rgba": list(target.rgba),
-                      "frame": "origin at the box centre"}
-        targets.append(entry)
-    return {
-        "scenario": scenario.name, "source": scenario.source, "seed": scenario.seed,
-        "camlog_version": VERSION, "mujoco_version": mujoco.__version__,
-        "renderer": f"mujoco/{gl_backend()}", "spec": scenario.spec,
-        "cameras": cameras, "targets": targets,
-    }
+    cameras = [
+        ScenarioCamera(
+            name=camera.name, namespace=camera.namespace, frame_id=camera.frame_id,
+            width=camera.model.width, height=camera.model.height, k=camera.model.k,
+            distortion_model=camera.model.distortion_model, d=camera.model.d,
+            world_from_camera=camera.world_from_camera,
+            render_size=(optics[index].render_width, optics[index].render_height),
+            supersample=optics[index].supersample, dropped_frames=dropped[index].tolist())
+        for index, camera in enumerate(scenario.cameras)
+    ]
+    targets = [
+        ScenarioTarget(
+            name=target.name, kind=target.kind,
+            inner_corners=target.inner_corners,
+            square_m=target.square_m, corners_in_target=board_corners_in_target(target),
+            frame="origin at the first inner corner, x along cols, y along rows, "
+                  "z into the board")
+        if target.kind == "checkerboard" else
+        ScenarioTarget(name=target.name, kind=target.kind, size_m=target.size_m,
+                       rgba=tuple(target.rgba), frame="origin at the box centre")
+        for target in scenario.targets
+    ]
+    return ScenarioRecord(
+        scenario=scenario.name, source=scenario.source, seed=scenario.seed,
+        camlog_version=VERSION, mujoco_version=mujoco.__version__,
+        renderer=f"mujoco/{gl_backend()}", spec=scenario.spec, cameras=cameras,
+        targets=targets)
 
 
 #: queue item that ends the worker and drops the partial log
@@ -203,12 +189,12 @@ class _Pipeline:
             pixels = cv2.cvtColor(pixels, cv2.COLOR_RGB2BGR)
         elif camera.encoding == "mono8":
             pixels = cv2.cvtColor(pixels, cv2.COLOR_RGB2GRAY)
-        write = writer.write
-        write(image_topic(camera), Image(stamp_ns, camera.frame_id, camera.encoding, pixels))
-        write(info_topic(camera), camera.model.camera_info(
+        write, topics = writer.write, CameraTopics(camera.namespace)
+        write(topics.image_raw, Image(stamp_ns, camera.frame_id, camera.encoding, pixels))
+        write(topics.camera_info, camera.model.camera_info(
             stamp_ns=stamp_ns, frame_id=camera.frame_id, baseline_tx=camera.baseline_tx))
         for target, camera_from_target in zip(self.scenario.targets, truth, strict=True):
-            write(truth_topic(camera, target.name), PoseStamped(
+            write(topics.ground_truth(target.name), PoseStamped(
                 stamp_ns, camera.frame_id, camera_from_target[:3, 3],
                 quat_xyzw_from_rotation(camera_from_target[:3, :3])))
 
@@ -238,14 +224,14 @@ def record(
         [rng_for(scenario, CLOCK_STREAM, i) for i in range(len(scenario.cameras))],
     )
     renderer = SceneRenderer(scenario, optics)  # first: it sets MUJOCO_GL before the import
-    header = Text(json.dumps(scenario_record(scenario, optics, dropped)))
+    header = scenario_record(scenario, optics, dropped).to_message()
     metadata = {"scenario": scenario.name, "seed": str(scenario.seed), "version": VERSION,
                 "renderer": f"mujoco/{gl_backend()}"}
 
     def open_log() -> LogWriter:
         writer = open_writer(output, fmt=fmt, overwrite=overwrite, **writer_options)
         try:
-            writer.write(SCENARIO_TOPIC, header, log_time_ns=scenario.start_stamp_ns)
+            writer.write(SCENARIO, header, log_time_ns=scenario.start_stamp_ns)
             writer.set_metadata("camlog", metadata)
         except BaseException:
             writer.abort()
@@ -287,10 +273,10 @@ def record(
         dropped={c.name: dropped[i].tolist() for i, c in enumerate(scenario.cameras)},
         wall_s=time.perf_counter() - started,
         loop_s=loop_s,
-        topics=sorted({SCENARIO_TOPIC} | {
-            t for c in scenario.cameras
-            for t in (image_topic(c), info_topic(c), *(truth_topic(c, x.name)
-                                                       for x in scenario.targets))
+        topics=sorted({SCENARIO} | {
+            t for c in scenario.cameras for topics in [CameraTopics(c.namespace)]
+            for t in (topics.image_raw, topics.camera_info,
+                      *(topics.ground_truth(x.name) for x in scenario.targets))
         }),
     )
 

@@ -86,6 +86,7 @@ class SceneRenderer:
         return np.asarray(renderer.render())
 
     def close(self) -> None:
+        """Release every camera's GL renderer."""
         for renderer in self._renderers.values():
             renderer.close()
         self._renderers.clear()

@@ -36,6 +36,7 @@ def builtin_dir() -> Path:
 
 
 def builtin_names() -> list[str]:
+    """Names of the scenario specs that ship with camlog."""
     return sorted(p.stem for p in builtin_dir().glob("*.toml"))
 
 
@@ -88,6 +89,9 @@ class TargetSpec:
 
 @dataclass(frozen=True)
 class Scenario:
+    """A resolved scenario: cameras, targets, motion, timing and seed (all a recording
+    depends on)."""
+
     name: str
     description: str
     seed: int
@@ -101,6 +105,7 @@ class Scenario:
 
     @property
     def rate_hz(self) -> float:
+        """Frame rate of the first camera, in Hz."""
         return self.cameras[0].rate_hz
 
     @property

@@ -210,6 +210,7 @@ class AtomicFolder(_Staged):
         self.path = temp_sibling(folder)
         self.path.mkdir()
         self.done = False
+        self.files: list[Path] = []  # final paths of the committed files
 
     def commit(self) -> list[Path]:
         """Move the written files into place; returns their final paths."""
@@ -223,7 +224,8 @@ class AtomicFolder(_Staged):
                 (self.path / name).replace(self.folder / name)
             _remove(self.path)
         self.done = True
-        return [self.folder / name for name in written]
+        self.files = [self.folder / name for name in written]
+        return self.files
 
     def discard(self) -> None:
         """Delete the temporary folder (only ever this run's own)."""

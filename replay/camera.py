@@ -58,23 +58,28 @@ class CameraModel:
 
     @classmethod
     def from_camera_info(cls, info: CameraInfo) -> CameraModel:
+        """The intrinsic model a CameraInfo describes (plumb_bob when it names none)."""
         model = info.distortion_model or "plumb_bob"
         return cls(info.width, info.height, info.k, model, info.d)
 
     @property
     def fx(self) -> float:
+        """Focal length along x, in pixels."""
         return float(self.k[0, 0])
 
     @property
     def fy(self) -> float:
+        """Focal length along y, in pixels."""
         return float(self.k[1, 1])
 
     @property
     def cx(self) -> float:
+        """Principal point x, in pixels."""
         return float(self.k[0, 2])
 
     @property
     def cy(self) -> float:
+        """Principal point y, in pixels."""
         return float(self.k[1, 2])
 
     @property

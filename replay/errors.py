@@ -39,5 +39,9 @@ class ImageFolderError(ReplayError):
     """A folder of image files cannot be imported (missing, empty, unreadable, mixed sizes)."""
 
 
+class RecordError(ReplayError):
+    """A well-known JSON record (scenario, calibration summary, residuals...) is malformed."""
+
+
 class ViewerError(ReplayError):
     """A rerun recording could not be written or a viewer could not be reached."""

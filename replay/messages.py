@@ -50,10 +50,12 @@ class Image:
 
     @property
     def width(self) -> int:
+        """Image width in pixels."""
         return int(self.pixels.shape[1])
 
     @property
     def height(self) -> int:
+        """Image height in pixels."""
         return int(self.pixels.shape[0])
 
     def __eq__(self, other: object) -> bool:

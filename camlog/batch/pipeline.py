@@ -35,6 +35,7 @@ from typing import Any
 
 from processors.errors import ConfigError
 from replay.atomic import write_text_atomic
+from replay.topics import RESYNC_PREFIX
 
 
 @dataclass(frozen=True)
@@ -58,6 +59,7 @@ class StepOutcome:
 
 @dataclass(frozen=True)
 class Pipeline:
+    """A validated pipeline: its steps and where it was read from."""
     steps: tuple[Step, ...]
     source: str
 
@@ -87,10 +89,10 @@ def _resync(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcom
 
     result = resync_log(log, out / "synced.mcap", left=o.get("left", "/unsynced/left"),
                         right=o.get("right", "/unsynced/right"),
-                        out_prefix=o.get("out_prefix", "/stereo_sync"), slop_s=o.get("slop"),
+                        out_prefix=o.get("out_prefix", RESYNC_PREFIX), slop_s=o.get("slop"),
                         overwrite=True)
     stats = result.stats
-    return StepOutcome(result.output, {"pairs": stats.get("pairs")}, [result.output])
+    return StepOutcome(result.output, {"pairs": stats.pairs}, [result.output])
 
 
 def _calibrate(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
@@ -119,13 +121,13 @@ def _calibrate(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOut
         progress=False)
     summary = run.summary
     figures: dict[str, Any] = {}
-    for camera in summary["cameras"]:
-        key = camera["namespace"].strip("/").split("/")[-1]
-        figures[f"{key}_rms_px"] = round(camera["rms_px"], 4)
-        figures[f"{key}_fx"] = round(camera["parameters"]["fx"]["value"], 3)
-    if "stereo" in summary:
-        figures["baseline_m"] = round(summary["stereo"]["baseline_m"], 6)
-        figures["epipolar_px"] = round(summary["stereo"]["epipolar_rms_px"], 4)
+    for camera in summary.cameras:
+        key = camera.namespace.strip("/").split("/")[-1]
+        figures[f"{key}_rms_px"] = round(camera.rms_px, 4)
+        figures[f"{key}_fx"] = round(camera.parameters["fx"].value, 3)
+    if summary.stereo is not None:
+        figures["baseline_m"] = round(summary.stereo.baseline_m, 6)
+        figures["epipolar_px"] = round(summary.stereo.epipolar_rms_px, 4)
     return StepOutcome(out / "calibration.mcap", figures, run.files)
 
 

@@ -175,12 +175,14 @@ def _run_ray(jobs: list[Job], n: int, done: Callable[[dict[str, Any]], None]) ->
 
 @dataclass
 class BatchResult:
+    """What a batch run produced: one status per log, wall time, the summary file."""
     statuses: list[dict[str, Any]]
     wall_s: float
     summary_path: Path
 
     @property
     def failed(self) -> list[dict[str, Any]]:
+        """The statuses of the logs that failed."""
         return [s for s in self.statuses if s["status"] == "failed"]
 
 

@@ -11,12 +11,13 @@ import numpy as np
 from processors.calibration.board import Board
 from processors.calibration.check import linearity_error, reprojection_rms
 from processors.calibration.stereo import epipolar_errors, orient_right_views
-from processors.errors import InputError
 from replay.calibration_yaml import load_calibration
 from replay.camera import CameraModel
 from replay.formats import open_reader
 
-from .flow import detect_views, resolve_camera, size_hint, stereo_pairs
+from ..errors import CalibrationError, InputError, UsageError
+from .solving import stereo_pairs
+from .views import detect_views, resolve_camera, size_hint
 
 
 @dataclass
@@ -29,6 +30,8 @@ class CheckResult:
     epipolar_px: list[float]  # stereo only
 
     def lines(self) -> list[str]:
+        """One line per figure: mean, median and max over the views."""
+
         def stats(name: str, values: list[float]) -> str:
             a = np.asarray(values)
             return (f"{name}: mean {a.mean():.4f} px, median {np.median(a):.4f} px, "
@@ -46,24 +49,25 @@ def check_log(log: Path, *, board: Board, cameras: list[str], calibrations: list
               recover: bool = False) -> CheckResult:
     """Linearity and reprojection error per view (mono), plus epipolar error (stereo)."""
     if len(calibrations) != len(cameras):
-        raise InputError(f"give one --calibration per camera ({len(cameras)}), "
+        raise UsageError(f"give one --calibration per camera ({len(cameras)}), "
                          f"got {len(calibrations)}")
     infos = [load_calibration(p).camera_info for p in calibrations]
     with open_reader(log, recover=recover) as reader:
-        streams = [resolve_camera(reader, ns) for ns in cameras]
-        detect_views(reader, streams, board, workers=os.cpu_count() or 2, progress=progress)
+        sources = [resolve_camera(reader, ns) for ns in cameras]
+        streams = detect_views(reader, sources, board, workers=os.cpu_count() or 2,
+                               progress=progress).cameras
     models = []
     for stream, info, path in zip(streams, infos, calibrations, strict=True):
         if stream.size != (info.width, info.height):
-            size = f"{stream.size[0]}x{stream.size[1]}" if stream.size else "no images"
             raise InputError(f"{path} is for {info.width}x{info.height} images, "
-                             f"{stream.image_topic} has {size}")
+                             f"{stream.source.image_topic} has "
+                             f"{stream.size[0]}x{stream.size[1]}")
         models.append(CameraModel.from_camera_info(info))
-    views = [[f for f in s.frames if f.candidate] for s in streams]
-    if not views[0]:
-        raise InputError(f"no {board.cols}x{board.rows} board found in "
-                         f"{streams[0].image_topic}{size_hint(streams[0], board)}")
-    first = [f.detection.corners_px for f in views[0]]  # type: ignore[union-attr]
+    candidates = [f.index for f in streams[0].frames if f.candidate]
+    if not candidates:
+        raise CalibrationError(f"no {board.cols}x{board.rows} board found in "
+                               f"{streams[0].source.image_topic}{size_hint(streams[0], board)}")
+    first = [streams[0].corners(i) for i in candidates]
     linear = [linearity_error(c, models[0], board) for c in first]
     reproj = [reprojection_rms(c, models[0], board) for c in first]
     epipolar: list[float] = []
@@ -72,11 +76,10 @@ def check_log(log: Path, *, board: Board, cameras: list[str], calibrations: list
         pairs = [(li, ri) for li, ri in stereo_pairs(left, right, approximate_s)
                  if left.frames[li].candidate and right.frames[ri].candidate]
         if not pairs:
-            raise InputError("no stereo pair shows the whole board in both cameras")
-        left_views = [left.frames[li].detection.corners_px for li, _ in pairs]  # type: ignore[union-attr]
+            raise CalibrationError("no stereo pair shows the whole board in both cameras")
+        left_views = [left.corners(li) for li, _ in pairs]
         right_views = orient_right_views(
-            board.points_in_board(), left_views,
-            [right.frames[ri].detection.corners_px for _, ri in pairs],  # type: ignore[union-attr]
+            board.points_in_board(), left_views, [right.corners(ri) for _, ri in pairs],
             left_model=models[0], right_model=models[1])
         epipolar = epipolar_errors(left_views, right_views, left_model=models[0],
                                    right_model=models[1], r1=infos[0].r, p1=infos[0].p,

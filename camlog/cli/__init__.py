@@ -38,8 +38,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
 }
 
 #: (module, exception) of every package's error tree: one line on stderr, exit status 1
-KNOWN_ERRORS = (("replay.errors", "ReplayError"), ("recorder.errors", "RecorderError"),
-                ("processors.errors", "ProcessorError"))
+KNOWN_ERRORS = (("camlog.errors", "CamlogError"), ("replay.errors", "ReplayError"),
+                ("recorder.errors", "RecorderError"), ("processors.errors", "ProcessorError"))
 
 
 def build_parser(commands: Collection[str] = COMMANDS) -> argparse.ArgumentParser:

@@ -81,6 +81,7 @@ def cameras_from(args: argparse.Namespace) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Calibrate (or ``--check``) and print the key figures."""
     from processors.calibration.board import make_board
     from processors.calibration.solve import CalibrationOptions, tangential_mode
     from processors.errors import InputError
@@ -109,27 +110,26 @@ def run(args: argparse.Namespace) -> int:
         approximate_s=args.approximate, camera_name=args.camera_name,
         max_speed_px=args.max_chessboard_speed, max_views=args.max_views,
         overwrite=args.overwrite, progress=progress, recover=args.recover)
-    for camera in run_.summary["cameras"]:
-        p = camera["parameters"]
-        print(f"{camera['namespace']}: {camera['used_views']} views "
-              f"({camera['boards_found']} boards in {camera['distinct_frames']} distinct of "
-              f"{camera['frames']} frames, {len(camera['rejected'])} rejected), "
-              f"RMS {camera['rms_px']:.4f} px")
-        print(f"  fx {p['fx']['value']:.3f} ± {p['fx']['std']:.3f}  fy {p['fy']['value']:.3f} ± "
-              f"{p['fy']['std']:.3f}  cx {p['cx']['value']:.3f} ± {p['cx']['std']:.3f}  "
-              f"cy {p['cy']['value']:.3f} ± {p['cy']['std']:.3f}")
-        if "summary" in camera["tangential"]:
-            print(f"  {camera['tangential']['summary']}")
-        if "max_projection_difference_vs_truth_px" in camera:
+    for camera in run_.summary.cameras:
+        p = camera.parameters
+        print(f"{camera.namespace}: {camera.used_views} views "
+              f"({camera.boards_found} boards in {camera.distinct_frames} distinct of "
+              f"{camera.frames} frames, {len(camera.rejected)} rejected), "
+              f"RMS {camera.rms_px:.4f} px")
+        print("  " + "  ".join(f"{name} {p[name].value:.3f} ± {p[name].std:.3f}"
+                               for name in ("fx", "fy", "cx", "cy")))
+        if camera.tangential.summary is not None:
+            print(f"  {camera.tangential.summary}")
+        if camera.max_projection_difference_vs_truth_px is not None:
             print(f"  vs simulator truth: max projection difference "
-                  f"{camera['max_projection_difference_vs_truth_covered_aligned_px']:.3f} px "
+                  f"{camera.max_projection_difference_vs_truth_covered_aligned_px:.3f} px "
                   "where corners were seen, "
-                  f"{camera['max_projection_difference_vs_truth_aligned_px']:.3f} px over the "
+                  f"{camera.max_projection_difference_vs_truth_aligned_px:.3f} px over the "
                   "whole image (camera frames aligned by a rotation)")
-    if "stereo" in run_.summary:
-        s = run_.summary["stereo"]
-        print(f"stereo: baseline {s['baseline_m']:.5f} m, epipolar RMS "
-              f"{s['epipolar_rms_px']:.4f} px, square {s['square_m']:.5f} m")
+    if run_.summary.stereo is not None:
+        s = run_.summary.stereo
+        print(f"stereo: baseline {s.baseline_m:.5f} m, epipolar RMS "
+              f"{s.epipolar_rms_px:.4f} px, square {s.square_m:.5f} m")
     print(f"wrote {run_.output_dir}/ ({', '.join(f.name for f in run_.files)}) "
           f"in {run_.wall_s:.1f} s")
     return 0

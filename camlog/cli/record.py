@@ -47,6 +47,7 @@ def _distortion(text: str) -> tuple[str, list[float]]:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Register the ``record`` arguments."""
     p.add_argument("scenario", nargs="?", default=DEFAULT_SCENARIO,
                    help=f"built-in scenario name ({', '.join(builtin_names())}) or path to a "
                         f".toml spec (default: {DEFAULT_SCENARIO})")
@@ -99,6 +100,7 @@ def overrides_from(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> int:
+    """Record the scenario and print what was written."""
     from recorder.record import record
     from recorder.scenario import load_scenario
 

@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from replay.formats import FORMATS
+from replay.topics import RESYNC_PREFIX
 
 from ..processing.resync_log import resync_log
 
@@ -31,8 +32,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--slop", type=float, metavar="SEC",
                    help="largest |right - left| stamp difference of a pair "
                         "(default: half the median frame period)")
-    p.add_argument("--out-prefix", default="/stereo_sync", metavar="NS",
-                   help="namespace of the re-stamped topics (default /stereo_sync)")
+    p.add_argument("--out-prefix", default=RESYNC_PREFIX, metavar="NS",
+                   help=f"namespace of the re-stamped topics (default {RESYNC_PREFIX})")
     p.add_argument("--format", choices=sorted(FORMATS), help="output format (default: from OUT)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output")
     p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
@@ -50,13 +51,14 @@ def run(args: argparse.Namespace) -> int:
         slop_s=args.slop, fmt=args.format, overwrite=args.overwrite, recover=args.recover,
     )
     s = result.stats
-    offset = s["offset_right_minus_left_ns"]
-    print(f"paired {s['pairs']} of {s['left_frames']} left / {s['right_frames']} right frames "
-          f"(slop {s['slop_ns'] / 1e6:.3f} ms, re-stamped with the later stamp)")
-    for side in ("left", "right"):
-        unpaired = s[f"{side}_unpaired_stamps_ns"]
+    print(f"paired {s.pairs} of {s.left_frames} left / {s.right_frames} right frames "
+          f"(slop {s.slop_ns / 1e6:.3f} ms, re-stamped with the later stamp)")
+    for side, unpaired in (("left", s.left_unpaired_stamps_ns),
+                           ("right", s.right_unpaired_stamps_ns)):
         print(f"unpaired {side}: {len(unpaired)}{_stamps(unpaired)}")
-    print(f"offset right - left: min {offset['min'] / 1e6:.3f} ms, median "
-          f"{offset['median'] / 1e6:.3f} ms, max {offset['max'] / 1e6:.3f} ms")
+    offset = s.offset_right_minus_left_ns
+    if offset is not None:
+        print(f"offset right - left: min {offset.min / 1e6:.3f} ms, median "
+              f"{offset.median / 1e6:.3f} ms, max {offset.max / 1e6:.3f} ms")
     print(f"wrote {result.output} in {result.wall_s:.2f} s")
     return 0

@@ -61,9 +61,11 @@ class Tolerance:
     why: str
 
     def allows(self, expected: float, actual: float) -> bool:
+        """Whether ``actual`` is within the tolerance of ``expected``."""
         return abs(actual - expected) <= self.abs + self.rel * abs(expected)
 
     def describe(self) -> str:
+        """The tolerance in words."""
         parts = [f"abs {self.abs:g}{' ' + self.unit if self.unit else ''}"] if self.abs else []
         parts += [f"rel {self.rel:g}"] if self.rel else []
         return " + ".join(parts) or "exact"

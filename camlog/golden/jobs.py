@@ -17,17 +17,18 @@ from typing import Any, Protocol
 import numpy as np
 
 from processors.base import Processor
-from processors.errors import InputError
 from processors.registry import make_processor
 from replay.formats import open_reader
 from replay.info import summarize
-from replay.messages import Image, PointStamped, Text
+from replay.messages import Image, PointStamped
+from replay.records import CalibrationSummary, ResyncStats, to_json
+from replay.topics import ResyncTopics, read_record
 
+from ..errors import GoldenError
 from .artifacts import Artifacts, dumps_json
 
 __all__ = [
     "Calibrate",
-    "GoldenError",
     "Job",
     "Process",
     "Resync",
@@ -37,18 +38,18 @@ __all__ = [
 ]
 
 
-class GoldenError(InputError):
-    """The golden inputs do not match their manifest, or a golden job cannot run."""
-
-
 class Job(Protocol):
     """One step over a golden input; writes below ``folder / name`` and returns artifacts
     named relative to that folder."""
 
     @property
-    def name(self) -> str: ...
+    def name(self) -> str:
+        """The job's name: its folder and the prefix of its artifacts."""
+        ...
 
-    def run(self, log: Path, folder: Path, workers: int) -> Artifacts: ...
+    def run(self, log: Path, folder: Path, workers: int) -> Artifacts:
+        """Run the job on ``log`` below ``folder``; its artifacts."""
+        ...
 
 
 def _json(value: Any) -> Any:
@@ -67,6 +68,9 @@ def log_summary(path: Path) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: the topics of a resync output at the default prefix
+SYNCED = ResyncTopics()
+
 #: calibration.json keys kept per camera and for the pair (inputs and figures left out)
 CAMERA_KEYS = ("namespace", "image_topic", "width", "height", "frames", "distinct_frames",
                "boards_found", "candidate_views", "selected_views", "used_views", "rejected",
@@ -79,17 +83,19 @@ STEREO_KEYS = ("rms_px", "epipolar_rms_px", "baseline_m", "baseline_std_m", "squ
                "rotation_deg", "translation_m", "joint_views")
 
 
-def calibration_numbers(summary: dict[str, Any]) -> dict[str, Any]:
+def calibration_numbers(summary: CalibrationSummary) -> dict[str, Any]:
     """The key numbers of ``calibration.json``: views, RMS, parameters with their sigma."""
     cameras = []
-    for camera in summary["cameras"]:
-        entry = {k: camera[k] for k in CAMERA_KEYS if k in camera}
-        entry["parameters"] = {name: {"value": p["value"], "std": p["std"]}
-                               for name, p in camera["parameters"].items()}
+    for camera in summary.cameras:
+        data = to_json(camera)
+        entry = {k: data[k] for k in CAMERA_KEYS if k in data}
+        entry["parameters"] = {name: {"value": p.value, "std": p.std}
+                               for name, p in camera.parameters.items()}
         cameras.append(entry)
     out: dict[str, Any] = {"cameras": cameras}
-    if "stereo" in summary:
-        out["stereo"] = {k: summary["stereo"][k] for k in STEREO_KEYS}
+    if summary.stereo is not None:
+        stereo = to_json(summary.stereo)
+        out["stereo"] = {k: stereo[k] for k in STEREO_KEYS}
     return out
 
 
@@ -102,6 +108,7 @@ class Calibrate:
     log: str | None = None  # another job's output log, relative to the input's folder
 
     def run(self, log: Path, folder: Path, workers: int) -> Artifacts:
+        """Calibrate and keep the YAML files, the key numbers and the log summary."""
         from processors.calibration.board import make_board
         from processors.calibration.solve import CalibrationOptions
 
@@ -114,8 +121,8 @@ class Calibrate:
             overwrite=True, workers=workers, progress=False)
         yamls = ("left.yaml", "right.yaml") if len(self.cameras) == 2 else ("ost.yaml",)
         return {name: (out / name).read_text() for name in yamls} | {
-            "calibration.json": _json(calibration_numbers(
-                json.loads((out / "calibration.json").read_text()))),
+            "calibration.json": _json(calibration_numbers(CalibrationSummary.from_json_text(
+                (out / "calibration.json").read_text()))),
             "calibration_mcap.txt": log_summary(out / "calibration.mcap"),
         }
 
@@ -129,6 +136,7 @@ class Resync:
     right: str
 
     def run(self, log: Path, folder: Path, workers: int) -> Artifacts:
+        """Resync and keep the pair table, the stats and the log summary."""
         from ..processing.resync_log import resync_log
 
         output = folder / self.name / "output.mcap"
@@ -146,7 +154,7 @@ def _image_stamps(path: Path, topic: str) -> list[int]:
 
 
 def pair_table(log: Path, output: Path, left: str, right: str,
-               prefix: str = "/stereo_sync") -> dict[str, Any]:
+               topics: ResyncTopics = SYNCED) -> dict[str, Any]:
     """Per pair (left stamp, right stamp, output stamp), and the unpaired input stamps.
 
     The output holds the common stamp (the later one) and ``x = right - left`` in seconds,
@@ -154,11 +162,11 @@ def pair_table(log: Path, output: Path, left: str, right: str,
     """
     offsets: dict[int, int] = {}
     with open_reader(output) as reader:
-        for record in reader.messages([f"{prefix}/offset_s"]):
+        for record in reader.messages([topics.offset]):
             if isinstance(record.message, PointStamped):
                 offsets[record.message.stamp_ns] = round(float(record.message.point[0]) * 1e9)
     rows = []
-    for out_ns in _image_stamps(output, f"{prefix}/left/image_raw"):
+    for out_ns in _image_stamps(output, topics.left.image_raw):
         offset = offsets[out_ns]
         left_ns, right_ns = (out_ns - offset, out_ns) if offset >= 0 else (out_ns,
                                                                              out_ns + offset)
@@ -170,12 +178,12 @@ def pair_table(log: Path, output: Path, left: str, right: str,
             "right_unpaired_stamps_ns": [s for s in inputs[1] if s not in paired[1]]}
 
 
-def _stats(output: Path, topic: str = "/stereo_sync/stats") -> Any:
+def _stats(output: Path, topics: ResyncTopics = SYNCED) -> Any:
     with open_reader(output) as reader:
-        for record in reader.messages([topic]):
-            if isinstance(record.message, Text):
-                return json.loads(record.message.data)
-    raise GoldenError(f"{output} has no {topic}")
+        stats = read_record(reader, topics.stats, ResyncStats)
+    if stats is None:
+        raise GoldenError(f"{output} has no {topics.stats}")
+    return to_json(stats)
 
 
 @dataclass(frozen=True)
@@ -189,6 +197,7 @@ class Process:
     calibration: str | None = None  # for rectify: another job's YAML, relative to the folder
 
     def build(self, folder: Path) -> list[Processor]:
+        """The processors, with the calibration file for rectify."""
         from replay.calibration_yaml import load_calibration
 
         options: dict[str, dict[str, Any]] = {}
@@ -198,6 +207,7 @@ class Process:
         return [make_processor(name, **options.get(name, {})) for name in self.processors]
 
     def run(self, log: Path, folder: Path, workers: int) -> Artifacts:
+        """Process and keep the output frames, tracks and the log summary."""
         from ..processing.process_log import process_log
 
         processors = self.build(folder)

@@ -27,8 +27,10 @@ import cv2
 
 from replay.atomic import write_text_atomic
 from replay.formats import open_reader
-from replay.messages import Text
+from replay.records import Scenario
+from replay.topics import SCENARIO, read_record
 
+from ..errors import GoldenError
 from .artifacts import (
     TOLERANCES,
     Artifacts,
@@ -39,14 +41,13 @@ from .artifacts import (
     dumps_json,
     update,
 )
-from .jobs import Calibrate, GoldenError, Job, Process, Resync
+from .jobs import Calibrate, Job, Process, Resync
 
 __all__ = [
     "INPUTS",
     "TOLERANCES",
     "Artifacts",
     "Difference",
-    "GoldenError",
     "GoldenInput",
     "Tolerance",
     "artifacts_equal",
@@ -89,14 +90,17 @@ class GoldenInput:
 
     @property
     def file_name(self) -> str:
+        """The golden log's file name."""
         return f"{self.stem}.mcap"
 
     @property
     def options(self) -> dict[str, Any]:
+        """The recording options that shaped the log."""
         return {"frames": self.frames, "resolution": f"{self.width}x{self.height}"}
 
     @property
     def command(self) -> str:
+        """The camlog command that records the log."""
         return (f"camlog record {self.scenario} --seed {self.seed} --frames {self.frames} "
                 f"--resolution {self.width}x{self.height} -o {self.file_name}")
 
@@ -201,14 +205,14 @@ def record_inputs(inputs_dir: Path, only: Iterable[str] | None = None) -> list[s
             "height": golden.height})
         record(scenario, path, overwrite=True, progress=False, compression="zstd")
         with open_reader(path) as reader:
-            (text,) = (r.message for r in reader.messages(["/camlog/scenario"]))
-        assert isinstance(text, Text)
-        header = json.loads(text.data)
+            header = read_record(reader, SCENARIO, Scenario)
+        if header is None:
+            raise GoldenError(f"{path} has no {SCENARIO} record")
         old = entries.get(golden.file_name, {}).get("sha256")
         entry = {"file": golden.file_name, "scenario": golden.scenario, "seed": golden.seed,
                  "options": golden.options, "command": golden.command,
-                 "renderer": header["renderer"], "mujoco_version": header["mujoco_version"],
-                 "camlog_version": header["camlog_version"], "format": "mcap",
+                 "renderer": header.renderer, "mujoco_version": header.mujoco_version,
+                 "camlog_version": header.camlog_version, "format": "mcap",
                  "compression": "zstd", "sha256": _sha256(path),
                  "size_bytes": path.stat().st_size}
         entries[golden.file_name] = entry

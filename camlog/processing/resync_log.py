@@ -11,11 +11,9 @@ of pairs not yet complete are held, so memory is bounded by the slop, not the lo
 from __future__ import annotations
 
 import dataclasses
-import json
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
@@ -23,7 +21,9 @@ from processors.errors import InputError, SyncError
 from processors.resync import default_slop_ns, pair_stamp_ns, pair_stamps, pairing_stats
 from replay.atomic import check_not_input
 from replay.formats import LogReader, LogWriter, open_reader, open_writer
-from replay.messages import CameraInfo, CompressedImage, Image, Message, PointStamped, Text
+from replay.messages import CameraInfo, CompressedImage, Image, Message, PointStamped
+from replay.records import ResyncStats
+from replay.topics import RESYNC_PREFIX, ResyncTopics
 
 from .checks import IMAGE_TYPES, require_free_topics, require_messages
 
@@ -36,7 +36,7 @@ class ResyncResult:
     """What :func:`resync_log` did; ``stats`` is the JSON stored on ``PREFIX/stats``."""
 
     output: Path
-    stats: dict[str, Any]
+    stats: ResyncStats
     wall_s: float
 
 
@@ -108,7 +108,7 @@ def resync_log(
     *,
     left: str = "/unsynced/left",
     right: str = "/unsynced/right",
-    out_prefix: str = "/stereo_sync",
+    out_prefix: str = RESYNC_PREFIX,
     slop_s: float | None = None,
     fmt: str | None = None,
     overwrite: bool = False,
@@ -128,7 +128,7 @@ def resync_log(
         require_messages(reader)
         sides = [_side(reader, name, ns, prefix) for name, ns in zip(SIDES, (left, right),
                                                                     strict=True)]
-        offset_topic, stats_topic = f"{prefix}/offset_s", f"{prefix}/stats"
+        offset_topic, stats_topic = ResyncTopics(prefix).offset, ResyncTopics(prefix).stats
         new_topics = [t for s in sides for t in (s.out_image, s.out_info)]
         require_free_topics(reader, [*new_topics, offset_topic, stats_topic],
                             hint="choose another --out-prefix")
@@ -136,10 +136,10 @@ def resync_log(
         (left_ns, left_keys), (right_ns, right_keys) = (_keys(s.image_stamps) for s in sides)
         slop_ns = default_slop_ns(left_ns, right_ns) if slop_s is None else round(slop_s * 1e9)
         pairing = pair_stamps(left_ns, right_ns, slop_ns=slop_ns)
-        stats = pairing_stats(left_ns, right_ns, pairing)
-        stats |= {"left_topic": sides[0].image_topic, "right_topic": sides[1].image_topic,
-                  "slop_source": "default: half the median frame period"
-                  if slop_s is None else "given"}
+        stats = dataclasses.replace(
+            pairing_stats(left_ns, right_ns, pairing), left_topic=sides[0].image_topic,
+            right_topic=sides[1].image_topic,
+            slop_source="default: half the median frame period" if slop_s is None else "given")
         if not len(pairing):
             raise SyncError(
                 f"{reader.path}: no {sides[0].image_topic} frame has a {sides[1].image_topic} "
@@ -151,10 +151,10 @@ def resync_log(
                                 [pairing.left_index, pairing.right_index])
         with open_writer(output, fmt=fmt, overwrite=overwrite,
                          inputs=[input_path]) as writer:
-            stats["peak_buffered_messages"] = _write_pairs(
+            stats = dataclasses.replace(stats, peak_buffered_messages=_write_pairs(
                 reader, writer=writer, sides=sides, pair_of=pair_of, needed=needed,
-                common_ns=common_ns.tolist(), offset_topic=offset_topic)
-            writer.write(stats_topic, Text(json.dumps(stats)),
+                common_ns=common_ns.tolist(), offset_topic=offset_topic))
+            writer.write(stats_topic, stats.to_message(),
                          log_time_ns=reader.end_ns or int(common_ns[-1]))
     return ResyncResult(output, stats, time.perf_counter() - started)
 

@@ -29,6 +29,7 @@ class Board:
 
     @property
     def corner_count(self) -> int:
+        """Number of inner corners."""
         return self.cols * self.rows
 
     @property
@@ -48,6 +49,7 @@ class Board:
         return np.column_stack([xs.ravel(), ys.ravel()])
 
     def describe(self) -> str:
+        """The board in words, e.g. ``7x6 inner corners, 0.01 m squares``."""
         return f"{self.cols}x{self.rows} inner corners, {self.square_m:g} m squares"
 
 
@@ -63,6 +65,7 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 def make_board(size: str, square_m: float, pattern: str = "chessboard") -> Board:
+    """A board from ``COLSxROWS`` inner corners, the square side in metres and the pattern."""
     if pattern not in PATTERNS:
         raise ProcessorError(f"unsupported pattern {pattern!r} (supported: {', '.join(PATTERNS)})")
     if not square_m > 0:

@@ -64,6 +64,7 @@ class Coverage:
 
     @property
     def good_enough(self) -> bool:
+        """Whether every view parameter's range is fully covered."""
         return all(p >= 1.0 for _, _, p in self.ranges.values())
 
     def bars(self) -> str:

@@ -50,6 +50,7 @@ def tangential_mode(zero_tangent_dist: bool, tangent_dist: bool) -> str:
 
 @dataclass(frozen=True)
 class CalibrationOptions:
+    """Solver options, with camera_calibration's meaning (see the module docstring)."""
     fix_principal_point: bool = False
     fix_aspect_ratio: bool = False
     tangential: str = "auto"
@@ -63,6 +64,7 @@ class CalibrationOptions:
                                  f"{', '.join(TANGENTIAL_MODES)}, got {self.tangential!r}")
 
     def with_tangential(self, mode: str) -> CalibrationOptions:
+        """The same options with another tangential mode."""
         return dataclasses.replace(self, tangential=mode)
 
     @property
@@ -74,10 +76,12 @@ class CalibrationOptions:
 
     @property
     def distortion_model(self) -> str:
+        """``rational_polynomial`` above 3 radial coefficients, else ``plumb_bob``."""
         return "rational_polynomial" if self.k_coefficients > 3 else "plumb_bob"
 
     @property
     def flags(self) -> int:
+        """OpenCV's calibrateCamera flags for these options."""
         flags = 0
         if self.fix_principal_point:
             flags |= cv2.CALIB_FIX_PRINCIPAL_POINT
@@ -105,9 +109,11 @@ class TangentialTest:
 
     @property
     def p_value(self) -> float:
+        """Probability of a rise this large without tangential distortion."""
         return math.exp(-max(self.chi2, 0.0) / 2.0)
 
     def describe(self) -> str:
+        """The outcome in one sentence, with the statistic."""
         verdict = ("estimated" if self.estimated
                    else "held at zero (the views do not show any)")
         return (f"tangential distortion {verdict}: holding p1 = p2 = 0 raises the residual by "
@@ -132,6 +138,7 @@ class MonoResult:
     tangential_test: TangentialTest | None = None
 
     def parameters(self) -> dict[str, float]:
+        """Estimated fx, fy, cx, cy and distortion coefficients by OpenCV name."""
         m = self.model
         names = ["fx", "fy", "cx", "cy", *_distortion_names(m.distortion_model)]
         values = [m.fx, m.fy, m.cx, m.cy, *m.d.tolist()]
@@ -150,11 +157,21 @@ def _pose(rvec: np.ndarray, tvec: np.ndarray) -> F64:
     return pose
 
 
-_Solution = tuple[float, CameraModel, list[F64], F64, F64, list[F64]]
+@dataclass(frozen=True)
+class Solution:
+    """One run of OpenCV's solver over some views (positions in the list it was given)."""
+
+    rms_px: float
+    model: CameraModel
+    camera_from_board: list[F64]  # (4, 4) per view
+    std: F64  # OpenCV's stdDeviationsIntrinsics, in STD_NAMES order
+    view_rms_px: F64  # (V,) per view
+    residuals_px: list[F64]  # (N, 2) per view: observed - projected
 
 
-def _solve(points_in_board: F64, corners: list[F64], size: tuple[int, int],
-           options: CalibrationOptions) -> _Solution:
+def solve_views(points_in_board: F64, corners: list[F64], size: tuple[int, int],
+                options: CalibrationOptions) -> Solution:
+    """Calibrate once from every view given (no outlier rejection, no model choice)."""
     object_points = [points_in_board.astype(np.float32)] * len(corners)
     image_points = [c.reshape(-1, 1, 2).astype(np.float32) for c in corners]
     n_d = 8 if options.k_coefficients > 3 else 5
@@ -174,8 +191,8 @@ def _solve(points_in_board: F64, corners: list[F64], size: tuple[int, int],
     for pose, c in zip(poses, corners, strict=True):
         projected = model.project(points_in_board @ pose[:3, :3].T + pose[:3, 3])
         residuals.append(c - projected)
-    return float(rms), model, poses, np.asarray(std_in, dtype=np.float64).reshape(-1), \
-        np.asarray(per_view, dtype=np.float64).reshape(-1), residuals
+    return Solution(float(rms), model, poses, np.asarray(std_in, dtype=np.float64).reshape(-1),
+                    np.asarray(per_view, dtype=np.float64).reshape(-1), residuals)
 
 
 def far_above_the_rest(view_ids: list[int], view_rms_px: F64, what: str) -> dict[int, str]:
@@ -207,8 +224,9 @@ def calibrate_mono(points_in_board: F64, corners: list[F64], size: tuple[int, in
     active = list(range(len(corners)))
     rejected: dict[int, str] = {}
     for round_ in range(REJECTION_ROUNDS + 1):
-        solution = _solve(points_in_board, [corners[i] for i in active], size, solve_options)
-        bad = far_above_the_rest(active, solution[4], "reprojection") \
+        solution = solve_views(points_in_board, [corners[i] for i in active], size,
+                               solve_options)
+        bad = far_above_the_rest(active, solution.view_rms_px, "reprojection") \
             if reject_outliers and round_ < REJECTION_ROUNDS else {}
         if not bad:
             break
@@ -217,24 +235,24 @@ def calibrate_mono(points_in_board: F64, corners: list[F64], size: tuple[int, in
     test = None
     if options.tangential == "auto":
         zero_options = options.with_tangential("zero")
-        without = _solve(points_in_board, [corners[i] for i in active], size, zero_options)
+        without = solve_views(points_in_board, [corners[i] for i in active], size,
+                              zero_options)
         observed = 2 * sum(len(corners[i]) for i in active)
         dof = observed - solve_options.free_intrinsics - 6 * len(active)
-        chi2 = (without[0] ** 2 - solution[0] ** 2) / max(solution[0] ** 2, 1e-300) * dof
+        chi2 = (without.rms_px ** 2 - solution.rms_px ** 2) / max(solution.rms_px ** 2, 1e-300) \
+            * dof
         test = TangentialTest(chi2, estimated=False)
         test = dataclasses.replace(test, estimated=test.p_value < TANGENTIAL_P_VALUE)
         if not test.estimated:
             solution, solve_options = without, zero_options
-    rms, model, poses, std, per_view, residuals = solution
-    names = ["fx", "fy", "cx", "cy", *_distortion_names(model.distortion_model)]
-    opencv_index = {n: STD_NAMES.index(n) for n in names}
-    sigma = {n: float(std[opencv_index[n]]) for n in names}
+    names = ["fx", "fy", "cx", "cy", *_distortion_names(solution.model.distortion_model)]
+    sigma = {n: float(solution.std[STD_NAMES.index(n)]) for n in names}
     return MonoResult(
-        model=model, rms_px=rms, view_ids=active,
-        view_rms_px={i: float(e) for i, e in zip(active, per_view, strict=True)},
+        model=solution.model, rms_px=solution.rms_px, view_ids=active,
+        view_rms_px={i: float(e) for i, e in zip(active, solution.view_rms_px, strict=True)},
         rejected=rejected, std=sigma,
-        camera_from_board=dict(zip(active, poses, strict=True)),
-        residuals_px=dict(zip(active, residuals, strict=True)),
+        camera_from_board=dict(zip(active, solution.camera_from_board, strict=True)),
+        residuals_px=dict(zip(active, solution.residuals_px, strict=True)),
         options=solve_options, tangential_test=test,
     )
 

@@ -47,6 +47,7 @@ class StereoResult:
 
     @property
     def rotation_deg(self) -> float:
+        """Angle of the rig rotation ``right_from_left``, in degrees."""
         angle = math.acos(max(-1.0, min(1.0, (np.trace(self.right_from_left[:3, :3]) - 1) / 2)))
         return math.degrees(angle)
 

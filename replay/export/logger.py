@@ -29,6 +29,7 @@ from ..codec import decode_compressed, to_mono8, to_rgb8
 from ..errors import ReplayError
 from ..formats.base import RawMessage
 from ..messages import CameraInfo, CompressedImage, Image, Message, PointStamped, PoseStamped, Text
+from ..records import ViewResiduals
 from .blueprint import LOG_TIME, REPLAY_TIME, STAMP_TIME
 from .frames import CameraFrames
 from .images import encoded_image, rerun_image
@@ -39,7 +40,6 @@ from .overlays import (
     inside_image,
     mask_classes,
     project_target,
-    residual_view,
     stamp_free_key,
 )
 from .scene import CameraPlan, ScenePlan, rectified_entity, series_entity, text_entity
@@ -342,7 +342,7 @@ class SceneLogger:
     def _residuals(self, raw: RawMessage, route: Route) -> None:
         message = self._decode(raw)
         assert isinstance(message, Text)
-        view = residual_view(json.loads(message.data))
+        view = ViewResiduals.from_message(message)
         cam = self.cameras[route.namespace]
         if not self._shows(cam, view.stamp_ns):
             return

@@ -8,9 +8,6 @@ from __future__ import annotations
 
 import math
 import struct
-from collections.abc import Mapping
-from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
@@ -21,15 +18,12 @@ from ..messages import F64
 
 __all__ = [
     "CLASSES",
-    "ResidualView",
     "edge_classes",
     "header_stamp_ns",
     "inside_image",
     "mask_classes",
     "project_target",
-    "residual_view",
     "stamp_free_key",
-    "target_points",
 ]
 
 U8 = npt.NDArray[np.uint8]
@@ -62,48 +56,6 @@ def mask_classes(mask_rgb: U8) -> U8:
 def edge_classes(edges_mono: U8) -> U8:
     """``(H, W)`` class ids of a Canny edge image (edge where the value is above 127)."""
     return np.where(edges_mono > 127, EDGE, BACKGROUND).astype(np.uint8)
-
-
-@dataclass(frozen=True)
-class ResidualView:
-    """One calibration view: ``corners_px`` (N, 2) and ``residuals_px`` (N, 2), observed
-    minus reprojected, as ``camlog calibrate`` writes them."""
-
-    stamp_ns: int
-    rms_px: float
-    corners_px: F64
-    residuals_px: F64
-
-
-def residual_view(payload: Mapping[str, Any]) -> ResidualView:
-    """Parse one ``{ns}/calibration/residuals`` JSON object; ValueError when malformed."""
-    try:
-        corners = np.asarray(payload["corners_px"], dtype=np.float64).reshape(-1, 2)
-        residuals = np.asarray(payload["residuals_px"], dtype=np.float64).reshape(-1, 2)
-        stamp, rms = int(payload["stamp_ns"]), float(payload["rms_px"])
-    except (KeyError, TypeError, ValueError) as err:
-        raise ValueError(f"not a residuals record ({err})") from None
-    if corners.shape != residuals.shape:
-        raise ValueError(f"{len(corners)} corners but {len(residuals)} residuals")
-    return ResidualView(stamp, rms, corners, residuals)
-
-
-def target_points(target: Mapping[str, Any]) -> F64 | None:
-    """Points ``(N, 3)`` in the target frame worth projecting: a board's inner corners
-    (``corners_in_target``) or a box's eight vertices (``size_m``, centred)."""
-    corners = target.get("corners_in_target")
-    if corners is not None:
-        try:
-            points = np.asarray(corners, dtype=np.float64).reshape(-1, 3)
-        except (TypeError, ValueError):
-            return None
-        return points if len(points) else None
-    size = target.get("size_m")
-    if target.get("kind") == "box" and isinstance(size, list) and len(size) == 3:
-        half = np.asarray(size, dtype=np.float64) / 2
-        signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
-        return signs * half
-    return None
 
 
 def project_target(

@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from ..messages import F64, CameraInfo
+from ..records import Scenario
 
 __all__ = ["Rig", "baseline_m", "rig_poses", "stereo_partner"]
 
@@ -68,19 +69,16 @@ def _matrix(value: Any) -> F64 | None:
 
 
 def _scenario_poses(
-    namespaces: Sequence[str], frame_ids: Mapping[str, str], scenario: Mapping[str, Any]
+    namespaces: Sequence[str], frame_ids: Mapping[str, str], scenario: Scenario
 ) -> dict[str, F64]:
     by_ns: dict[str, F64] = {}
     by_frame: dict[str, F64] = {}
-    cameras = scenario.get("cameras", [])
-    for camera in cameras if isinstance(cameras, list) else []:
-        if not isinstance(camera, dict):
-            continue
-        pose = _matrix(camera.get("world_from_camera"))
+    for camera in scenario.cameras:
+        pose = _matrix(camera.world_from_camera)
         if pose is None:
             continue
-        by_ns.setdefault(str(camera.get("namespace", "")), pose)
-        by_frame.setdefault(str(camera.get("frame_id", "")), pose)
+        by_ns.setdefault(camera.namespace, pose)
+        by_frame.setdefault(camera.frame_id, pose)
     poses = {}
     for ns in namespaces:
         pose = by_ns.get(ns)
@@ -96,7 +94,7 @@ def rig_poses(
     *,
     frame_ids: Mapping[str, str],
     infos: Mapping[str, CameraInfo],
-    scenario: Mapping[str, Any] | None,
+    scenario: Scenario | None,
 ) -> Rig:
     """Poses of the cameras the log can place (see the module docstring)."""
     poses = _scenario_poses(namespaces, frame_ids, scenario) if scenario else {}

@@ -23,12 +23,10 @@ images carry that frame; a frame no camera has becomes a camera ``world/frame/{f
 
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
 
 from ..messages import F64, CameraInfo
-from .overlays import target_points
+from ..records import Scenario
 from .rig import Rig, rig_poses
 from .survey import Survey
 from .topics import Kind, Route
@@ -112,26 +110,9 @@ def orphan_namespace(frame_id: str) -> str:
     return "/frame/" + (frame_id.replace("/", "_").strip("_") or "unnamed")
 
 
-def _targets(scenario: Mapping[str, Any] | None) -> dict[str, F64]:
-    out: dict[str, F64] = {}
-    targets = scenario.get("targets", []) if scenario else []
-    for target in targets if isinstance(targets, list) else []:
-        if isinstance(target, dict) and (points := target_points(target)) is not None:
-            out[str(target.get("name", ""))] = points
-    return out
-
-
-def _rejected(summary: Mapping[str, Any] | None) -> dict[str, dict[int, str]]:
-    out: dict[str, dict[int, str]] = {}
-    cameras = summary.get("cameras", []) if summary else []
-    for camera in cameras if isinstance(cameras, list) else []:
-        if not isinstance(camera, dict):
-            continue
-        reasons = out.setdefault(str(camera.get("namespace", "")), {})
-        for item in camera.get("rejected", []) or []:
-            if isinstance(item, dict) and "stamp_ns" in item:
-                reasons[int(item["stamp_ns"])] = str(item.get("reason", ""))
-    return out
+def _targets(scenario: Scenario | None) -> dict[str, F64]:
+    targets = scenario.targets if scenario is not None else []
+    return {t.name: points for t in targets if (points := t.points_in_target()) is not None}
 
 
 def _plane_distance_m(rig: Rig) -> float:
@@ -218,7 +199,8 @@ def plan_scene(found: Survey) -> ScenePlan:
                           if r.kind is Kind.RECTIFIED}),
         texts=[text_entity(t) for t, r in sorted(routes.items()) if r.kind is Kind.TEXT],
         targets=_targets(found.scenario),
-        rejected=_rejected(found.calibration_summary),
+        rejected=found.calibration_summary.rejected_stamps()
+        if found.calibration_summary is not None else {},
         skipped=skipped,
         counts={name: info.count for name, info in found.topics.items()},
     )

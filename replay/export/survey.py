@@ -1,26 +1,26 @@
 """A cheap first look at the logs before exporting them: the facts the layout depends on.
 
 Reads the first message of each camera and overlay topic (its ``frame_id``, the first
-camera_info) and the JSON records of the scenario and the calibration summary. Every read
+camera_info) and the records of the scenario and the calibration summary. Every read
 stops after one message, so the survey costs a few chunks, not a pass over the log.
 """
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 from ..errors import ReplayError
 from ..formats.base import LogReader, TopicInfo
-from ..messages import CameraInfo, Text
+from ..messages import CameraInfo
+from ..records import CalibrationSummary, JsonRecord, Scenario
+from ..topics import CALIBRATION_SUMMARY, SCENARIO
 from .topics import Kind, Route, classify
 
-__all__ = ["SCENARIO_TOPIC", "SUMMARY_TOPIC", "Survey", "survey"]
+__all__ = ["Survey", "survey"]
 
-SCENARIO_TOPIC = "/camlog/scenario"
-SUMMARY_TOPIC = "/calibration/summary"
+R = TypeVar("R", bound=JsonRecord)
 
 #: kinds whose first message tells which camera (frame_id) they belong to
 _FRAME_KINDS = frozenset({
@@ -39,8 +39,8 @@ class Survey:
     routes: dict[str, Route] = field(default_factory=dict)
     frame_ids: dict[str, str] = field(default_factory=dict)  # topic -> first frame_id
     camera_infos: dict[str, CameraInfo] = field(default_factory=dict)  # topic -> first
-    scenario: dict[str, Any] | None = None
-    calibration_summary: dict[str, Any] | None = None
+    scenario: Scenario | None = None
+    calibration_summary: CalibrationSummary | None = None
     duplicates: list[str] = field(default_factory=list)  # topics left out: an earlier log has them
 
 
@@ -53,14 +53,12 @@ def _first(reader: LogReader, topic: str, start_ns: int | None, end_ns: int | No
     return None
 
 
-def _json(message: Any) -> dict[str, Any] | None:
-    if not isinstance(message, Text):
-        return None
+def _record(message: Any, record: type[R]) -> R | None:
+    """The record a message holds; None when it holds none (the layout does without)."""
     try:
-        data = json.loads(message.data)
-    except json.JSONDecodeError:
+        return record.from_message(message)
+    except ReplayError:
         return None
-    return data if isinstance(data, dict) else None
 
 
 def survey(
@@ -88,8 +86,9 @@ def survey(
                 result.frame_ids[name] = getattr(message, "frame_id", "")
                 if isinstance(message, CameraInfo):
                     result.camera_infos[name] = message
-            elif name == SCENARIO_TOPIC and result.scenario is None:
-                result.scenario = _json(_first(reader, name, None, None))
-            elif name == SUMMARY_TOPIC and result.calibration_summary is None:
-                result.calibration_summary = _json(_first(reader, name, None, None))
+            elif name == SCENARIO and result.scenario is None:
+                result.scenario = _record(_first(reader, name, None, None), Scenario)
+            elif name == CALIBRATION_SUMMARY and result.calibration_summary is None:
+                result.calibration_summary = _record(_first(reader, name, None, None),
+                                                     CalibrationSummary)
     return result

@@ -11,6 +11,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import Enum
 
+from .. import topics as names
+from ..topics import ResyncTopics
+
 __all__ = ["Kind", "Route", "classify"]
 
 IMAGE = "sensor_msgs/msg/Image"
@@ -66,12 +69,13 @@ BY_FRAME: dict[str, Kind] = {
 }
 #: type -> (suffix, kind) tried in order; the camera namespace is what precedes the suffix
 SUFFIXES: dict[str, tuple[tuple[str, Kind], ...]] = {
-    IMAGE: (("/calibration/detections", Kind.DETECTIONS), ("/image_rect", Kind.RECTIFIED),
-            ("/image_raw", Kind.IMAGE)),
-    CAMERA_INFO: (("/calibrated/camera_info", Kind.CALIBRATED_INFO),
-                  ("/camera_info", Kind.CAMERA_INFO)),
-    POINT: (("/calibration/view_error", Kind.VIEW_ERROR), ("/offset_s", Kind.STEREO_OFFSET)),
-    STRING: (("/calibration/residuals", Kind.RESIDUALS),),
+    IMAGE: ((f"/{names.DETECTIONS}", Kind.DETECTIONS), (f"/{names.IMAGE_RECT}", Kind.RECTIFIED),
+            (f"/{names.IMAGE_RAW}", Kind.IMAGE)),
+    CAMERA_INFO: ((f"/{names.CALIBRATED_INFO}", Kind.CALIBRATED_INFO),
+                  (f"/{names.CAMERA_INFO}", Kind.CAMERA_INFO)),
+    POINT: ((f"/{names.VIEW_ERROR}", Kind.VIEW_ERROR),
+            (ResyncTopics("").offset, Kind.STEREO_OFFSET)),
+    STRING: ((f"/{names.RESIDUALS}", Kind.RESIDUALS),),
 }
 #: type -> kind of a topic no suffix names (its namespace is the topic itself)
 FALLBACK: dict[str, Kind] = {
@@ -92,10 +96,9 @@ def classify(topic: str, msgtype: str) -> Route:
     if msgtype == COMPRESSED:
         msgtype, name = IMAGE, topic.removesuffix("/compressed") or topic
     if msgtype == POSE:
-        ns, _, target = topic.rpartition("/ground_truth/")
-        if ns and target and "/" not in target:
-            return Route(Kind.GROUND_TRUTH, ns, detail=target)
-        return Route(Kind.SKIPPED)
+        truth = names.split_ground_truth(topic)
+        return Route(Kind.GROUND_TRUTH, truth[0], detail=truth[1]) if truth \
+            else Route(Kind.SKIPPED)
     if msgtype not in FALLBACK:
         return Route(Kind.SKIPPED)
     if name in BY_FRAME:

@@ -14,6 +14,7 @@ from processors.resync import (
     pair_stamps,
     pairing_stats,
 )
+from replay.records import OffsetStats
 
 MS = 1_000_000
 
@@ -97,7 +98,7 @@ def test_empty_sides_pair_nothing(left: list[int], right: list[int]) -> None:
     assert p.left_unpaired.tolist() == list(range(len(left)))
     assert p.right_unpaired.tolist() == list(range(len(right)))
     stats = pairing_stats(left, right, p)
-    assert stats["pairs"] == 0 and stats["offset_right_minus_left_ns"] is None
+    assert stats.pairs == 0 and stats.offset_right_minus_left_ns is None
 
 
 def test_long_streams_stay_fast_and_exact() -> None:
@@ -120,10 +121,10 @@ def test_common_stamp_is_the_later_one_and_stats_report_offsets() -> None:
     left, right = np.array([0, 100, 200]), np.array([5, 93, 400])
     p = pair_stamps(left, right, slop_ns=10)
     stats = pairing_stats(left, right, p)
-    assert stats["pairs"] == 2
-    assert stats["offset_right_minus_left_ns"] == {"min": -7, "median": -1, "max": 5}
-    assert stats["left_unpaired_stamps_ns"] == [200]
-    assert stats["right_unpaired_stamps_ns"] == [400]
+    assert stats.pairs == 2
+    assert stats.offset_right_minus_left_ns == OffsetStats(min=-7, median=-1, max=5)
+    assert stats.left_unpaired_stamps_ns == [200]
+    assert stats.right_unpaired_stamps_ns == [400]
 
 
 def test_bad_input_is_rejected() -> None:

@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 
 from camlog.cli import main
+from camlog.errors import GoldenError
 from camlog.golden import run as golden
 from camlog.golden.artifacts import TOLERANCES, read_artifact, tolerance_for
 from processors import red_pixels
@@ -179,7 +180,7 @@ def test_a_changed_input_byte_is_refused(tmp_path: Path) -> None:
     (problem,) = golden.verify_inputs(tmp_path, only=[RED])
     assert problem == f"{tmp_path / spec.file_name}: sha256 differs from manifest.json " \
         "(re-recorded by hand? use camlog golden record)"
-    with pytest.raises(golden.GoldenError, match="sha256 differs"):
+    with pytest.raises(GoldenError, match="sha256 differs"):
         golden.compute_outputs(tmp_path, tmp_path / "work", only=[RED])
 
 

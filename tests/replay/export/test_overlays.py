@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from processors.red_pixels import draw_marker
 from replay.camera import CameraModel
@@ -15,9 +14,7 @@ from replay.export.overlays import (
     edge_classes,
     mask_classes,
     project_target,
-    residual_view,
     stamp_free_key,
-    target_points,
 )
 from replay.geometry import quat_xyzw_from_rotation, rotation_about
 
@@ -36,26 +33,6 @@ def test_mask_classes_of_the_red_pixels_output() -> None:
 def test_edge_classes() -> None:
     edges = np.array([[0, 255, 200, 100]], np.uint8)
     assert edge_classes(edges).tolist() == [[0, EDGE, EDGE, 0]]
-
-
-def test_residual_view_parses_and_rejects() -> None:
-    view = residual_view({"stamp_ns": 5, "frame_id": "f", "rms_px": 0.1,
-                          "corners_px": [[1, 2], [3, 4]], "residuals_px": [[0.1, 0], [0, 0.2]]})
-    assert view.stamp_ns == 5 and view.corners_px.shape == (2, 2)
-    with pytest.raises(ValueError, match="corners"):
-        residual_view({"stamp_ns": 5, "rms_px": 0.1, "corners_px": [[1, 2]],
-                       "residuals_px": [[0, 0], [0, 0]]})
-    with pytest.raises(ValueError, match="not a residuals record"):
-        residual_view({"stamp_ns": 5})
-
-
-def test_target_points_of_a_board_and_a_box() -> None:
-    board = target_points({"corners_in_target": [[0, 0, 0], [0.01, 0, 0]]})
-    assert board is not None and board.shape == (2, 3)
-    box = target_points({"kind": "box", "size_m": [0.02, 0.02, 0.01]})
-    assert box is not None and box.shape == (8, 3)
-    np.testing.assert_allclose(np.abs(box).max(axis=0), [0.01, 0.01, 0.005])
-    assert target_points({"kind": "sphere"}) is None
 
 
 def test_projection_matches_the_camera_model() -> None:

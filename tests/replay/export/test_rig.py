@@ -8,6 +8,7 @@ import pytest
 from replay.camera import CameraModel
 from replay.export.rig import baseline_m, rig_poses, stereo_partner
 from replay.messages import CameraInfo
+from replay.records import Scenario, ScenarioCamera
 
 MODEL = CameraModel.ideal(640, 480, 0.6)
 
@@ -39,12 +40,20 @@ def test_baseline_rig_puts_the_right_camera_along_the_left_x() -> None:
     assert rig.source == {"/s/left": "baseline", "/s/right": "baseline"}
 
 
+def scenario(namespace: str, frame_id: str, world_from_camera: np.ndarray) -> Scenario:
+    camera = ScenarioCamera(
+        name="c", namespace=namespace, frame_id=frame_id, width=640, height=480, k=MODEL.k,
+        distortion_model="plumb_bob", d=np.zeros(5), world_from_camera=world_from_camera,
+        render_size=(640, 480), supersample=1)
+    return Scenario(scenario="s", source="test", seed=0, camlog_version="", mujoco_version="",
+                    renderer="", spec={}, cameras=[camera], targets=[])
+
+
 def test_scenario_poses_match_by_namespace_then_frame() -> None:
     pose = np.eye(4)
     pose[:3, 3] = [1, 2, 3]
-    scenario = {"cameras": [{"namespace": "/unsynced/left", "frame_id": "left_optical",
-                             "world_from_camera": pose.tolist()}]}
-    rig = rig_poses(["/stereo_sync/left", "/other"], scenario=scenario, infos={},
+    rig = rig_poses(["/stereo_sync/left", "/other"],
+                    scenario=scenario("/unsynced/left", "left_optical", pose), infos={},
                     frame_ids={"/stereo_sync/left": "left_optical", "/other": "x"})
     assert rig.world_is_scenario
     np.testing.assert_array_equal(rig.world_from_camera["/stereo_sync/left"], pose)
@@ -52,6 +61,6 @@ def test_scenario_poses_match_by_namespace_then_frame() -> None:
 
 
 def test_a_bad_scenario_pose_is_ignored() -> None:
-    scenario = {"cameras": [{"namespace": "/c", "world_from_camera": [[1, 2], [3, 4]]}]}
-    rig = rig_poses(["/c"], scenario=scenario, infos={}, frame_ids={})
+    bad = scenario("/c", "c", np.array([[1.0, 2], [3, 4]]))
+    rig = rig_poses(["/c"], scenario=bad, infos={}, frame_ids={})
     assert rig.world_from_camera == {}

@@ -1,0 +1,111 @@
+"""The annotated log ``calibration.mcap``: the input log plus what the calibration saw.
+
+This is the second pass over the log, and it cannot be folded into the first: a frame's
+annotation (used, and with which error, or rejected, and why) is known only once every
+camera is solved, and keeping the images until then would make memory grow with the log.
+The pass copies every input message, and adds per camera frame the calibrated camera_info,
+the frame with its corners drawn, the view's error and residuals and, for stereo, the
+rectified image. It also hands back the rectified images of one joint view for the report.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import cv2
+import numpy as np
+from tqdm import tqdm
+
+from processors.calibration.board import Board
+from processors.calibration.figures import annotate_detection
+from replay.formats import LogReader, open_writer
+from replay.messages import CameraInfo, Image, PointStamped
+from replay.records import CalibrationSummary, ViewResiduals
+from replay.topics import CALIBRATION_SUMMARY, CameraTopics
+
+from .pixels import as_image, bgr
+from .solving import CalibratedCamera, StereoSolution
+
+__all__ = ["Evidence", "write_evidence"]
+
+
+@dataclass(frozen=True)
+class Evidence:
+    """What the pass hands back: the rectified BGR images of the joint view shown in the
+    report (stereo only)."""
+
+    rectified_pair: tuple[np.ndarray, np.ndarray] | None
+
+
+def _rectify_maps(info: CameraInfo) -> tuple[np.ndarray, np.ndarray]:
+    maps = cv2.initUndistortRectifyMap(info.k, info.d, info.r, info.p[:, :3],
+                                       (info.width, info.height), cv2.CV_16SC2)
+    return maps[0], maps[1]
+
+
+def write_evidence(reader: LogReader, path: Path, cameras: list[CalibratedCamera], *,
+                   board: Board, stereo: StereoSolution | None, summary: CalibrationSummary,
+                   progress: bool | None) -> Evidence:
+    """Write ``path``: the log of ``reader`` plus the calibration's annotated topics."""
+    by_topic = {c.views.source.image_topic: c for c in cameras}
+    counters = dict.fromkeys(by_topic, 0)
+    maps = {c.views.source.namespace: _rectify_maps(c.camera_info) for c in cameras} \
+        if stereo is not None else {}
+    # frames of the joint views, per camera, and the one the report shows
+    joint = {cameras[0].views.source.namespace: {li for li, _ in stereo.pairs},
+             cameras[-1].views.source.namespace: {ri for _, ri in stereo.pairs}} \
+        if stereo is not None else {}
+    shown = stereo.pairs[len(stereo.pairs) // 2] if stereo is not None and stereo.pairs \
+        else None
+    rectified_shown: dict[int, np.ndarray] = {}
+    bar = tqdm(total=reader.message_count, unit="msg", desc="write", leave=False,
+               disable=None if progress is None else not progress)
+    with open_writer(path) as writer, bar:
+        for raw in reader.raw_messages():
+            writer.write_raw(raw)
+            bar.update()
+            camera = by_topic.get(raw.topic)
+            if camera is None:
+                continue
+            frame = camera.views.frames[counters[raw.topic]]
+            counters[raw.topic] += 1
+            image = as_image(reader.decode(raw), where=f"{reader.path}: {raw.topic}")
+            ns, stamp, log_time = camera.views.source.namespace, image.stamp_ns, raw.log_time_ns
+            topics = CameraTopics(ns)
+            info = camera.camera_info
+            writer.write(topics.calibrated_info, CameraInfo(
+                stamp, image.frame_id, info.width, info.height, info.distortion_model,
+                info.d, info.k, info.r, info.p), log_time_ns=log_time)
+            # a joint view's frame may repeat the previous one on one side: rectify it anyway
+            if frame.index in joint.get(ns, ()):
+                rectified = cv2.remap(image.pixels, *maps[ns], cv2.INTER_LINEAR)
+                writer.write(topics.image_rect, Image(stamp, image.frame_id, image.encoding,
+                                                      rectified), log_time_ns=log_time)
+                side = 0 if camera is cameras[0] else 1
+                if shown is not None and frame.index == shown[side]:
+                    rectified_shown[side] = bgr(Image(stamp, image.frame_id, image.encoding,
+                                                      rectified))
+            if frame.duplicate:
+                continue
+            status, used = camera.solution.status(frame)
+            corners = frame.detection.corners_px if frame.detection is not None else None
+            annotated = cv2.cvtColor(
+                annotate_detection(bgr(image), corners, board.pattern_size, status, used),
+                cv2.COLOR_BGR2RGB)
+            writer.write(topics.detections, Image(stamp, image.frame_id, "rgb8", annotated),
+                         log_time_ns=log_time)
+            result = camera.solution.result
+            if used and corners is not None:
+                rms = result.view_rms_px[frame.index]
+                writer.write(topics.view_error, PointStamped(
+                    stamp, image.frame_id, np.array([rms, 0.0, 0.0], dtype=np.float64)),
+                    log_time_ns=log_time)
+                writer.write(topics.residuals, ViewResiduals(
+                    stamp, image.frame_id, rms, np.round(corners, 4),
+                    np.round(result.residuals_px[frame.index], 5)).to_message(),
+                    log_time_ns=log_time)
+        writer.write(CALIBRATION_SUMMARY, summary.to_message(indent=1),
+                     log_time_ns=reader.end_ns or 0)
+    pair = (rectified_shown[0], rectified_shown[1]) if len(rectified_shown) == 2 else None
+    return Evidence(pair)

@@ -1,0 +1,114 @@
+"""``report.md``: the calibration summary for people."""
+
+from __future__ import annotations
+
+from replay.records import CalibrationSummary, CameraSummary, StereoSummary
+
+__all__ = ["markdown_report"]
+
+
+def _fmt(value: float) -> str:
+    return f"{value:.6g}"
+
+
+def _parameter_lines(camera: CameraSummary) -> list[str]:
+    has_truth = camera.has_truth
+    header = "| parameter | value | σ | 3σ interval |" + (" truth | error | error/σ |"
+                                                         if has_truth else "")
+    lines = [header, "|" + " --- |" * (header.count("|") - 1)]
+    for name, p in camera.parameters.items():
+        if p.std == 0:
+            line = f"| {name} | {_fmt(p.value)} | fixed | |"
+            if has_truth and p.truth is not None and p.error is not None:
+                line += f" {_fmt(p.truth)} | {p.error:+.4g} | |"
+            lines.append(line)
+            continue
+        lo, hi = p.value - 3 * p.std, p.value + 3 * p.std
+        line = f"| {name} | {_fmt(p.value)} | {_fmt(p.std)} | [{_fmt(lo)}, {_fmt(hi)}] |"
+        if has_truth and p.truth is not None and p.error is not None:
+            ratio = abs(p.error) / p.std if p.std > 0 else float("inf")
+            line += f" {_fmt(p.truth)} | {p.error:+.4g} | {ratio:.2f} |"
+        lines.append(line)
+    return lines
+
+
+def _camera_lines(camera: CameraSummary) -> list[str]:
+    lines = [
+        f"## {camera.namespace}", "",
+        f"{camera.frames} frames ({camera.distinct_frames} distinct), board found in "
+        f"{camera.boards_found}, {camera.candidate_views} candidate views, "
+        f"{camera.selected_views} selected, {camera.used_views} used. "
+        f"Reprojection RMS {camera.rms_px:.4f} px.", "",
+        *_parameter_lines(camera), "",
+    ]
+    if camera.tangential.summary is not None:
+        text = camera.tangential.summary
+        lines.append(text[0].upper() + text[1:] + ".")
+    if camera.cross_validation_px is not None:
+        lines.append(f"Cross-validation: two disjoint halves of the views, calibrated "
+                     f"separately, differ by at most {camera.cross_validation_px:.3f} px "
+                     "over the image once their camera frames are aligned.")
+    if camera.max_projection_difference_vs_truth_px is not None:
+        lines.append(
+            "Against the simulator's true model, max projection difference: "
+            f"{camera.max_projection_difference_vs_truth_covered_aligned_px:.3f} px "
+            "where the views put corners and "
+            f"{camera.max_projection_difference_vs_truth_aligned_px:.3f} px over the "
+            "whole image (its corners are extrapolated), after the best rotation of the "
+            "camera frame, which intrinsic calibration cannot observe; without it "
+            f"{camera.max_projection_difference_vs_truth_covered_px:.3f} px and "
+            f"{camera.max_projection_difference_vs_truth_px:.3f} px.")
+    cov = camera.coverage
+    lines.append("Coverage: " + ", ".join(
+        f"{k} {100 * v.progress:.0f}%" for k, v in cov.ranges.items())
+        + f", image cells {100 * cov.image_cells:.0f}%.")
+    if camera.rejected:
+        lines += ["", f"Rejected views ({len(camera.rejected)}):"]
+        reasons: dict[str, int] = {}
+        for item in camera.rejected:
+            key = item.reason.split(" (")[0] if "RMS" not in item.reason else item.reason
+            reasons[key] = reasons.get(key, 0) + 1
+        lines += [f"- {count}× {reason}" for reason, count in reasons.items()]
+    lines.append("")
+    return lines
+
+
+def _stereo_lines(s: StereoSummary) -> list[str]:
+    lines = [
+        "## Stereo", "",
+        f"{s.joint_views} joint views. Stereo RMS {s.rms_px:.4f} px, epipolar RMS "
+        f"after rectification {s.epipolar_rms_px:.4f} px.",
+        f"Baseline {s.baseline_m:.6f} m (σ {s.baseline_std_m:.2g} m), rotation "
+        f"{s.rotation_deg:.4f}°, T = [{', '.join(f'{v:.5f}' for v in s.translation_m)}] m.",
+        f"Board square re-estimated by triangulation: {s.square_m:.5f} m.",
+    ]
+    if s.rejected:
+        lines.append(f"Rejected joint views ({len(s.rejected)}):")
+        lines += [f"- left {r.left_stamp_ns} ns, right {r.right_stamp_ns} ns: {r.reason}"
+                  for r in s.rejected]
+    if s.truth is not None:
+        lines.append(f"True baseline {s.truth.baseline_m:.6f} m: error "
+                     f"{s.truth.baseline_error_percent:+.3f} %.")
+    lines.append("")
+    return lines
+
+
+def markdown_report(summary: CalibrationSummary, figures: list[str]) -> str:
+    """A short human summary of the calibration, with its figures."""
+    board, options = summary.board, summary.options
+    flags = ", ".join(name.replace("_", "-") for name, on in (
+        ("fix_principal_point", options.fix_principal_point),
+        ("fix_aspect_ratio", options.fix_aspect_ratio)) if on)
+    lines = [
+        "# Calibration report", "",
+        f"Board: {board.cols}x{board.rows} inner corners, {board.square_m:g} m squares. "
+        f"Model: {options.distortion_model} with {options.k_coefficients} radial "
+        f"coefficients; options: {flags or 'none'}; tangential distortion: "
+        f"{options.tangential}.", "",
+    ]
+    for camera in summary.cameras:
+        lines += _camera_lines(camera)
+    if summary.stereo is not None:
+        lines += _stereo_lines(summary.stereo)
+    lines += ["## Figures", ""] + [f"![{name}]({name})" for name in figures] + [""]
+    return "\n".join(lines)

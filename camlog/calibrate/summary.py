@@ -1,0 +1,136 @@
+"""The calibration summary: every figure a run produced, as a typed record.
+
+The same record goes to ``calibration.json``, to ``/calibration/summary`` in
+``calibration.mcap``, to the Markdown report and to the command's printout.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from processors.calibration.board import Board
+from processors.calibration.solve import (
+    CalibrationOptions,
+    MonoResult,
+    max_projection_difference,
+)
+from replay.records import (
+    BoardSummary,
+    CalibrationSummary,
+    CameraSummary,
+    CoverageSummary,
+    OptionsSummary,
+    ParameterEstimate,
+    RangeProgress,
+    RejectedJointView,
+    RejectedView,
+    StereoSummary,
+    StereoTruth,
+    TangentialSummary,
+)
+
+from .solving import CalibratedCamera, StereoSolution
+
+__all__ = ["build_summary"]
+
+
+def _parameters(camera: CalibratedCamera) -> dict[str, ParameterEstimate]:
+    result = camera.solution.result
+    truth = camera.truth.parameters() if camera.truth is not None else {}
+    table = {}
+    for name, value in result.parameters().items():
+        estimate = ParameterEstimate(float(value), float(result.std.get(name, 0.0)))
+        if name in truth:
+            estimate = ParameterEstimate(estimate.value, estimate.std, truth[name],
+                                         float(value - truth[name]))
+        table[name] = estimate
+    return table
+
+
+def _tangential(result: MonoResult) -> TangentialSummary:
+    test = result.tangential_test
+    estimated = result.options.tangential == "estimate"
+    if test is None:
+        return TangentialSummary(estimated)
+    return TangentialSummary(estimated, test.chi2, test.p_value, test.describe())
+
+
+def _rejected(camera: CalibratedCamera) -> list[RejectedView]:
+    """Frames rejected at detection or by the speed limit (in frame order), then the views
+    the solver left out."""
+    views, result = camera.views, camera.solution.result
+    rejected = []
+    for f in views.distinct():
+        if f.detection is not None and not f.detection.accepted:
+            rejected.append(RejectedView(f.stamp_ns, f.detection.reason))
+        elif f.reason:
+            rejected.append(RejectedView(f.stamp_ns, f.reason))
+    rejected += [RejectedView(views.frames[index].stamp_ns, why)
+                 for index, why in sorted(result.rejected.items())]
+    return rejected
+
+
+def _camera(camera: CalibratedCamera) -> CameraSummary:
+    solution, views = camera.solution, camera.views
+    result = solution.result
+    distinct = list(views.distinct())
+    differences: dict[str, float] = {}
+    if camera.truth is not None:
+        seen = np.concatenate(solution.used_corners())
+        true_model = camera.truth.model()
+        for key, within in (("", None), ("_covered", seen)):
+            differences[f"max_projection_difference_vs_truth{key}_px"] = \
+                max_projection_difference(result.model, true_model, within=within)
+            differences[f"max_projection_difference_vs_truth{key}_aligned_px"] = \
+                max_projection_difference(result.model, true_model, within=within,
+                                          align_rotation=True)
+    return CameraSummary(
+        namespace=views.source.namespace, image_topic=views.source.image_topic,
+        width=views.size[0], height=views.size[1], frames=len(views.frames),
+        distinct_frames=len(distinct),
+        boards_found=sum(f.detection is not None for f in distinct),
+        candidate_views=len(solution.candidates), selected_views=len(solution.selected),
+        used_views=len(result.view_ids), rejected=_rejected(camera), rms_px=result.rms_px,
+        distortion_model=result.model.distortion_model, parameters=_parameters(camera),
+        cross_validation_px=solution.cross_validation_px, tangential=_tangential(result),
+        coverage=CoverageSummary(
+            {name: RangeProgress(lo, hi, p)
+             for name, (lo, hi, p) in solution.coverage.ranges.items()},
+            solution.coverage.image_cells),
+        **differences,
+    )
+
+
+def _stereo(cameras: list[CalibratedCamera], stereo: StereoSolution) -> StereoSummary:
+    s = stereo.result
+    left, right = cameras
+    truth = None
+    if left.truth is not None and right.truth is not None:
+        right_from_left = np.linalg.inv(right.truth.world_from_camera) @ \
+            left.truth.world_from_camera
+        true_baseline = float(np.linalg.norm(right_from_left[:3, 3]))
+        truth = StereoTruth(true_baseline,
+                            100 * (s.baseline_m - true_baseline) / true_baseline)
+    return StereoSummary(
+        rms_px=s.rms_px, epipolar_rms_px=s.epipolar_rms_px, baseline_m=s.baseline_m,
+        baseline_std_m=s.baseline_std_m, square_m=s.square_m, rotation_deg=s.rotation_deg,
+        translation_m=s.right_from_left[:3, 3].tolist(), joint_views=len(s.view_epipolar_px),
+        rejected=[RejectedJointView(left.views.frames[li].stamp_ns,
+                                    right.views.frames[ri].stamp_ns, why)
+                  for (li, ri), why in stereo.rejected],
+        truth=truth)
+
+
+def build_summary(cameras: list[CalibratedCamera], stereo: StereoSolution | None, *,
+                  board: Board, options: CalibrationOptions,
+                  ground_truth: bool) -> CalibrationSummary:
+    """The summary of a run; ``ground_truth``: the log had the simulator's scenario."""
+    return CalibrationSummary(
+        board=BoardSummary(board.pattern, board.cols, board.rows, board.square_m),
+        options=OptionsSummary(options.fix_principal_point, options.fix_aspect_ratio,
+                               options.tangential, options.k_coefficients,
+                               options.distortion_model),
+        cameras=[_camera(c) for c in cameras],
+        ground_truth=ground_truth,
+        stereo=_stereo(cameras, stereo) if stereo is not None else None,
+    )

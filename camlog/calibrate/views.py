@@ -1,0 +1,269 @@
+"""What a log shows of each camera: its topics, and the board found in every frame.
+
+This is the one pass over the log that calibration needs for solving: it streams the camera
+images, skips frames identical to the previous one (a board held still; they share its
+detection), and detects the board on a thread pool (OpenCV releases the GIL). Only corners
+are kept, so memory does not grow with the number of images. The camera_info and the
+simulator's scenario record are read in the same pass.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections import deque
+from collections.abc import Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass, field
+
+import cv2
+import numpy as np
+from tqdm import tqdm
+
+from processors.calibration.board import Board
+from processors.calibration.detect import Detection, find_chessboard
+from replay.formats import LogReader
+from replay.messages import CameraInfo
+from replay.records import Scenario
+from replay.topics import SCENARIO, CameraTopics
+
+from ..errors import InputError
+from .pixels import as_image, mono8
+
+#: mean absolute difference (8-bit levels) of 80x60 thumbnails below which a frame repeats
+#: the previous one; sensor noise averages out over the 64 pixels of a thumbnail cell
+DUPLICATE_LEVELS = 1.0
+#: frames kept per camera to suggest another board size when none is found
+HINT_SAMPLES = 12
+
+__all__ = ["CameraSource", "CameraViews", "Frame", "LogViews", "detect_views",
+           "resolve_camera", "size_hint", "with_speed_limit"]
+
+
+@dataclass(frozen=True)
+class CameraSource:
+    """The topics of one camera namespace in a log."""
+
+    namespace: str
+    image_topic: str
+    info_topic: str | None
+
+    @property
+    def name(self) -> str:
+        """A file-name friendly name: ``/stereo/left`` -> ``stereo_left``."""
+        return self.namespace.strip("/").replace("/", "_") or "camera"
+
+
+def resolve_camera(reader: LogReader, namespace: str) -> CameraSource:
+    """The image and camera_info topics of a camera namespace."""
+    ns = namespace.rstrip("/") or "/"
+    topics = CameraTopics(ns)
+    for topic in (topics.image_raw, f"{topics.image_raw}/compressed", topics.image_rect,
+                  f"{ns}/image"):
+        info = reader.topics.get(topic)
+        if info is not None and info.count > 0:
+            break
+    else:
+        images = sorted(t for t, i in reader.topics.items()
+                        if i.msgtype.endswith(("/Image", "/CompressedImage")) and i.count)
+        raise InputError(
+            f"{reader.path}: no images under camera {ns} (expected {topics.image_raw} or "
+            f"{topics.image_raw}/compressed; image topics: {', '.join(images) or 'none'})"
+        )
+    info_topic = topics.camera_info
+    has_info = info_topic in reader.topics and reader.topics[info_topic].count > 0
+    return CameraSource(ns, topic, info_topic if has_info else None)
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One image of one camera, as the detection pass saw it."""
+
+    index: int
+    stamp_ns: int
+    duplicate: bool  # same picture as the previous frame: shares its detection
+    detection: Detection | None = None
+    reason: str = ""  # why a found board is not a candidate view (beyond the detection's own)
+
+    @property
+    def candidate(self) -> bool:
+        """A distinct frame whose board passed every check."""
+        return (not self.duplicate and self.detection is not None and self.detection.accepted
+                and not self.reason)
+
+
+@dataclass(frozen=True)
+class CameraViews:
+    """Every frame of one camera with its detection, the image size, the log's own
+    camera_info (the first one) and a few frames kept for size hints."""
+
+    source: CameraSource
+    frames: tuple[Frame, ...]
+    size: tuple[int, int]  # (width, height)
+    log_info: CameraInfo | None
+    samples: tuple[np.ndarray, ...] = field(default=(), repr=False)
+
+    @property
+    def frame_id(self) -> str:
+        """The camera's optical frame: from its camera_info, else its name."""
+        return self.log_info.frame_id if self.log_info is not None else self.source.name
+
+    def corners(self, index: int) -> np.ndarray:
+        """Detected corners ``(N, 2)`` of frame ``index`` (which must have a detection)."""
+        detection = self.frames[index].detection
+        if detection is None:
+            raise ValueError(f"frame {index} of {self.source.image_topic} has no board")
+        return detection.corners_px
+
+    def distinct(self) -> Iterator[Frame]:
+        """The frames that do not repeat the previous one."""
+        return (f for f in self.frames if not f.duplicate)
+
+
+@dataclass(frozen=True)
+class LogViews:
+    """What the detection pass found: every camera's views and the scenario record."""
+
+    cameras: list[CameraViews]
+    scenario: Scenario | None
+
+
+def _thumbnail(gray: np.ndarray) -> np.ndarray:
+    return cv2.resize(gray, (80, 60), interpolation=cv2.INTER_AREA).astype(np.int16)
+
+
+@dataclass
+class _Seen:
+    """What the pass has collected for one camera so far."""
+
+    source: CameraSource
+    hint_stride: int
+    stamps: list[int] = field(default_factory=list)
+    duplicates: list[bool] = field(default_factory=list)
+    detections: dict[int, Detection | None] = field(default_factory=dict)
+    size: tuple[int, int] | None = None
+    log_info: CameraInfo | None = None
+    samples: list[np.ndarray] = field(default_factory=list)
+    thumbnail: np.ndarray | None = None
+
+    def add(self, gray: np.ndarray, stamp_ns: int, where: str) -> tuple[int, bool]:
+        """Record a frame; its index and whether it repeats the previous one."""
+        size = (gray.shape[1], gray.shape[0])
+        if self.size is None:
+            self.size = size
+        elif self.size != size:
+            raise InputError(
+                f"{where} changes image size from {self.size[0]}x{self.size[1]} to "
+                f"{size[0]}x{size[1]}")
+        thumb = _thumbnail(gray)
+        duplicate = self.thumbnail is not None and \
+            float(np.abs(thumb - self.thumbnail).mean()) < DUPLICATE_LEVELS
+        self.thumbnail = thumb
+        index = len(self.stamps)
+        self.stamps.append(stamp_ns)
+        self.duplicates.append(duplicate)
+        if index % self.hint_stride == 0 and len(self.samples) < HINT_SAMPLES:
+            self.samples.append(gray)
+        return index, duplicate
+
+    def views(self) -> CameraViews:
+        """The frames, duplicates sharing the detection of the frame they repeat."""
+        if self.size is None:
+            raise InputError(f"no images on {self.source.image_topic}")
+        frames, last = [], None
+        for index, (stamp, duplicate) in enumerate(zip(self.stamps, self.duplicates,
+                                                       strict=True)):
+            if not duplicate:
+                last = self.detections.get(index)
+            frames.append(Frame(index, stamp, duplicate, last))
+        return CameraViews(self.source, tuple(frames), self.size, self.log_info,
+                           tuple(self.samples))
+
+
+def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *,
+                 workers: int, progress: bool | None) -> LogViews:
+    """Detect the board in every distinct frame of ``sources`` (one pass over the log)."""
+    seen = {s.namespace: _Seen(s, max(1, reader.topics[s.image_topic].count // HINT_SAMPLES))
+            for s in sources}
+    by_image = {s.image_topic: seen[s.namespace] for s in sources}
+    by_info = {s.info_topic: seen[s.namespace] for s in sources if s.info_topic}
+    scenario: Scenario | None = None
+    wanted = [*by_image, *by_info, *([SCENARIO] if SCENARIO in reader.topics else [])]
+    pending: deque[tuple[_Seen, int, Future[Detection | None]]] = deque()
+    bar = tqdm(total=sum(reader.topics[s.image_topic].count for s in sources), unit="frame",
+               desc="detect", disable=None if progress is None else not progress, leave=False)
+    with ThreadPoolExecutor(max_workers=workers) as pool, bar:
+        for raw in reader.raw_messages(wanted):
+            message = reader.decode(raw)
+            if raw.topic == SCENARIO:
+                scenario = scenario or _scenario(message)
+                continue
+            if raw.topic in by_info:
+                camera = by_info[raw.topic]
+                if camera.log_info is None and isinstance(message, CameraInfo):
+                    camera.log_info = message
+                continue
+            camera = by_image[raw.topic]
+            image = as_image(message, where=f"{reader.path}: {raw.topic}")
+            gray = mono8(image)
+            index, duplicate = camera.add(gray, image.stamp_ns, f"{reader.path}: {raw.topic}")
+            if not duplicate:
+                pending.append((camera, index, pool.submit(find_chessboard, gray, board)))
+            while len(pending) > 2 * workers + 2:
+                done, at, future = pending.popleft()
+                done.detections[at] = future.result()
+            bar.update()
+        for done, at, future in pending:
+            done.detections[at] = future.result()
+    return LogViews([seen[s.namespace].views() for s in sources], scenario)
+
+
+def _scenario(message: object) -> Scenario | None:
+    """The scenario record; a log whose record is malformed is calibrated without truth."""
+    from replay.errors import RecordError
+
+    try:
+        return Scenario.from_message(message)
+    except RecordError:
+        return None
+
+
+def with_speed_limit(views: CameraViews, max_speed_px: float) -> CameraViews:
+    """The views with boards moving faster than ``max_speed_px`` per frame rejected.
+
+    A view's speed is its corners' mean displacement to the nearer of its neighbouring
+    frames (zero when the next frame repeats it: the board was held still).
+    """
+    frames = list(views.frames)
+    for i, frame in enumerate(views.frames):
+        if frame.duplicate or frame.detection is None or not frame.detection.accepted:
+            continue
+        speeds = []
+        for j in (i - 1, i + 1):
+            if 0 <= j < len(frames):
+                other = views.frames[j]
+                if j == i + 1 and other.duplicate:
+                    speeds.append(0.0)
+                elif other.detection is not None:
+                    delta = other.detection.corners_px - frame.detection.corners_px
+                    speeds.append(float(np.linalg.norm(delta, axis=1).mean()))
+        speed = min(speeds) if speeds else float("inf")
+        if speed > max_speed_px:
+            frames[i] = dataclasses.replace(
+                frame, reason=f"board moving {speed:.2f} px/frame > {max_speed_px:g}")
+    return dataclasses.replace(views, frames=tuple(frames))
+
+
+def size_hint(views: CameraViews, board: Board) -> str:
+    """A hint when another inner-corner count would have matched the frames."""
+    c, r = board.cols, board.rows
+    for cols, rows in ((r, c), (c + 1, r), (c, r + 1), (c + 1, r + 1), (c - 1, r), (c, r - 1),
+                       (c - 1, r - 1)):
+        if cols < 2 or rows < 2 or (cols, rows) == (c, r):
+            continue
+        other = Board(cols, rows, board.square_m)
+        for gray in views.samples:
+            found = find_chessboard(gray, other)
+            if found is not None and found.accepted:
+                return (f"; the frames show a {cols}x{rows} board: --size counts inner "
+                        "corners (squares minus one) per row x per column")
+    return ""

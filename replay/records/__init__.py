@@ -1,0 +1,44 @@
+"""Typed JSON records of camlog's well-known topics (see :mod:`replay.topics`)."""
+
+from .base import JsonRecord, from_json, to_json
+from .calibration import (
+    BoardSummary,
+    CalibrationSummary,
+    CameraSummary,
+    CoverageSummary,
+    OptionsSummary,
+    ParameterEstimate,
+    RangeProgress,
+    RejectedJointView,
+    RejectedView,
+    StereoSummary,
+    StereoTruth,
+    TangentialSummary,
+    ViewResiduals,
+)
+from .resync import OffsetStats, ResyncStats
+from .scenario import Scenario, ScenarioCamera, ScenarioTarget
+
+__all__ = [
+    "BoardSummary",
+    "CalibrationSummary",
+    "CameraSummary",
+    "CoverageSummary",
+    "JsonRecord",
+    "OffsetStats",
+    "OptionsSummary",
+    "ParameterEstimate",
+    "RangeProgress",
+    "RejectedJointView",
+    "RejectedView",
+    "ResyncStats",
+    "Scenario",
+    "ScenarioCamera",
+    "ScenarioTarget",
+    "StereoSummary",
+    "StereoTruth",
+    "TangentialSummary",
+    "ViewResiduals",
+    "from_json",
+    "to_json",
+]

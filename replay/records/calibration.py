@@ -1,0 +1,234 @@
+"""The records ``camlog calibrate`` writes: per-view residuals and the calibration summary.
+
+``{ns}/calibration/residuals`` holds one :class:`ViewResiduals` per used view;
+``/calibration/summary`` (and ``calibration.json``) one :class:`CalibrationSummary`. Every
+length is in pixels (``_px``) or metres (``_m``), every stamp in nanoseconds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import RecordError
+from ..messages import F64
+from .base import OMIT_NONE, JsonRecord, from_json, to_json
+
+__all__ = [
+    "BoardSummary",
+    "CalibrationSummary",
+    "CameraSummary",
+    "CoverageSummary",
+    "OptionsSummary",
+    "ParameterEstimate",
+    "RangeProgress",
+    "RejectedJointView",
+    "RejectedView",
+    "StereoSummary",
+    "StereoTruth",
+    "TangentialSummary",
+    "ViewResiduals",
+]
+
+
+@dataclass(frozen=True)
+class ViewResiduals(JsonRecord):
+    """One used calibration view: detected ``corners_px`` (N, 2) and ``residuals_px`` (N, 2),
+    observed minus reprojected, and the view's RMS."""
+
+    what = "residuals record"
+
+    stamp_ns: int
+    frame_id: str
+    rms_px: float
+    corners_px: F64
+    residuals_px: F64
+
+    def __post_init__(self) -> None:
+        corners = np.asarray(self.corners_px, dtype=np.float64).reshape(-1, 2)
+        residuals = np.asarray(self.residuals_px, dtype=np.float64).reshape(-1, 2)
+        if corners.shape != residuals.shape:
+            raise RecordError(f"{len(corners)} corners but {len(residuals)} residuals")
+        object.__setattr__(self, "corners_px", corners)
+        object.__setattr__(self, "residuals_px", residuals)
+
+
+@dataclass(frozen=True)
+class BoardSummary:
+    """The calibration target: ``cols`` x ``rows`` inner corners, ``square_m`` squares."""
+
+    pattern: str
+    cols: int
+    rows: int
+    square_m: float
+
+
+@dataclass(frozen=True)
+class OptionsSummary:
+    """The solver options (camera_calibration's meaning)."""
+
+    fix_principal_point: bool
+    fix_aspect_ratio: bool
+    tangential: str
+    k_coefficients: int
+    distortion_model: str
+
+
+@dataclass(frozen=True)
+class RejectedView:
+    """A frame left out of the calibration, and why."""
+
+    stamp_ns: int
+    reason: str
+
+
+@dataclass(frozen=True)
+class ParameterEstimate:
+    """One estimated parameter with its standard deviation (0: held fixed) and, when the
+    log has the simulator's truth, the true value and the error (estimate - truth)."""
+
+    value: float
+    std: float
+    truth: float | None = field(default=None, metadata=OMIT_NONE)
+    error: float | None = field(default=None, metadata=OMIT_NONE)
+
+
+@dataclass(frozen=True)
+class TangentialSummary:
+    """Whether p1, p2 were estimated, and the likelihood-ratio test that decided it."""
+
+    estimated: bool
+    chi2: float | None = field(default=None, metadata=OMIT_NONE)
+    p_value: float | None = field(default=None, metadata=OMIT_NONE)
+    summary: str | None = field(default=None, metadata=OMIT_NONE)
+
+
+@dataclass(frozen=True)
+class RangeProgress:
+    """How much of one view parameter's range (X, Y, size, skew) the used views cover."""
+
+    min: float
+    max: float
+    progress: float
+
+
+@dataclass(frozen=True)
+class CoverageSummary:
+    """Coverage per view parameter, and the share of image cells that saw a corner.
+
+    JSON: ``{"X": {...}, "Y": {...}, ..., "image_cells": 0.8}``."""
+
+    ranges: dict[str, RangeProgress]
+    image_cells: float
+
+    def json_value(self) -> dict[str, Any]:
+        """The JSON object (ranges by name, then ``image_cells``)."""
+        return {**to_json(self.ranges), "image_cells": self.image_cells}
+
+    @classmethod
+    def from_json_value(cls, data: Any, where: str) -> CoverageSummary:
+        """Parse the JSON object :meth:`json_value` writes."""
+        if not isinstance(data, dict) or "image_cells" not in data:
+            raise RecordError(f"{where}: expected an object with image_cells")
+        ranges = {k: from_json(RangeProgress, v, f"{where}.{k}")
+                  for k, v in data.items() if k != "image_cells"}
+        cells = data["image_cells"]
+        if isinstance(cells, bool) or not isinstance(cells, int | float):
+            raise RecordError(f"{where}.image_cells: expected a number")
+        return cls(ranges, float(cells))
+
+
+@dataclass(frozen=True)
+class CameraSummary:
+    """One calibrated camera: what its frames gave, the model, its evidence and accuracy.
+
+    The ``max_projection_difference_vs_truth*`` figures exist when the log has the
+    simulator's truth: over the whole image or only where the views put corners
+    (``_covered``), with or without aligning the camera frames by a rotation (``_aligned``).
+    """
+
+    namespace: str
+    image_topic: str
+    width: int
+    height: int
+    frames: int
+    distinct_frames: int
+    boards_found: int
+    candidate_views: int
+    selected_views: int
+    used_views: int
+    rejected: list[RejectedView]
+    rms_px: float
+    distortion_model: str
+    parameters: dict[str, ParameterEstimate]
+    cross_validation_px: float | None
+    tangential: TangentialSummary
+    coverage: CoverageSummary
+    max_projection_difference_vs_truth_px: float | None = field(default=None,
+                                                                metadata=OMIT_NONE)
+    max_projection_difference_vs_truth_aligned_px: float | None = field(default=None,
+                                                                        metadata=OMIT_NONE)
+    max_projection_difference_vs_truth_covered_px: float | None = field(default=None,
+                                                                        metadata=OMIT_NONE)
+    max_projection_difference_vs_truth_covered_aligned_px: float | None = field(
+        default=None, metadata=OMIT_NONE)
+
+    @property
+    def has_truth(self) -> bool:
+        """Whether the parameters were compared with the simulator's truth."""
+        return any(p.truth is not None for p in self.parameters.values())
+
+
+@dataclass(frozen=True)
+class RejectedJointView:
+    """A stereo pair left out of the stereo solve, and why."""
+
+    left_stamp_ns: int
+    right_stamp_ns: int
+    reason: str
+
+
+@dataclass(frozen=True)
+class StereoTruth:
+    """The simulator's true baseline and the estimate's relative error."""
+
+    baseline_m: float
+    baseline_error_percent: float
+
+
+@dataclass(frozen=True)
+class StereoSummary:
+    """The stereo solve: RMS, epipolar error after rectification, the rig transform
+    (``translation_m`` (3,) of ``right_from_left``), and the board square re-estimated by
+    triangulation."""
+
+    rms_px: float
+    epipolar_rms_px: float
+    baseline_m: float
+    baseline_std_m: float
+    square_m: float
+    rotation_deg: float
+    translation_m: list[float]
+    joint_views: int
+    rejected: list[RejectedJointView]
+    truth: StereoTruth | None = field(default=None, metadata=OMIT_NONE)
+
+
+@dataclass(frozen=True)
+class CalibrationSummary(JsonRecord):
+    """Machine-readable results of ``camlog calibrate`` (``/calibration/summary`` and
+    ``calibration.json``)."""
+
+    what = "calibration summary"
+
+    board: BoardSummary
+    options: OptionsSummary
+    cameras: list[CameraSummary]
+    ground_truth: bool
+    stereo: StereoSummary | None = field(default=None, metadata=OMIT_NONE)
+
+    def rejected_stamps(self) -> dict[str, dict[int, str]]:
+        """Camera namespace -> stamp of every rejected frame -> why."""
+        return {c.namespace: {r.stamp_ns: r.reason for r in c.rejected} for c in self.cameras}

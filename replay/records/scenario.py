@@ -1,0 +1,104 @@
+"""The simulator's scenario record (``/camlog/scenario``): what shaped a recording.
+
+The recorder writes it once, first in the log: the resolved spec and seed, the camlog and
+MuJoCo versions, every camera's true model and pose, its dropped frames, and the targets'
+geometry. Calibration compares against it; the rerun export places cameras and projects
+targets with it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..camera import CameraModel
+from ..messages import F64
+from .base import OMIT_NONE, JsonRecord
+
+__all__ = ["Scenario", "ScenarioCamera", "ScenarioTarget"]
+
+
+@dataclass(frozen=True)
+class ScenarioCamera:
+    """One simulated camera: its true model (``k`` (3, 3), ``d`` (N,)), its optical frame's
+    pose ``world_from_camera`` (4, 4), how it was rendered and which frames it dropped."""
+
+    name: str
+    namespace: str
+    frame_id: str
+    width: int
+    height: int
+    k: F64
+    distortion_model: str
+    d: F64
+    world_from_camera: F64
+    render_size: tuple[int, int]
+    supersample: int
+    dropped_frames: list[int] = field(default_factory=list)
+
+    def model(self) -> CameraModel:
+        """The camera's true intrinsic model."""
+        return CameraModel(self.width, self.height, self.k, self.distortion_model, self.d)
+
+    def parameters(self) -> dict[str, float]:
+        """True fx, fy, cx, cy and distortion coefficients by OpenCV name (k1, k2, p1, ...)."""
+        names = ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6")
+        values = {"fx": float(self.k[0, 0]), "fy": float(self.k[1, 1]),
+                  "cx": float(self.k[0, 2]), "cy": float(self.k[1, 2])}
+        coefficients = [*np.asarray(self.d, dtype=np.float64).reshape(-1).tolist(), *[0.0] * 8]
+        return values | dict(zip(names, coefficients, strict=False))
+
+
+@dataclass(frozen=True)
+class ScenarioTarget:
+    """A target: a checkerboard (``inner_corners`` (cols, rows), ``square_m``, its inner
+    corners ``corners_in_target`` (N, 3)) or a box (``size_m`` (3,), ``rgba``); ``frame``
+    says where the target frame sits."""
+
+    name: str
+    kind: str
+    inner_corners: tuple[int, int] | None = field(default=None, metadata=OMIT_NONE)
+    square_m: float | None = field(default=None, metadata=OMIT_NONE)
+    corners_in_target: F64 | None = field(default=None, metadata=OMIT_NONE)
+    size_m: F64 | None = field(default=None, metadata=OMIT_NONE)
+    rgba: tuple[float, ...] | None = field(default=None, metadata=OMIT_NONE)
+    frame: str = ""
+
+    def points_in_target(self) -> F64 | None:
+        """Points ``(N, 3)`` worth projecting: a board's inner corners, a box's vertices."""
+        if self.corners_in_target is not None:
+            points = np.asarray(self.corners_in_target, dtype=np.float64)
+            return points.reshape(-1, 3) if points.size and points.size % 3 == 0 else None
+        if self.kind == "box" and self.size_m is not None and np.size(self.size_m) == 3:
+            half = np.asarray(self.size_m, dtype=np.float64).reshape(3) / 2
+            signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
+            return np.asarray(signs * half, dtype=np.float64)
+        return None
+
+
+@dataclass(frozen=True)
+class Scenario(JsonRecord):
+    """Everything that shaped a recording (``/camlog/scenario``, JSON)."""
+
+    what = "scenario record"
+
+    scenario: str
+    source: str
+    seed: int
+    camlog_version: str
+    mujoco_version: str
+    renderer: str
+    spec: dict[str, Any]
+    cameras: list[ScenarioCamera]
+    targets: list[ScenarioTarget]
+
+    def camera_for(self, namespace: str, frame_id: str | None = None) -> ScenarioCamera | None:
+        """The camera of a namespace, or else the one camera with ``frame_id`` (topics
+        renamed by resync keep their frame ids)."""
+        for camera in self.cameras:
+            if camera.namespace == namespace:
+                return camera
+        matches = [c for c in self.cameras if frame_id and c.frame_id == frame_id]
+        return matches[0] if len(matches) == 1 else None

@@ -1,0 +1,157 @@
+"""The well-known topics of camlog logs, named once, and the typed record each one holds.
+
+A camera namespace ``ns`` owns ``{ns}/image_raw[/compressed]`` and ``{ns}/camera_info``; the
+simulator adds ``{ns}/ground_truth/{target}`` (``PoseStamped``: the target in the camera's
+optical frame) and the log-wide ``/camlog/scenario`` (:class:`~replay.records.Scenario`);
+``camlog calibrate`` adds ``{ns}/calibration/{detections,residuals,view_error}``,
+``{ns}/calibrated/camera_info``, ``{ns}/image_rect`` (stereo) and ``/calibration/summary``
+(:class:`~replay.records.CalibrationSummary`); ``camlog resync`` writes the pairs under a
+prefix (default ``/stereo_sync``) with ``{prefix}/offset_s`` and ``{prefix}/stats``
+(:class:`~replay.records.ResyncStats`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import TypeVar
+
+from .errors import ReplayError
+from .formats.base import LogReader
+from .records.base import JsonRecord
+
+__all__ = [
+    "CALIBRATED_INFO",
+    "CALIBRATION_SUMMARY",
+    "DETECTIONS",
+    "GROUND_TRUTH",
+    "IMAGE_RECT",
+    "RESIDUALS",
+    "RESYNC_PREFIX",
+    "SCENARIO",
+    "VIEW_ERROR",
+    "CameraTopics",
+    "ResyncTopics",
+    "read_record",
+    "split_ground_truth",
+]
+
+#: the simulator's scenario record (std_msgs/String, JSON)
+SCENARIO = "/camlog/scenario"
+#: camlog calibrate's summary (std_msgs/String, JSON)
+CALIBRATION_SUMMARY = "/calibration/summary"
+#: where camlog resync writes the re-stamped pairs by default
+RESYNC_PREFIX = "/stereo_sync"
+
+# topic names relative to a camera namespace
+IMAGE_RAW = "image_raw"
+CAMERA_INFO = "camera_info"
+GROUND_TRUTH = "ground_truth"
+DETECTIONS = "calibration/detections"
+RESIDUALS = "calibration/residuals"
+VIEW_ERROR = "calibration/view_error"
+CALIBRATED_INFO = "calibrated/camera_info"
+IMAGE_RECT = "image_rect"
+
+
+@dataclass(frozen=True)
+class CameraTopics:
+    """The topics of one camera namespace (``/stereo_camera/left``)."""
+
+    namespace: str
+
+    def _under(self, name: str) -> str:
+        return f"{self.namespace.rstrip('/')}/{name}"
+
+    @property
+    def image_raw(self) -> str:
+        """Raw images (``sensor_msgs/Image``)."""
+        return self._under(IMAGE_RAW)
+
+    @property
+    def camera_info(self) -> str:
+        """The driver's camera model (``sensor_msgs/CameraInfo``)."""
+        return self._under(CAMERA_INFO)
+
+    def ground_truth(self, target: str) -> str:
+        """The simulator's pose of ``target`` in this camera's optical frame."""
+        return self._under(f"{GROUND_TRUTH}/{target}")
+
+    @property
+    def detections(self) -> str:
+        """Calibration frames with the detected corners drawn (``Image``)."""
+        return self._under(DETECTIONS)
+
+    @property
+    def residuals(self) -> str:
+        """One :class:`~replay.records.ViewResiduals` per used calibration view."""
+        return self._under(RESIDUALS)
+
+    @property
+    def view_error(self) -> str:
+        """Per-view calibration RMS (``PointStamped`` x, px)."""
+        return self._under(VIEW_ERROR)
+
+    @property
+    def calibrated_info(self) -> str:
+        """The calibrated camera model (``CameraInfo``)."""
+        return self._under(CALIBRATED_INFO)
+
+    @property
+    def image_rect(self) -> str:
+        """Rectified images of a calibrated stereo camera."""
+        return self._under(IMAGE_RECT)
+
+
+def split_ground_truth(topic: str) -> tuple[str, str] | None:
+    """``(namespace, target)`` of a ground-truth topic, None for any other topic.
+
+    >>> split_ground_truth("/stereo_camera/left/ground_truth/board")
+    ('/stereo_camera/left', 'board')
+    """
+    namespace, _, target = topic.rpartition(f"/{GROUND_TRUTH}/")
+    return (namespace, target) if namespace and target and "/" not in target else None
+
+
+@dataclass(frozen=True)
+class ResyncTopics:
+    """The topics ``camlog resync`` writes under ``prefix``."""
+
+    prefix: str = RESYNC_PREFIX
+
+    @property
+    def left(self) -> CameraTopics:
+        """The re-stamped left camera."""
+        return CameraTopics(f"{self.prefix}/left")
+
+    @property
+    def right(self) -> CameraTopics:
+        """The re-stamped right camera."""
+        return CameraTopics(f"{self.prefix}/right")
+
+    @property
+    def offset(self) -> str:
+        """One ``PointStamped`` per pair: x = right - left stamp, in seconds."""
+        return f"{self.prefix}/offset_s"
+
+    @property
+    def stats(self) -> str:
+        """The :class:`~replay.records.ResyncStats` record."""
+        return f"{self.prefix}/stats"
+
+
+R = TypeVar("R", bound=JsonRecord)
+
+
+def read_record(reader: LogReader, topic: str, record: type[R]) -> R | None:
+    """The first message of ``topic`` as ``record``; None when the log has no such topic.
+
+    A malformed record raises :class:`~replay.errors.RecordError` naming the log and topic.
+    """
+    if topic not in reader.topics:
+        return None
+    for raw in reader.raw_messages([topic]):
+        try:
+            return record.from_message(reader.decode(raw))
+        except ReplayError as err:
+            raise type(err)(f"{reader.path}: topic {topic}: {err}") from None
+    return None
