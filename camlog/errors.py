@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 __all__ = ["CalibrationError", "CamlogError", "GoldenError", "InputError", "PipelineError",
-           "SyncError", "UsageError"]
+           "ProcessingError", "SyncError", "UsageError"]
 
 
 class CamlogError(Exception):
@@ -20,6 +20,10 @@ class UsageError(CamlogError):
 
 class CalibrationError(CamlogError):
     """The views of a log do not allow a calibration (no board, no pairs)."""
+
+
+class ProcessingError(CamlogError):
+    """A processor failed on one frame of a log."""
 
 
 class SyncError(CamlogError):

@@ -89,8 +89,7 @@ class TargetSpec:
 
 @dataclass(frozen=True)
 class Scenario:
-    """A resolved scenario: cameras, targets, motion, timing and seed (all a recording
-    depends on)."""
+    """A resolved scenario: cameras, targets, motion, timing and seed (all that shapes it)."""
 
     name: str
     description: str

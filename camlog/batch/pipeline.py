@@ -33,9 +33,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from processors.errors import ConfigError
 from replay.atomic import write_text_atomic
 from replay.topics import RESYNC_PREFIX
+
+from ..errors import PipelineError
 
 
 @dataclass(frozen=True)
@@ -81,7 +82,7 @@ def _bool_or_table(value: Any, key: str, step: str) -> dict[str, Any] | None:
         return {}
     if isinstance(value, dict):
         return dict(value)
-    raise ConfigError(f"step {step!r}: {key} must be true, false or a table of options")
+    raise PipelineError(f"step {step!r}: {key} must be true, false or a table of options")
 
 
 def _resync(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
@@ -106,7 +107,7 @@ def _calibrate(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOut
     elif "camera" in o:
         cameras = [o["camera"]]
     else:
-        raise ConfigError("calibrate: give camera = NS, or left and right")
+        raise PipelineError("calibrate: give camera = NS, or left and right")
     run = calibrate_log(
         log, board=make_board(str(o.get("size", "")), float(o.get("square", 0))),
         cameras=cameras, output_dir=out,
@@ -138,7 +139,7 @@ def _process(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutco
     from ..processing.process_log import process_log
 
     if "topic" not in o:
-        raise ConfigError("process: give topic = the image topic to process")
+        raise PipelineError("process: give topic = the image topic to process")
     chosen = []
     for key, name in (("red_pixels", "red_pixels"), ("edges", "edges")):
         options = _bool_or_table(o.get(key), key, "process")
@@ -150,7 +151,7 @@ def _process(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutco
         chosen.append(make_processor(
             "rectify", camera_info=load_calibration(Path(o["rectify"])).camera_info))
     if not chosen:
-        raise ConfigError("process: enable at least one of red_pixels, edges, rectify")
+        raise PipelineError("process: enable at least one of red_pixels, edges, rectify")
     result = process_log(log, out / "processed.mcap", topic=o["topic"], processors=chosen,
                          throttle=make_throttle(every=o.get("every"), rate_hz=o.get("rate")),
                          compress=o.get("compress"), overwrite=True, workers=workers)
@@ -196,30 +197,30 @@ def run_step(step: Step, log: Path, out: Path, workers: int) -> StepOutcome:
 def parse_pipeline(raw: Any, source: str) -> Pipeline:
     """Validate raw pipeline data (from TOML or YAML)."""
     if not isinstance(raw, dict) or not isinstance(raw.get("steps"), list) or not raw["steps"]:
-        raise ConfigError(f"{source}: a pipeline needs a non-empty list of [[steps]]")
+        raise PipelineError(f"{source}: a pipeline needs a non-empty list of [[steps]]")
     unknown_top = set(raw) - {"steps", "description"}
     if unknown_top:
-        raise ConfigError(f"{source}: unknown key {sorted(unknown_top)[0]!r}")
+        raise PipelineError(f"{source}: unknown key {sorted(unknown_top)[0]!r}")
     steps: list[Step] = []
     for index, table in enumerate(raw["steps"]):
         where = f"{source}: steps[{index}]"
         if not isinstance(table, dict) or "run" not in table:
-            raise ConfigError(f"{where}: each step needs run = one of {', '.join(STEPS)}")
+            raise PipelineError(f"{where}: each step needs run = one of {', '.join(STEPS)}")
         kind = table["run"]
         if kind not in STEPS:
-            raise ConfigError(f"{where}: unknown step {kind!r} (known: {', '.join(STEPS)})")
+            raise PipelineError(f"{where}: unknown step {kind!r} (known: {', '.join(STEPS)})")
         name = str(table.get("name", kind))
         if any(s.name == name for s in steps):
-            raise ConfigError(f"{where}: step name {name!r} is used twice; give name = ...")
+            raise PipelineError(f"{where}: step name {name!r} is used twice; give name = ...")
         source_step = str(table.get("input", "previous"))
         known = {"log", "previous", *(s.name for s in steps)}
         if source_step not in known:
-            raise ConfigError(f"{where}: input {source_step!r} is not 'log', 'previous' or an "
+            raise PipelineError(f"{where}: input {source_step!r} is not 'log', 'previous' or an "
                               "earlier step's name")
         options = {k: v for k, v in table.items() if k not in ("run", "name", "input")}
         bad = sorted(set(options) - STEPS[kind][0])
         if bad:
-            raise ConfigError(f"{where}: {kind} has no option {bad[0]!r} "
+            raise PipelineError(f"{where}: {kind} has no option {bad[0]!r} "
                               f"(options: {', '.join(sorted(STEPS[kind][0])) or 'none'})")
         steps.append(Step(name, kind, source_step, options))
     return Pipeline(tuple(steps), source)
@@ -230,9 +231,9 @@ def load_pipeline(path: Path) -> Pipeline:
     try:
         text = path.read_text()
     except FileNotFoundError:
-        raise ConfigError(f"pipeline file {path} does not exist") from None
+        raise PipelineError(f"pipeline file {path} does not exist") from None
     except (OSError, UnicodeDecodeError) as err:
-        raise ConfigError(f"cannot read pipeline {path}: {err}") from None
+        raise PipelineError(f"cannot read pipeline {path}: {err}") from None
     if path.suffix in (".yaml", ".yml"):
         from ruamel.yaml import YAML
         from ruamel.yaml.error import YAMLError
@@ -240,10 +241,10 @@ def load_pipeline(path: Path) -> Pipeline:
         try:
             raw = YAML(typ="safe", pure=True).load(text)
         except YAMLError as err:
-            raise ConfigError(f"{path}: not valid YAML: {str(err).splitlines()[0]}") from None
+            raise PipelineError(f"{path}: not valid YAML: {str(err).splitlines()[0]}") from None
     else:
         try:
             raw = tomllib.loads(text)
         except tomllib.TOMLDecodeError as err:
-            raise ConfigError(f"{path}: not valid TOML: {err}") from None
+            raise PipelineError(f"{path}: not valid TOML: {err}") from None
     return parse_pipeline(raw, str(path))

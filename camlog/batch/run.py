@@ -20,16 +20,17 @@ from typing import Any
 
 from tqdm import tqdm
 
-from processors.errors import ConfigError, ProcessorError
+from processors.errors import ProcessorError
 from recorder.errors import RecorderError
 from replay.atomic import write_text_atomic
 from replay.errors import ReplayError
 
+from ..errors import CamlogError, InputError, UsageError
 from .pipeline import Pipeline, run_step
 
 STATUS_FILE = "batch_status.json"
 ENGINES = ("process", "ray")
-KNOWN_ERRORS = (ReplayError, ProcessorError, RecorderError, OSError, ValueError)
+KNOWN_ERRORS = (CamlogError, ReplayError, ProcessorError, RecorderError, OSError, ValueError)
 
 
 @dataclass(frozen=True)
@@ -83,7 +84,7 @@ def run_job(job: Job) -> dict[str, Any]:
     status: dict[str, Any] = {"log": str(job.log), "out_dir": str(job.out_dir), "steps": []}
     try:
         if not job.log.exists():
-            raise ReplayError(f"{job.log} does not exist")
+            raise InputError(f"{job.log} does not exist")
         status["input"] = fingerprint(job.log)
         logs: dict[str, Path] = {"log": job.log}
         current = job.log
@@ -155,7 +156,7 @@ def _run_ray(jobs: list[Job], n: int, done: Callable[[dict[str, Any]], None]) ->
     try:
         import ray
     except ImportError:
-        raise ConfigError("--engine ray needs Ray: pip install 'camlog[ray]'") from None
+        raise UsageError("--engine ray needs Ray: pip install 'camlog[ray]'") from None
     started_here = not ray.is_initialized()
     if started_here:
         threads = str(jobs[0].workers if jobs else 1)
@@ -190,13 +191,13 @@ def run_batch(pipeline: Pipeline, logs: list[Path], out_dir: Path, *, jobs: int 
               engine: str = "process", progress: bool | None = None) -> BatchResult:
     """Run ``pipeline`` over ``logs``; statuses come back in the order of ``logs``."""
     if engine not in ENGINES:
-        raise ConfigError(f"unknown engine {engine!r} (use {' or '.join(ENGINES)})")
+        raise UsageError(f"unknown engine {engine!r} (use {' or '.join(ENGINES)})")
     if jobs < 1:
-        raise ConfigError(f"-j must be at least 1, got {jobs}")
+        raise UsageError(f"-j must be at least 1, got {jobs}")
     if not logs:
-        raise ConfigError("give at least one log")
+        raise UsageError("give at least one log")
     if out_dir.exists() and not out_dir.is_dir():
-        raise ConfigError(f"output {out_dir} exists and is not a directory")
+        raise UsageError(f"output {out_dir} exists and is not a directory")
     out_dir.mkdir(parents=True, exist_ok=True)
     planned = plan_jobs(pipeline, logs, out_dir, jobs)
     results: dict[str, dict[str, Any]] = {}

@@ -21,6 +21,7 @@ from tqdm import tqdm
 
 from processors.calibration.board import Board
 from processors.calibration.detect import Detection, find_chessboard
+from replay.errors import RecordError
 from replay.formats import LogReader
 from replay.messages import CameraInfo
 from replay.records import Scenario
@@ -219,8 +220,6 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
 
 def _scenario(message: object) -> Scenario | None:
     """The scenario record; a log whose record is malformed is calibrated without truth."""
-    from replay.errors import RecordError
-
     try:
         return Scenario.from_message(message)
     except RecordError:

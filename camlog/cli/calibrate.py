@@ -7,6 +7,8 @@ from pathlib import Path
 
 from processors.calibration.board import PATTERNS
 
+from ..errors import UsageError
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Register the ``calibrate`` arguments (camera_calibration's vocabulary)."""
@@ -60,14 +62,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def cameras_from(args: argparse.Namespace) -> list[str]:
     """The camera namespaces to calibrate, from the options or the log's only camera."""
-    from processors.errors import InputError
     from replay.formats import open_reader
 
     if args.left or args.right:
         if not (args.left and args.right):
-            raise InputError("stereo needs both --left and --right")
+            raise UsageError("stereo needs both --left and --right")
         if args.camera:
-            raise InputError("give either --camera or --left/--right")
+            raise UsageError("give either --camera or --left/--right")
         return [args.left, args.right]
     if args.camera:
         return [args.camera]
@@ -75,7 +76,7 @@ def cameras_from(args: argparse.Namespace) -> list[str]:
         spaces = sorted({t.rsplit("/image_raw", 1)[0] for t, i in reader.topics.items()
                          if "/image_raw" in t and i.count})
     if len(spaces) != 1:
-        raise InputError(f"name the camera with --camera (or --left/--right); image_raw "
+        raise UsageError(f"name the camera with --camera (or --left/--right); image_raw "
                          f"namespaces in {args.log}: {', '.join(spaces) or 'none'}")
     return spaces
 
@@ -84,7 +85,6 @@ def run(args: argparse.Namespace) -> int:
     """Calibrate (or ``--check``) and print the key figures."""
     from processors.calibration.board import make_board
     from processors.calibration.solve import CalibrationOptions, tangential_mode
-    from processors.errors import InputError
 
     from ..calibrate.check import check_log
     from ..calibrate.flow import calibrate_log
@@ -94,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
     progress = False if args.no_progress else None
     if args.check:
         if not args.calibration:
-            raise InputError("--check needs --calibration FILE (twice for stereo)")
+            raise UsageError("--check needs --calibration FILE (twice for stereo)")
         result = check_log(args.log, board=board, cameras=cameras,
                            calibrations=args.calibration, approximate_s=args.approximate,
                            progress=progress, recover=args.recover)

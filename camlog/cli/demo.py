@@ -5,6 +5,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..errors import UsageError
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Register the ``demo`` arguments."""
@@ -21,12 +23,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Run the demo, printing where each output went."""
-    from processors.errors import ConfigError
-
     from ..demo import run_demo
 
     if args.duration <= 0:
-        raise ConfigError(f"--duration must be positive, got {args.duration:g}")
+        raise UsageError(f"--duration must be positive, got {args.duration:g}")
     result = run_demo(args.output, duration_s=args.duration, seed=args.seed,
                       progress=False if args.no_progress else None)
     print(f"done in {result.wall_s:.0f} s; everything is in {args.output}/")

@@ -7,11 +7,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from processors.errors import ConfigError
 from processors.registry import make_processor
 from processors.throttle import make_throttle
 from replay.formats import FORMATS
 
+from ..errors import UsageError
 from ..processing.process_log import COMPRESSIONS, process_log
 
 
@@ -77,7 +77,7 @@ def run(args: argparse.Namespace) -> int:
     """Build the processors named on the command line and call :func:`process_log`."""
     chosen = [name for name, (is_chosen, _) in CHOSEN.items() if is_chosen(args)]
     if not chosen:
-        raise ConfigError("choose at least one of --red-pixels, --edges, --rectify")
+        raise UsageError("choose at least one of --red-pixels, --edges, --rectify")
     processors = [make_processor(name, **CHOSEN[name][1](args)) for name in chosen]
     result = process_log(
         args.log, args.output, topic=args.topic, processors=processors,

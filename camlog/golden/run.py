@@ -8,7 +8,7 @@ process) into a work folder and reduces what they wrote to artifacts: JSON numbe
 calibration YAML, first and last output frames as PNG, and short text summaries of the
 output logs (topics, types, counts, log-time spans; never the bytes of compressed files).
 :func:`compare` checks them against ``datasets/golden/expected/STEM/JOB/...`` within
-:data:`TOLERANCES`; :func:`update` rewrites the expected files that changed.
+:data:`~.tolerances.TOLERANCES`; :func:`update` rewrites the expected files that changed.
 """
 
 from __future__ import annotations
@@ -32,10 +32,8 @@ from replay.topics import SCENARIO, read_record
 
 from ..errors import GoldenError
 from .artifacts import (
-    TOLERANCES,
     Artifacts,
     Difference,
-    Tolerance,
     artifacts_equal,
     compare,
     dumps_json,
@@ -45,11 +43,9 @@ from .jobs import Calibrate, Job, Process, Resync
 
 __all__ = [
     "INPUTS",
-    "TOLERANCES",
     "Artifacts",
     "Difference",
     "GoldenInput",
-    "Tolerance",
     "artifacts_equal",
     "check",
     "compare",

@@ -20,7 +20,7 @@ from pathlib import Path
 import cv2
 
 from processors.base import Processor
-from processors.errors import ConfigError, FrameError, ProcessorError
+from processors.errors import ProcessorError
 from processors.throttle import KeepAll, Throttle
 from replay.atomic import check_not_input
 from replay.codec import decode_compressed, encode_compressed, msgtype_of, serialize
@@ -28,6 +28,7 @@ from replay.errors import ReplayError
 from replay.formats import RawMessage, open_reader, open_writer
 from replay.messages import CompressedImage, Image, Message
 
+from ..errors import ProcessingError, UsageError
 from .checks import (
     IMAGE_TYPES,
     require_free_topics,
@@ -81,7 +82,7 @@ class _Job:
             return raws
         except (ProcessorError, ReplayError, cv2.error) as err:
             text = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
-            raise FrameError(f"{self.where}: frame stamped {stamp}: {text}") from None
+            raise ProcessingError(f"{self.where}: frame stamped {stamp}: {text}") from None
 
 
 def output_topics(processors: Sequence[Processor], compress: str | None) -> dict[str, str]:
@@ -93,7 +94,7 @@ def output_topics(processors: Sequence[Processor], compress: str | None) -> dict
             if compress and kind == "sensor_msgs/msg/Image":
                 topic, msgtype = name + "/compressed", "sensor_msgs/msg/CompressedImage"
             if topic in topics:
-                raise ConfigError(f"two processors write {topic}")
+                raise UsageError(f"two processors write {topic}")
             topics[topic] = msgtype
     return topics
 
@@ -121,9 +122,9 @@ def process_log(
     """
     started = time.perf_counter()
     if not processors:
-        raise ConfigError("no processor chosen (e.g. --red-pixels, --edges, --rectify)")
+        raise UsageError("no processor chosen (e.g. --red-pixels, --edges, --rectify)")
     if compress is not None and compress not in COMPRESSIONS:
-        raise ConfigError(f"unknown compression {compress!r} (use {' or '.join(COMPRESSIONS)})")
+        raise UsageError(f"unknown compression {compress!r} (use {' or '.join(COMPRESSIONS)})")
     throttle = throttle or KeepAll()
     check_not_input(output, [input_path])
     new_topics = output_topics(processors, compress)

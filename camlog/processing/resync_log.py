@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 
-from processors.errors import InputError, SyncError
 from processors.resync import default_slop_ns, pair_stamp_ns, pair_stamps, pairing_stats
 from replay.atomic import check_not_input
 from replay.formats import LogReader, LogWriter, open_reader, open_writer
@@ -25,6 +24,7 @@ from replay.messages import CameraInfo, CompressedImage, Image, Message, PointSt
 from replay.records import ResyncStats
 from replay.topics import RESYNC_PREFIX, ResyncTopics
 
+from ..errors import InputError, SyncError
 from .checks import IMAGE_TYPES, require_free_topics, require_messages
 
 INFO_TYPE = "sensor_msgs/msg/CameraInfo"

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from camlog.batch.pipeline import load_pipeline, parse_pipeline
-from processors.errors import ConfigError
+from camlog.errors import PipelineError
 
 GOOD = """
 [[steps]]
@@ -70,10 +70,10 @@ def test_digest_changes_with_any_option() -> None:
 def test_bad_pipelines_name_the_problem(tmp_path: Path, text: str, message: str) -> None:
     path = tmp_path / "bad.toml"
     path.write_text(text)
-    with pytest.raises(ConfigError, match=message):
+    with pytest.raises(PipelineError, match=message):
         load_pipeline(path)
 
 
 def test_missing_pipeline_file(tmp_path: Path) -> None:
-    with pytest.raises(ConfigError, match="does not exist"):
+    with pytest.raises(PipelineError, match="does not exist"):
         load_pipeline(tmp_path / "none.toml")

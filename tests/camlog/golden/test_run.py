@@ -18,7 +18,8 @@ import pytest
 from camlog.cli import main
 from camlog.errors import GoldenError
 from camlog.golden import run as golden
-from camlog.golden.artifacts import TOLERANCES, read_artifact, tolerance_for
+from camlog.golden.artifacts import read_artifact
+from camlog.golden.tolerances import TOLERANCES, tolerance_for
 from processors import red_pixels
 from processors.edges import Edges
 from replay.messages import Image
