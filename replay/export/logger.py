@@ -15,9 +15,7 @@ read; every log call still reaches rerun in message order.
 from __future__ import annotations
 
 import json
-from collections import deque
 from collections.abc import Callable
-from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -30,7 +28,7 @@ from ..errors import ReplayError
 from ..formats.base import RawMessage
 from ..messages import CameraInfo, CompressedImage, Image, Message, PointStamped, PoseStamped, Text
 from ..records import ViewResiduals
-from .blueprint import LOG_TIME, REPLAY_TIME, STAMP_TIME
+from .emitter import Emitter
 from .frames import CameraFrames
 from .images import encoded_image, rerun_image
 from .overlays import (
@@ -51,16 +49,8 @@ __all__ = ["LoggerOptions", "SceneLogger"]
 ORDER_DETECTIONS, ORDER_MASK, ORDER_EDGES = -9.0, -8.0, -7.0
 GREEN, ORANGE, RED, YELLOW, CYAN = (60, 230, 60), (255, 150, 0), (255, 50, 50), (255, 230, 0), \
     (0, 220, 255)
-#: log calls held back behind an image still being encoded (bounds memory)
-MAX_PENDING = 16
-#: log calls between blocking flushes of the recording (bounds rerun's write queue)
-FLUSH_EVERY = 400
 CORNER_RADIUS, CENTROID_RADIUS, TRUTH_RADIUS, GUIDE_RADIUS = (
     rr.components.Radius.ui_points(r) for r in (2.5, 5.0, 1.5, 0.5))
-
-
-#: (log time, header stamp or None, replay wall clock or None), ns
-_Times = tuple[int, int | None, int | None]
 
 
 @dataclass(frozen=True)
@@ -97,20 +87,14 @@ class SceneLogger:
         rec.set_log_tick_enabled(False)
         self.cameras = {ns: _Camera(cam, frames=CameraFrames(every=options.every))
                         for ns, cam in plan.cameras.items()}
-        self.counts: dict[str, int] = {}  # entity -> logged rows
+        self._out = Emitter(rec, encoders=2 if options.jpeg_quality is not None else 0)
+        self.counts = self._out.counts  # entity -> logged rows
         self.warnings: list[str] = []
         self._warned: set[str] = set()
         self._guides: set[str] = set()
         self._styled: set[str] = set()  # point entities whose colour and size are logged
         self._truth: dict[str, tuple[bytes, CameraModel, Any]] = {}  # topic -> last pose
         self._replay_ns: int | None = None
-        self._now: _Times = (0, None, None)  # log time, header stamp, replay time
-        self._applied: _Times | None = None  # times last set on the stream
-        # (times, entity, archetype or its encoding in progress), in message order
-        self._pending: deque[tuple[_Times, str, Any]] = deque()
-        self._logged = 0
-        self._pool = ThreadPoolExecutor(2, thread_name_prefix="camlog-jpeg") \
-            if options.jpeg_quality is not None else None
         self._handlers: dict[Kind, Callable[[RawMessage, Route], None]] = {
             Kind.IMAGE: self._image, Kind.CAMERA_INFO: self._camera_info,
             Kind.CALIBRATED_INFO: self._camera_info, Kind.RECTIFIED: self._rectified,
@@ -168,51 +152,14 @@ class SceneLogger:
             self.warnings.append(text)
 
     def _emit(self, entity: str, archetype: Any, *, count: bool = True) -> None:
-        """Log at the current message's times, after anything logged before it."""
-        self._pending.append((self._now, entity, archetype))
-        self._drain(MAX_PENDING)
-        if count:
-            self.counts[entity] = self.counts.get(entity, 0) + 1
-
-    def _drain(self, keep: int) -> None:
-        """Send pending log calls in order; wait for an encoding only beyond ``keep``."""
-        while self._pending:
-            times, entity, archetype = self._pending[0]
-            if isinstance(archetype, Future):
-                if len(self._pending) <= keep and not archetype.done():
-                    return
-                archetype = archetype.result()
-            self._pending.popleft()
-            if times != self._applied:
-                self._apply(times)
-            self.rec.log(entity, archetype)
-            self._logged += 1
-            if self._logged % FLUSH_EVERY == 0:
-                # rerun writes on its own thread; without back-pressure its queue grows with
-                # the log's length whenever logging outpaces writing
-                self.rec.flush()
-
-    def _apply(self, times: _Times) -> None:
-        log_time_ns, stamp_ns, replay_ns = times
-        self.rec.set_time(LOG_TIME, timestamp=np.datetime64(log_time_ns, "ns"))
-        if stamp_ns is None:
-            self.rec.disable_timeline(STAMP_TIME)
-        else:
-            self.rec.set_time(STAMP_TIME, timestamp=np.datetime64(stamp_ns, "ns"))
-        if replay_ns is not None:
-            self.rec.set_time(REPLAY_TIME, timestamp=np.datetime64(replay_ns, "ns"))
-        self._applied = times
+        self._out.emit(entity, archetype, count=count)
 
     def _times(self, raw: RawMessage, stamp_ns: int | None) -> None:
-        self._now = (raw.log_time_ns, stamp_ns, self._replay_ns)
+        self._out.at(raw.log_time_ns, stamp_ns, self._replay_ns)
 
     def close(self) -> None:
         """Send what is still pending and stop the encoding threads."""
-        try:
-            self._drain(0)
-        finally:
-            if self._pool is not None:
-                self._pool.shutdown(cancel_futures=True)
+        self._out.close()
 
     def _camera_of(self, route: Route, message: Any) -> _Camera | None:
         """The camera a message draws on: named by its route, or found by frame and stamp."""
@@ -271,9 +218,9 @@ class SceneLogger:
             if archetype is not None:
                 return archetype
             message = decode_compressed(message)
-        if self._pool is not None and message.pixels.dtype == np.uint8:
-            return self._pool.submit(rerun_image, message, draw_order=draw_order,
-                                     jpeg_quality=self.options.jpeg_quality)
+        if message.pixels.dtype == np.uint8:  # JPEG: encoded on a worker thread
+            return self._out.encode(rerun_image, message, draw_order=draw_order,
+                                    jpeg_quality=self.options.jpeg_quality)
         return rerun_image(message, jpeg_quality=self.options.jpeg_quality,
                            draw_order=draw_order)
 

@@ -1,0 +1,256 @@
+"""The shape of the code, read from the source with ``ast``: dependency direction, no import
+cycles, no private names across modules, small modules, docstrings on the public API.
+
+Every import counts, lazy ones inside functions included: a lazy import hides a cycle from
+Python, not from the design.
+"""
+
+from __future__ import annotations
+
+import ast
+import textwrap
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("replay", "recorder", "processors", "camlog")
+#: package -> the packages it must not import (recorder -> replay <- processors; camlog: all)
+FORBIDDEN = {
+    "replay": {"recorder", "processors", "camlog"},
+    "recorder": {"processors", "camlog"},
+    "processors": {"recorder", "camlog"},
+    "camlog": set(),
+}
+MAX_LINES = 400
+
+
+@dataclass
+class Import:
+    """One imported module: the names taken from it, the line, and local aliases of it."""
+
+    target: str
+    names: list[str]
+    line: int
+
+
+@dataclass
+class Module:
+    """One source module: its dotted name, where it is, its syntax tree and its imports."""
+
+    name: str
+    where: str
+    tree: ast.Module
+    is_package: bool
+    lines: int
+    imports: list[Import] = field(default_factory=list)
+    aliases: dict[str, str] = field(default_factory=dict)  # local name -> module it binds
+
+    @property
+    def package(self) -> str:
+        """The dotted name relative imports start from."""
+        return self.name if self.is_package else self.name.rpartition(".")[0]
+
+
+def _resolve(modules: dict[str, Module]) -> dict[str, Module]:
+    """Fill every module's imports and module aliases."""
+    for module in modules.values():
+        for node in ast.walk(module.tree):
+            if isinstance(node, ast.Import):
+                for alias in node.names:
+                    module.imports.append(Import(alias.name, [], node.lineno))
+                    if alias.asname:
+                        module.aliases[alias.asname] = alias.name
+            elif isinstance(node, ast.ImportFrom):
+                target = node.module or ""
+                if node.level:
+                    base = module.package.split(".")
+                    base = base[: len(base) - node.level + 1]
+                    target = ".".join(base + ([node.module] if node.module else []))
+                rest = []
+                for alias in node.names:
+                    if f"{target}.{alias.name}" in modules:  # a submodule
+                        module.imports.append(Import(f"{target}.{alias.name}", [], node.lineno))
+                        module.aliases[alias.asname or alias.name] = f"{target}.{alias.name}"
+                    else:
+                        rest.append(alias.name)
+                if rest:
+                    module.imports.append(Import(target, rest, node.lineno))
+    return modules
+
+
+def _read_tree() -> dict[str, Module]:
+    found: dict[str, Module] = {}
+    for package in PACKAGES:
+        for path in sorted((ROOT / package).rglob("*.py")):
+            parts = list(path.relative_to(ROOT).with_suffix("").parts)
+            is_package = parts[-1] == "__init__"
+            if is_package:
+                parts.pop()
+            text = path.read_text()
+            found[".".join(parts)] = Module(".".join(parts), str(path.relative_to(ROOT)),
+                                            ast.parse(text, str(path)), is_package,
+                                            len(text.splitlines()))
+    return _resolve(found)
+
+
+MODULES = _read_tree()
+
+
+def _top(name: str) -> str:
+    return name.split(".", maxsplit=1)[0]
+
+
+def wrong_direction(modules: dict[str, Module]) -> list[str]:
+    """Imports that go against the dependency direction."""
+    return [f"{m.where}:{i.line} imports {i.target}" for m in modules.values()
+            for i in m.imports if _top(i.target) in FORBIDDEN.get(_top(m.name), set())]
+
+
+def cycles(modules: dict[str, Module]) -> list[list[str]]:
+    """Groups of modules that import each other, directly or around a loop (Tarjan's
+    strongly connected components)."""
+    graph = {name: sorted({i.target for i in m.imports if i.target in modules
+                           and i.target != name}) for name, m in modules.items()}
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    found: list[list[str]] = []
+
+    def visit(node: str) -> None:
+        index[node] = low[node] = len(index)
+        stack.append(node)
+        for nxt in graph[node]:
+            if nxt not in index:
+                visit(nxt)
+                low[node] = min(low[node], low[nxt])
+            elif nxt in stack:
+                low[node] = min(low[node], index[nxt])
+        if low[node] == index[node]:
+            component = stack[stack.index(node):]
+            del stack[stack.index(node):]
+            if len(component) > 1:
+                found.append(sorted(component))
+
+    for node in sorted(graph):
+        if node not in index:
+            visit(node)
+    return found
+
+
+def _private(name: str) -> bool:
+    return name.startswith("_") and not name.startswith("__")
+
+
+def private_uses(modules: dict[str, Module]) -> list[str]:
+    """``_private`` names of one module imported or used as attributes by another."""
+    wrong = [f"{m.where}:{i.line} imports {i.target}.{name}" for m in modules.values()
+             for i in m.imports if _top(i.target) in PACKAGES and i.target != m.name
+             for name in i.names if _private(name)]
+    for m in modules.values():
+        for node in ast.walk(m.tree):
+            if isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and \
+                    node.value.id in m.aliases and _private(node.attr):
+                wrong.append(f"{m.where}:{node.lineno} uses {m.aliases[node.value.id]}."
+                             f"{node.attr}")
+    return wrong
+
+
+def _classes(modules: dict[str, Module]) -> dict[str, list[ast.ClassDef]]:
+    classes: dict[str, list[ast.ClassDef]] = {}
+    for module in modules.values():
+        for node in ast.walk(module.tree):
+            if isinstance(node, ast.ClassDef):
+                classes.setdefault(node.name, []).append(node)
+    return classes
+
+
+def _inherited(node: ast.ClassDef, classes: dict[str, list[ast.ClassDef]],
+               seen: frozenset[str] = frozenset()) -> set[str]:
+    """Method names the class's bases (in this tree) define: an override shares their
+    docstring, as ``inspect.getdoc`` reads it."""
+    names: set[str] = set()
+    for base in node.bases:
+        name = base.id if isinstance(base, ast.Name) else \
+            base.attr if isinstance(base, ast.Attribute) else ""
+        for parent in classes.get(name, []):
+            if parent.name not in seen:
+                names |= {item.name for item in parent.body
+                          if isinstance(item, ast.FunctionDef | ast.AsyncFunctionDef)}
+                names |= _inherited(parent, classes, seen | {parent.name})
+    return names
+
+
+def undocumented(modules: dict[str, Module]) -> Iterator[str]:
+    """Public module-level functions and classes, and public methods of public classes,
+    without a docstring."""
+    classes = _classes(modules)
+    defs = ast.FunctionDef | ast.AsyncFunctionDef
+    for module in modules.values():
+        for node in module.tree.body:
+            if not isinstance(node, defs | ast.ClassDef) or node.name.startswith("_"):
+                continue
+            if ast.get_docstring(node) is None:
+                yield f"{module.where}:{node.lineno} {node.name}"
+            if isinstance(node, ast.ClassDef):
+                inherited = _inherited(node, classes)
+                yield from (f"{module.where}:{item.lineno} {node.name}.{item.name}"
+                            for item in node.body
+                            if isinstance(item, defs) and not item.name.startswith("_")
+                            and item.name not in inherited and ast.get_docstring(item) is None)
+
+
+def _sample(**sources: str) -> dict[str, Module]:
+    """Modules made from source text, named by their keyword (``a__b`` is ``a.b``)."""
+    modules = {}
+    for key, text in sources.items():
+        name = key.replace("__", ".")
+        source = textwrap.dedent(text)
+        modules[name] = Module(name, name, ast.parse(source), False, len(source.splitlines()))
+    return _resolve(modules)
+
+
+def test_the_checks_find_what_they_look_for() -> None:
+    sample = _sample(
+        replay__a="from replay import b\n",
+        replay__b="from . import a\nimport replay.a as x\nx._hidden()\n",
+        replay__d="from camlog.c import run\n",
+        camlog__c="from replay.a import _secret\n\ndef run():\n    pass\n\nclass K:\n"
+                  "    '''Documented.'''\n    def go(self):\n        pass\n",
+    )
+    assert wrong_direction(sample) == ["replay.d:1 imports camlog.c"]
+    assert cycles(sample) == [["replay.a", "replay.b"]]
+    assert private_uses(sample) == ["camlog.c:1 imports replay.a._secret",
+                                    "replay.b:3 uses replay.a._hidden"]
+    assert list(undocumented(sample)) == ["camlog.c:3 run", "camlog.c:8 K.go"]
+
+
+def test_the_source_tree_is_read() -> None:
+    assert {"replay.formats.base", "camlog.cli", "processors.registry",
+            "recorder.record"} <= set(MODULES)
+    assert sum(len(m.imports) for m in MODULES.values()) > 300
+
+
+def test_dependencies_point_one_way() -> None:
+    assert wrong_direction(MODULES) == []
+
+
+def test_no_import_cycles() -> None:
+    assert cycles(MODULES) == []
+
+
+def test_no_private_names_across_modules() -> None:
+    assert private_uses(MODULES) == []
+
+
+def test_modules_are_small() -> None:
+    assert {m.where: m.lines for m in MODULES.values() if m.lines > MAX_LINES} == {}
+
+
+@pytest.mark.parametrize("package", PACKAGES)
+def test_public_functions_and_classes_say_what_they_are_for(package: str) -> None:
+    mine = {name: m for name, m in MODULES.items() if _top(name) == package}
+    assert [line for line in undocumented(MODULES) if line.startswith(f"{package}/")] == []
+    assert mine
