@@ -13,11 +13,13 @@ prefix (default ``/stereo_sync``) with ``{prefix}/offset_s`` and ``{prefix}/stat
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TypeVar
+from typing import TYPE_CHECKING, TypeVar
 
 from .errors import ReplayError
-from .formats.base import LogReader
-from .records.base import JsonRecord
+
+if TYPE_CHECKING:  # the names are light to import; reading a record is not
+    from .formats.base import LogReader
+    from .records.base import JsonRecord
 
 __all__ = [
     "CALIBRATED_INFO",
@@ -139,7 +141,7 @@ class ResyncTopics:
         return f"{self.prefix}/stats"
 
 
-R = TypeVar("R", bound=JsonRecord)
+R = TypeVar("R", bound="JsonRecord")
 
 
 def read_record(reader: LogReader, topic: str, record: type[R]) -> R | None:
