@@ -142,6 +142,9 @@ class LogWriter:
     def __init__(self, path: Path, *, overwrite: bool = False,
                  inputs: Iterable[Path] = ()) -> None:
         self.path = path
+        # a rosbag2 storage file stands for its directory: the output may not enter it
+        inputs = [*(given := [Path(p) for p in inputs]),
+                  *(p.parent for p in given if p.is_file() and is_rosbag2_dir(p.parent))]
         self._atomic = AtomicOutput(path, overwrite=overwrite, inputs=inputs,
                                     replaceable_dir=is_rosbag2_dir, what="a rosbag2 log")
         self._types: dict[str, str] = {}

@@ -97,7 +97,8 @@ def _inputs(red_log: Path, tmp_path: Path) -> dict[str, Path]:
     ("resync {log} --left /a --right /b -o {log} --overwrite", "is the input"),
     ("convert {log} {log} --overwrite", "is the input"),
     ("convert {bag} {bag}/out.mcap", "inside the input"),
-    ("convert {bag}/bag_0.mcap {bag} --overwrite", "holds the input"),
+    ("convert {bag}/bag.mcap {bag} --overwrite", "holds the input"),
+    ("convert {bag}/bag.mcap {bag}/out.mcap", "inside the input"),
     ("view {rrd} -o {rrd} --overwrite", "is the input"),
     ("calibrate {cal}/calibration.mcap --size 7x6 --square 0.01 --camera " + LEFT
      + " -o {cal} --overwrite", "is the input"),
