@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-__all__ = ["CalibrationError", "CamlogError", "GoldenError", "InputError", "PipelineError",
-           "ProcessingError", "SyncError", "UsageError"]
+__all__ = ["CalibrationError", "CamlogError", "ClusterError", "GoldenError", "InputError",
+           "PipelineError", "ProcessingError", "SyncError", "UsageError"]
 
 
 class CamlogError(Exception):
@@ -32,6 +32,10 @@ class SyncError(CamlogError):
 
 class PipelineError(CamlogError):
     """A batch pipeline file or one of its steps is invalid."""
+
+
+class ClusterError(CamlogError):
+    """A Ray cluster cannot be reached, or one of its nodes cannot run camlog."""
 
 
 class GoldenError(CamlogError):

@@ -45,3 +45,7 @@ class RecordError(ReplayError):
 
 class ViewerError(ReplayError):
     """A rerun recording could not be written or a viewer could not be reached."""
+
+
+class StorageError(ReplayError):
+    """A log location (object storage, URI) cannot be reached, listed, read or written."""

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 
+from . import storage
 from .codec import decode_compressed, deserialize
 from .errors import ReplayError
 from .formats.base import LogReader, RawMessage
@@ -50,7 +51,7 @@ class TopicSummary:
 class LogSummary:
     """Everything ``camlog info`` prints about one log."""
 
-    path: Path
+    path: Path | str
     format_name: str
     size_bytes: int
     start_ns: int | None
@@ -122,8 +123,10 @@ def describe(raw: RawMessage) -> str:
     return ""
 
 
-def size_on_disk(path: Path) -> int:
-    """Bytes of a file, or of all files below a directory."""
+def size_on_disk(path: Path | str) -> int:
+    """Bytes of a file, or of all files below a directory (local or a URI)."""
+    if isinstance(path, str):
+        return storage.size(path)
     if path.is_dir():
         return sum(f.stat().st_size for f in path.rglob("*") if f.is_file())
     return path.stat().st_size

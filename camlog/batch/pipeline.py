@@ -34,6 +34,7 @@ from pathlib import Path
 from typing import Any
 
 from replay.atomic import write_text_atomic
+from replay.storage import Location
 from replay.topics import RESYNC_PREFIX
 
 from ..errors import PipelineError
@@ -85,7 +86,7 @@ def _bool_or_table(value: Any, key: str, step: str) -> dict[str, Any] | None:
     raise PipelineError(f"step {step!r}: {key} must be true, false or a table of options")
 
 
-def _resync(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
+def _resync(log: Location, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
     from ..processing.resync_log import resync_log
 
     result = resync_log(log, out / "synced.mcap", left=o.get("left", "/unsynced/left"),
@@ -96,7 +97,7 @@ def _resync(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcom
     return StepOutcome(result.output, {"pairs": stats.pairs}, [result.output])
 
 
-def _calibrate(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
+def _calibrate(log: Location, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
     from processors.calibration.board import make_board
     from processors.calibration.solve import CalibrationOptions, tangential_mode
 
@@ -132,7 +133,7 @@ def _calibrate(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOut
     return StepOutcome(out / "calibration.mcap", figures, run.files)
 
 
-def _process(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
+def _process(log: Location, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
     from processors.registry import make_processor
     from processors.throttle import make_throttle
 
@@ -159,7 +160,7 @@ def _process(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutco
                                        "fps": round(result.fps, 1)}, [result.output])
 
 
-def _info(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
+def _info(log: Location, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
     from replay.formats import open_reader
     from replay.info import format_summary, summarize
 
@@ -171,7 +172,7 @@ def _info(log: Path, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
     return StepOutcome(None, {}, [path])
 
 
-Runner = Callable[[Path, Path, dict[str, Any], int], StepOutcome]
+Runner = Callable[[Location, Path, dict[str, Any], int], StepOutcome]
 
 #: step kind -> (allowed option keys, runner)
 STEPS: dict[str, tuple[frozenset[str], Runner]] = {
@@ -186,8 +187,8 @@ STEPS: dict[str, tuple[frozenset[str], Runner]] = {
 }
 
 
-def run_step(step: Step, log: Path, out: Path, workers: int) -> StepOutcome:
-    """Run one step on ``log``, writing under the folder ``out``."""
+def run_step(step: Step, log: Location, out: Path, workers: int) -> StepOutcome:
+    """Run one step on ``log`` (a path or a URI), writing under the local folder ``out``."""
     out.mkdir(parents=True, exist_ok=True)
     return STEPS[step.run][1](log, out, step.options, workers)
 

@@ -19,6 +19,7 @@ from processors.calibration.solve import CalibrationOptions
 from replay.atomic import AtomicFolder
 from replay.formats import open_reader
 from replay.records import CalibrationSummary
+from replay.storage import Location, local_paths
 
 from ..errors import InputError
 from .evidence import write_evidence
@@ -61,7 +62,7 @@ def _check_size(views: CameraViews) -> None:
 
 
 def calibrate_log(
-    log: Path,
+    log: Location,
     *,
     board: Board,
     cameras: list[str],
@@ -80,7 +81,8 @@ def calibrate_log(
     started = time.perf_counter()
     stereo_mode = len(cameras) == 2
     with AtomicFolder(output_dir, output_names(stereo_mode), overwrite=overwrite,
-                      inputs=[log]) as staged, open_reader(log, recover=recover) as reader:
+                      inputs=local_paths(log)) as staged, \
+            open_reader(log, recover=recover) as reader:
         if reader.message_count == 0:
             raise InputError(f"{log} is empty (no messages)")
         sources = [resolve_camera(reader, ns) for ns in cameras]

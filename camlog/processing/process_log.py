@@ -27,6 +27,7 @@ from replay.codec import decode_compressed, encode_compressed, msgtype_of, seria
 from replay.errors import ReplayError
 from replay.formats import RawMessage, open_reader, open_writer
 from replay.messages import CompressedImage, Image, Message
+from replay.storage import Location, local_paths
 
 from ..errors import ProcessingError, UsageError
 from .checks import (
@@ -100,7 +101,7 @@ def output_topics(processors: Sequence[Processor], compress: str | None) -> dict
 
 
 def process_log(
-    input_path: Path,
+    input_path: Location,
     output: Path,
     *,
     topic: str,
@@ -126,7 +127,7 @@ def process_log(
     if compress is not None and compress not in COMPRESSIONS:
         raise UsageError(f"unknown compression {compress!r} (use {' or '.join(COMPRESSIONS)})")
     throttle = throttle or KeepAll()
-    check_not_input(output, [input_path])
+    check_not_input(output, local_paths(input_path))
     new_topics = output_topics(processors, compress)
     with open_reader(input_path, recover=recover) as reader:
         require_messages(reader)
@@ -137,7 +138,7 @@ def process_log(
         workers = workers or min(4, os.cpu_count() or 1)
         in_flight = 2 * workers + 2
         with open_writer(output, fmt=fmt, overwrite=overwrite,
-                         inputs=[input_path]) as writer:
+                         inputs=local_paths(input_path)) as writer:
             job = _Job(tuple(processors), compress, writer.serialization,
                        f"{reader.path}: {topic}")
             for first in reader.raw_messages([topic]):  # fail early; warm up serializers

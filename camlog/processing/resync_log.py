@@ -22,6 +22,7 @@ from replay.atomic import check_not_input
 from replay.formats import LogReader, LogWriter, open_reader, open_writer
 from replay.messages import CameraInfo, CompressedImage, Image, Message, PointStamped
 from replay.records import ResyncStats
+from replay.storage import Location, local_paths
 from replay.topics import RESYNC_PREFIX, ResyncTopics
 
 from ..errors import InputError, SyncError
@@ -103,7 +104,7 @@ def _keys(stamps: list[int]) -> tuple[np.ndarray, list[tuple[int, int]]]:
 
 
 def resync_log(
-    input_path: Path,
+    input_path: Location,
     output: Path,
     *,
     left: str = "/unsynced/left",
@@ -122,7 +123,7 @@ def resync_log(
     (``PointStamped``, x = right - left stamp in s, per pair) and ``PREFIX/stats`` (JSON).
     """
     started = time.perf_counter()
-    check_not_input(output, [input_path])
+    check_not_input(output, local_paths(input_path))
     prefix = "/" + out_prefix.strip("/")
     with open_reader(input_path, recover=recover) as reader:
         require_messages(reader)
@@ -150,7 +151,7 @@ def resync_log(
         pair_of, needed = _plan(sides, [left_keys, right_keys],
                                 [pairing.left_index, pairing.right_index])
         with open_writer(output, fmt=fmt, overwrite=overwrite,
-                         inputs=[input_path]) as writer:
+                         inputs=local_paths(input_path)) as writer:
             stats = dataclasses.replace(stats, peak_buffered_messages=_write_pairs(
                 reader, writer=writer, sides=sides, pair_of=pair_of, needed=needed,
                 common_ns=common_ns.tolist(), offset_topic=offset_topic))

@@ -2,14 +2,18 @@
 
 from __future__ import annotations
 
+import shutil
+import tempfile
+import weakref
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from .. import storage
 from ..atomic import temp_output_of
 from ..errors import LogFormatError, LogReadError
 from .base import LogReader, LogWriter, RawMessage, Record, TopicInfo
-from .mcap import McapLogReader, McapLogWriter, is_mcap
+from .mcap import MAGIC, McapLogReader, McapLogWriter, is_mcap
 from .rosbags_formats import Ros1LogReader, Ros1LogWriter, Rosbag2LogReader, Rosbag2LogWriter
 
 __all__ = [
@@ -79,8 +83,11 @@ def _storage_without_metadata(path: Path) -> Path | None:
 
 
 def open_reader(path: str | Path, *, recover: bool = False) -> LogReader:
-    """Open any supported log for streaming reads."""
-    path = Path(path)
+    """Open any supported log for streaming reads: a path, a ``file://`` URI or an object
+    (``s3://bucket/run.mcap``; see :mod:`replay.storage`)."""
+    if storage.is_remote(path):
+        return _open_remote(str(path), recover=recover)
+    path = storage.local_path(path)
     reader = _open(path, recover=recover)
     final = temp_output_of(path)
     if final is not None:
@@ -92,16 +99,41 @@ def open_reader(path: str | Path, *, recover: bool = False) -> LogReader:
 def _open(path: Path, *, recover: bool) -> LogReader:
     fmt = detect_format(path)
     if path.is_dir() and fmt == "mcap":
-        storage = _storage_without_metadata(path)
-        assert storage is not None
-        reader = McapLogReader(storage, recover=recover)
+        inner = _storage_without_metadata(path)
+        assert inner is not None
+        reader = McapLogReader(inner, recover=recover)
         reader.warnings.insert(0, f"{path} has no metadata.yaml (its recording was cut "
                                   f"short?); reading its storage file "
-                                  f"{storage.relative_to(path)} directly")
+                                  f"{inner.relative_to(path)} directly")
         return reader
     if fmt == "rosbag2" and path.is_file():
         path = path.parent
     return READERS[fmt](path, recover=recover)
+
+
+def _open_remote(uri: str, *, recover: bool) -> LogReader:
+    """MCAP is read in place with range requests; other formats from a temporary copy."""
+    if not storage.is_dir(uri):
+        file = storage.open_remote(uri)
+        try:
+            head = file.read(len(MAGIC))
+            file.seek(0)
+        except Exception:
+            file.close()
+            raise
+        if head == MAGIC:
+            return McapLogReader(uri, file=file, recover=recover)
+        file.close()
+    folder = Path(tempfile.mkdtemp(prefix="camlog-download-"))
+    try:
+        reader = open_reader(storage.download(uri, folder), recover=recover)
+    except BaseException:
+        shutil.rmtree(folder, ignore_errors=True)
+        raise
+    weakref.finalize(reader, shutil.rmtree, folder, True)
+    reader.warnings.append(f"{uri} is read from a temporary download (only MCAP is read in "
+                           "place with range requests)")
+    return reader
 
 
 def format_for_output(path: Path, fmt: str | None = None) -> str:

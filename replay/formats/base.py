@@ -55,8 +55,8 @@ class LogReader:
 
     format_name: str = ""
 
-    def __init__(self, path: Path) -> None:
-        self.path = path
+    def __init__(self, path: Path | str) -> None:
+        self.path = path  # a string only for a URI (object storage)
         self.topics: dict[str, TopicInfo] = {}
         self.start_ns: int | None = None
         self.end_ns: int | None = None

@@ -67,12 +67,19 @@ class McapLogReader(LogReader):
 
     format_name = "mcap"
 
-    def __init__(self, path: Path, *, recover: bool = False) -> None:
+    def __init__(
+        self, path: Path | str, *, file: IO[bytes] | None = None, recover: bool = False
+    ) -> None:
+        """Open ``path``; or read ``file`` — any seekable binary file, such as an fsspec file
+        on object storage read with range requests — which ``path`` then only names. The
+        reader closes the file."""
         super().__init__(path)
-        try:
-            self._file: IO[bytes] = path.open("rb")
-        except OSError as err:
-            raise LogReadError(f"cannot open {path}: {err.strerror}") from None
+        if file is None:
+            try:
+                file = Path(path).open("rb")  # noqa: SIM115 (the reader owns it)
+            except OSError as err:
+                raise LogReadError(f"cannot open {path}: {err.strerror}") from None
+        self._file: IO[bytes] = file
         self._recover = recover
         self._summary: Any = None
         self._valid_until: int | None = None  # streaming: stop before this byte offset
@@ -174,7 +181,7 @@ class McapLogReader(LogReader):
             except _DAMAGE as err:
                 if learn:
                     # a record that runs into the end of the file was cut, not corrupted
-                    size = self.path.stat().st_size
+                    size = self._size()
                     at_end = self._file.tell() >= size
                     why = _describe(err)
                     if at_end:
@@ -208,9 +215,16 @@ class McapLogReader(LogReader):
             elif isinstance(record, DataEnd | Footer):
                 return
 
+    def _size(self) -> int:
+        position = self._file.tell()
+        try:
+            return self._file.seek(0, 2)
+        finally:
+            self._file.seek(position)
+
     def _note_damage(self, offset: int, why: str, *, truncated: bool) -> None:
         self._valid_until = offset
-        size = self.path.stat().st_size
+        size = self._size()
         if truncated or offset >= size or self._recover:
             self.warnings.append(
                 f"{self.path} is incomplete ({why} at byte {offset} of {size}); "

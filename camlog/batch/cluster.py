@@ -1,0 +1,193 @@
+"""The Ray engine: a batch on an existing Ray cluster, or on a Ray instance started here.
+
+``address`` names the cluster (``host:port`` or ``auto``, as ``RAY_ADDRESS``); without
+one, a local instance is started, bound to 127.0.0.1. Before any log is sent, every node
+is asked to import camlog (the same version) and the filesystems the batch's URIs need,
+so a cluster without them fails at once with one line instead of once per log. Each log
+is a task with ``cpus_per_log`` CPUs; Ray runs it again (``retries`` times) when its
+worker or its node dies, and a log that runs out of retries is reported failed while the
+others go on.
+"""
+
+from __future__ import annotations
+
+import socket
+import time
+from collections.abc import Callable, Iterable
+from typing import Any
+
+from replay import storage
+
+from ..errors import ClusterError, UsageError
+from .jobs import Job, run_job
+
+PROBE_TIMEOUT_S = 120.0
+CONNECT_TIMEOUT_S = 5.0
+
+
+def run_on_ray(jobs: list[Job], *, address: str | None, jobs_at_once: int | None,
+               cpus_per_log: float, retries: int, done: Callable[[dict[str, Any]], None],
+               show: Callable[[int, int], None], notes: list[str]) -> None:
+    """Run ``jobs`` as Ray tasks; ``done`` gets each status, ``show`` (running, queued)."""
+    try:
+        import ray
+    except ImportError:
+        raise UsageError("--engine ray needs Ray: pip install 'camlog[ray]'") from None
+    started_here = not ray.is_initialized()
+    if started_here:
+        _connect(ray, address, (jobs_at_once or 2) * cpus_per_log)
+    try:
+        nodes = _check_nodes(ray, address or "this machine", jobs)
+        if len(nodes) > 1:
+            local = [str(j.out_dir) for j in jobs[:1] if not storage.is_remote(j.out_dir)]
+            local += [str(j.log) for j in jobs if not storage.is_remote(j.log)][:1]
+            if local:
+                notes.append(f"{len(nodes)} nodes share the work but {local[0]} is a local "
+                             "path: every node must see it at that path (a shared "
+                             "filesystem), or use a URI such as s3://bucket/...")
+        task = ray.remote(run_job).options(num_cpus=cpus_per_log, max_retries=retries,
+                                           retry_exceptions=False)
+        _run(ray, task, jobs, limit=jobs_at_once or len(jobs), cpus_per_log=cpus_per_log,
+             retries=retries, done=done, show=show)
+    finally:
+        if started_here:
+            ray.shutdown()
+
+
+def _connect(ray: Any, address: str | None, cpus: float) -> None:
+    if address is None:
+        _start_local(ray, cpus)
+        return
+    if address != "auto":
+        _require_reachable(address)
+    try:
+        ray.init(address=address, log_to_driver=False, configure_logging=False)
+    except Exception as err:  # Ray raises ConnectionError, RuntimeError, ValueError, …
+        raise ClusterError(f"cannot connect to the Ray cluster at {address}: "
+                          f"{_one_line(err)}") from None
+
+
+def _start_local(ray: Any, cpus: float) -> None:
+    """A Ray instance for this batch only, its servers bound to 127.0.0.1.
+
+    Ray binds to the loopback address only in its single-machine mode, which it keys on
+    a module constant (``RAY_ENABLE_WINDOWS_OR_OSX_CLUSTER=0`` before Ray is imported):
+    the constant is switched for the start and restored.
+    """
+    from ray._private import ray_constants  # no public switch for this
+
+    saved = ray_constants.ENABLE_RAY_CLUSTER
+    ray_constants.ENABLE_RAY_CLUSTER = False
+    try:
+        ray.init(num_cpus=max(1, round(cpus)), include_dashboard=False, log_to_driver=False,
+                 configure_logging=False, _node_ip_address="127.0.0.1")
+    finally:
+        ray_constants.ENABLE_RAY_CLUSTER = saved
+
+
+def _require_reachable(address: str) -> None:
+    host, _, port = address.removeprefix("ray://").rpartition(":")
+    if not host or not port.isdigit():
+        raise UsageError(f"--address {address!r}: give HOST:PORT of the cluster's head or "
+                          "'auto'")
+    try:
+        with socket.create_connection((host.strip("[]"), int(port)), CONNECT_TIMEOUT_S):
+            pass
+    except OSError as err:
+        raise ClusterError(f"cannot reach the Ray cluster at {address}: "
+                          f"{err.strerror or err}") from None
+
+
+def _needed_filesystems(jobs: Iterable[Job]) -> list[str]:
+    return sorted({storage.scheme(loc) for job in jobs for loc in (job.log, job.out_dir)
+                   if storage.is_remote(loc)})
+
+
+def _check_nodes(ray: Any, where: str, jobs: list[Job]) -> list[str]:
+    """Ask every live node to import camlog and the needed filesystems; their ids."""
+    from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
+
+    from replay._version import VERSION
+
+    schemes = _needed_filesystems(jobs)
+
+    def probe(schemes: list[str]) -> str:  # pickled by value: runs without camlog
+        import importlib
+
+        try:
+            version = importlib.import_module("replay._version").VERSION
+            importlib.import_module("camlog.batch.jobs")
+            if schemes:
+                fsspec = importlib.import_module("fsspec")
+                for name in schemes:
+                    fsspec.get_filesystem_class(name)
+        except Exception as err:
+            return f"error: {type(err).__name__}: {err}"
+        return str(version)
+
+    remote = ray.remote(num_cpus=0, max_retries=0)(probe)
+    nodes = [n["NodeID"] for n in ray.nodes() if n.get("Alive")]
+    refs = {remote.options(scheduling_strategy=NodeAffinitySchedulingStrategy(
+        node_id, soft=False)).remote(schemes): node_id for node_id in nodes}
+    ready, late = ray.wait(list(refs), num_returns=len(refs), timeout=PROBE_TIMEOUT_S)
+    if late:
+        raise ClusterError(f"the Ray cluster at {where}: node {refs[late[0]][:8]} did not "
+                          f"start a worker within {PROBE_TIMEOUT_S:.0f} s")
+    for ref in ready:
+        try:
+            answer = str(ray.get(ref))
+        except Exception as err:
+            answer = f"error: {_one_line(err)}"
+        node = refs[ref][:8]
+        if answer.startswith("error: "):
+            raise ClusterError(
+                f"the Ray cluster at {where} cannot run camlog on node {node}: "
+                f"{_one_line(answer[7:])} (install camlog{'[cloud]' if schemes else ''} on "
+                "every node, or give the job a runtime environment: see the README)")
+        if answer != VERSION:
+            raise ClusterError(f"the Ray cluster at {where}: node {node} has camlog {answer}, "
+                              f"this machine {VERSION}")
+    return nodes
+
+
+def _run(ray: Any, task: Any, jobs: list[Job], *, limit: int, cpus_per_log: float,
+         retries: int, done: Callable[[dict[str, Any]], None],
+         show: Callable[[int, int], None]) -> None:
+    waiting = list(reversed(jobs))
+    in_flight: dict[Any, Job] = {}
+    last_count = 0.0
+    while waiting or in_flight:
+        while waiting and len(in_flight) < limit:
+            job = waiting.pop()
+            in_flight[task.remote(job)] = job
+        ready, _ = ray.wait(list(in_flight), num_returns=1, timeout=1.0)
+        for ref in ready:
+            job = in_flight.pop(ref)
+            try:
+                status = ray.get(ref)
+            except Exception as err:  # worker or node lost more often than retries allow
+                status = {"log": str(job.log), "out_dir": job.key, "status": "failed",
+                          "steps": [], "seconds": 0.0, "node": "?",
+                          "error": f"lost {retries + 1} times: {_one_line(err)}"}
+            done(status)
+        if time.monotonic() - last_count >= 1.0 or ready:
+            last_count = time.monotonic()
+            running = min(len(in_flight), _busy_slots(ray, cpus_per_log))
+            show(running, len(in_flight) - running + len(waiting))
+
+
+def _busy_slots(ray: Any, cpus_per_log: float) -> int:
+    """Logs the cluster's CPUs in use could hold: the running count across the cluster."""
+    try:
+        used = ray.cluster_resources().get("CPU", 0) - ray.available_resources().get("CPU", 0)
+    except Exception:  # a node going away mid-call
+        return 0
+    return int(used / cpus_per_log + 1e-6)
+
+
+def _one_line(err: BaseException | str) -> str:
+    """The message's first line, or a remote traceback's last (the exception itself)."""
+    lines = [line.strip() for line in str(err).splitlines() if line.strip()]
+    if not lines:
+        return type(err).__name__
+    return lines[-1] if any(line.startswith("File ") for line in lines) else lines[0]
