@@ -12,7 +12,7 @@ from __future__ import annotations
 import json
 import os
 import time
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -67,7 +67,7 @@ class BatchResult:
         return [s for s in self.statuses if s["status"] == "failed"]
 
 
-def run_batch(pipeline: Pipeline, logs: list[Location], out_dir: Location, *,
+def run_batch(pipeline: Pipeline, logs: Sequence[Location], out_dir: Location, *,
               jobs: int | None = None, engine: str = "process", progress: bool | None = None,
               address: str | None = None, cpus_per_log: float = 1.0,
               retries: int = 2) -> BatchResult:
@@ -90,7 +90,7 @@ def run_batch(pipeline: Pipeline, logs: list[Location], out_dir: Location, *,
     logs = [found for log in logs for found in storage.expand(str(log))] \
         if any(storage.is_remote(log) for log in logs) else logs
     if not logs:
-        raise UsageError("give at least one log (a URI pattern matched nothing)")
+        raise UsageError("give at least one log")
     if not storage.is_remote(out_dir):
         out_dir = storage.local_path(out_dir)
         if out_dir.exists() and not out_dir.is_dir():

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-from camlog.batch.pipeline import parse_pipeline
+from camlog.batch.pipeline import load_pipeline
 from camlog.batch.run import run_batch
 
 from .faults import (
@@ -17,29 +17,23 @@ from .faults import (
     kill_when,
     output_files,
     pool_workers,
-    record_logs,
     start_batch,
     wait_for,
 )
-from .test_run import PIPELINE
 
 
-@pytest.fixture(scope="module")
-def fault_logs(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
-    """Three short logs, and a pipeline file next to them."""
-    tmp = tmp_path_factory.mktemp("fault_logs")
-    (tmp / "pipe.toml").write_text(PIPELINE)
-    return record_logs(tmp, 3, 60)
+@pytest.fixture
+def fault_logs(short_logs: list[Path]) -> list[Path]:
+    """Three of the short logs."""
+    return short_logs[:3]
 
 
 def test_a_killed_worker_is_retried_and_outputs_are_complete(fault_logs: list[Path],
                                                              tmp_path: Path) -> None:
-    import tomllib
-
     pipeline_file = fault_logs[0].parent / "pipe.toml"
     reference = tmp_path / "reference"
-    clean = run_batch(parse_pipeline(tomllib.loads(PIPELINE), str(pipeline_file)), fault_logs,
-                      reference, jobs=2, progress=False)
+    clean = run_batch(load_pipeline(pipeline_file), fault_logs, reference, jobs=2,
+                      progress=False)
     assert not clean.failed
     out = tmp_path / "out"
     batch = start_batch([str(pipeline_file), *map(str, fault_logs), "-o", str(out), "-j", "2"])

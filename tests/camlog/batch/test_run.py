@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import socket
 from pathlib import Path
 
 import pytest
@@ -120,3 +121,17 @@ def test_bad_batch_arguments_are_one_line(
     assert main(["batch", str(pipeline), str(logs[0]), "-o", str(tmp_path / "o"),
                  "-j", "0"]) == 1
     assert "-j must be at least 1" in capsys.readouterr().err
+
+
+def test_an_unreachable_cluster_is_one_line(
+    logs: list[Path], pipeline: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    with socket.socket() as s:  # a port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    assert main(["batch", str(pipeline), str(logs[0]), "-o", str(tmp_path / "o"), "--engine",
+                 "ray", "--address", f"127.0.0.1:{port}", "--no-progress"]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert err[0].startswith("camlog batch: error: cannot reach the Ray cluster at "
+                             f"127.0.0.1:{port}")

@@ -1,0 +1,56 @@
+"""Ray engine against the process engine: the same 6 logs at -j 2, in one run.
+
+Pipeline and logs as batch_speedup (resync -> stereo calibration -> edges, six
+stereo_unsynced recordings). The Ray run starts its own local instance, and that start-up
+is part of its wall time, as it is of a user's. Reports the overhead ratio (Ray wall /
+process wall; target <= 1.25) and each engine's time to its first finished log.
+
+    python -m benchmarks.batch_ray [--logs N] [--frames F]
+"""
+
+from __future__ import annotations
+
+import argparse
+import tempfile
+from pathlib import Path
+
+from camlog.batch.pipeline import parse_pipeline
+from camlog.batch.run import BatchResult, run_batch
+from recorder.record import record
+from recorder.scenario import load_scenario
+
+from .batch_speedup import PIPELINE
+from .report import emit
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--logs", type=int, default=6)
+    parser.add_argument("--frames", type=int, default=450, help="frames per camera per log")
+    args = parser.parse_args()
+    pipeline = parse_pipeline(PIPELINE, "batch_ray")
+    with tempfile.TemporaryDirectory() as tmp_name:
+        tmp = Path(tmp_name)
+        logs: list[str | Path] = []
+        for seed in range(args.logs):
+            path = tmp / f"unsynced_{seed}.mcap"
+            record(load_scenario("stereo_unsynced", {"frames": args.frames, "seed": seed}), path,
+                   progress=False)
+            logs.append(path)
+        runs: dict[str, BatchResult] = {}
+        for engine in ("process", "ray"):
+            runs[engine] = run_batch(pipeline, logs, tmp / f"out_{engine}", jobs=2,
+                                     engine=engine, progress=False)
+            assert not runs[engine].failed, runs[engine].failed
+    process, ray = runs["process"], runs["ray"]
+    emit(f"batch {args.logs} logs -j 2, Ray vs processes", baseline="processes",
+         baseline_value=process.wall_s, measured="ray", measured_value=ray.wall_s, unit="s",
+         ratio=ray.wall_s / process.wall_s, target="<= 1.25 (overhead)")
+    print(f"batch of {args.logs} logs ({args.frames} frames per camera) at -j 2: processes "
+          f"{process.wall_s:.1f} s (first log after {process.first_result_s:.1f} s), Ray "
+          f"{ray.wall_s:.1f} s with its start-up (first log after {ray.first_result_s:.1f} s); "
+          f"overhead {ray.wall_s / process.wall_s:.2f}x")
+
+
+if __name__ == "__main__":
+    main()
