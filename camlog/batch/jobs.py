@@ -29,7 +29,6 @@ from processors.errors import ProcessorError
 from recorder.errors import RecorderError
 from replay import storage
 from replay.errors import ReplayError
-from replay.formats.mcap import MAGIC as MCAP_MAGIC
 from replay.storage import Location
 
 from ..errors import CamlogError, InputError
@@ -156,6 +155,8 @@ def _run_steps(job: Job, status: dict[str, Any], scratch: Path) -> None:
 def _stage_input(log: Location, scratch: Path, status: dict[str, Any]) -> Location:
     """The log itself, unless it is remote and not one MCAP file: then a local copy (made
     once here rather than by every step that reads it)."""
+    from replay.formats.mcap import MAGIC as MCAP_MAGIC
+
     if not storage.is_remote(log):
         return log
     uri = str(log)
