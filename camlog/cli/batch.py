@@ -28,8 +28,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="output folder or URI (default batch_out)")
     p.add_argument("--engine", choices=ENGINES, default="process",
                    help="local processes (default) or Ray (pip install 'camlog[ray]')")
-    p.add_argument("--address", default=os.environ.get("RAY_ADDRESS") or None,
-                   metavar="HOST:PORT",
+    p.add_argument("--address", metavar="HOST:PORT",
                    help="an existing Ray cluster, or 'auto' (default: RAY_ADDRESS; without "
                         "either, --engine ray starts a local instance)")
     p.add_argument("--cpus-per-log", type=float, default=1.0, metavar="N",
@@ -44,11 +43,16 @@ def run(args: argparse.Namespace) -> int:
     """Run the batch and print its summary table."""
     from pathlib import Path
 
+    from processors.errors import ConfigError
+
     from ..batch.pipeline import load_pipeline
     from ..batch.run import run_batch, summary_table
 
     pipeline = load_pipeline(Path(args.pipeline))
-    address = args.address if args.engine == "ray" else None
+    if args.address and args.engine != "ray":
+        raise ConfigError("--address needs --engine ray")
+    address = (args.address or os.environ.get("RAY_ADDRESS") or None) \
+        if args.engine == "ray" else None
     result = run_batch(pipeline, list(args.logs), args.output, jobs=args.jobs,
                        engine=args.engine, progress=False if args.no_progress else None,
                        address=address, cpus_per_log=args.cpus_per_log, retries=args.retries)

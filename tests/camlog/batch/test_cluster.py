@@ -128,6 +128,7 @@ def cluster_logs(short_logs: list[Path]) -> list[Path]:
 def test_a_cluster_without_a_needed_filesystem_is_one_line(
     cluster: Cluster, cluster_logs: list[Path], tmp_path: Path
 ) -> None:
+    # gs:// needs gcsfs, which camlog does not install: every node lacks it
     batch = start_batch([str(cluster_logs[0].parent / "pipe.toml"), "gs://bucket/run.mcap",
                          "-o", str(tmp_path / "o"), "--engine", "ray", "--address",
                          cluster.address], env=cluster.env)
@@ -147,8 +148,9 @@ def test_a_node_killed_mid_batch_changes_no_output(
                          progress=False).failed
     out = tmp_path / "out"
     started = time.monotonic()
+    # the cluster named as users do, through RAY_ADDRESS
     batch = start_batch([str(pipeline_file), *map(str, cluster_logs), "-o", str(out),
-                         "--engine", "ray", "--address", cluster.address], env=cluster.env)
+                         "--engine", "ray"], env=cluster.env | {"RAY_ADDRESS": cluster.address})
 
     def log_running_on_second_node() -> bool:
         return any(cmdline(pid).startswith("ray::run_job") for pid in in_session(cluster.worker))

@@ -77,12 +77,15 @@ def test_batch_survives_a_corrupt_log_and_reports_it(
 
 
 def test_rerun_skips_completed_logs_and_redoes_changed_ones(
-    logs: list[Path], pipeline: Path, tmp_path: Path
+    logs: list[Path], pipeline: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     good = logs[:2]
     out = tmp_path / "out"
-    first = run_batch(load_pipeline(pipeline), good, out, jobs=1, progress=False)
+    first = run_batch(load_pipeline(pipeline), good, out, jobs=1, progress=True)
     assert [s["status"] for s in first.statuses] == ["ok", "ok"]
+    bar = capsys.readouterr().err
+    assert "running 1, queued 1, failed 0" in bar  # live counts beside the bar
+    assert all(s["node"] and s["seconds"] > 0 for s in first.statuses)
     second = run_batch(load_pipeline(pipeline), good, out, jobs=1, progress=False)
     assert [s["status"] for s in second.statuses] == ["skipped", "skipped"]
     # a changed pipeline redoes everything
