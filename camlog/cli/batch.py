@@ -43,14 +43,13 @@ def run(args: argparse.Namespace) -> int:
     """Run the batch and print its summary table."""
     from pathlib import Path
 
-    from processors.errors import ConfigError
-
     from ..batch.pipeline import load_pipeline
     from ..batch.run import run_batch, summary_table
+    from ..errors import UsageError
 
     pipeline = load_pipeline(Path(args.pipeline))
     if args.address and args.engine != "ray":
-        raise ConfigError("--address needs --engine ray")
+        raise UsageError("--address needs --engine ray")
     address = (args.address or os.environ.get("RAY_ADDRESS") or None) \
         if args.engine == "ray" else None
     result = run_batch(pipeline, list(args.logs), args.output, jobs=args.jobs,
