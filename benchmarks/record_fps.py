@@ -6,6 +6,9 @@ from both) says how much warping, noise, serialization, compression and writing 
 rendering down (target >= 0.9). End-to-end recording fps, setup included, is printed too.
 
     python -m benchmarks.record_fps [SCENARIO] [--frames N] [--repeats R]
+
+SCENARIO (default mono_checkerboard) shapes the ideal and distorted rows; the fisheye row
+records mono_fisheye (a multi-view render and its warp).
 """
 
 from __future__ import annotations
@@ -17,7 +20,7 @@ from pathlib import Path
 
 from recorder.clock import schedule
 from recorder.motion import plan_trajectory
-from recorder.optics import plan_optics
+from recorder.multiview import plan_camera_optics
 from recorder.record import CLOCK_STREAM, MOTION_STREAM, record, rng_for
 from recorder.render import SceneRenderer
 from recorder.scenario import Scenario, load_scenario
@@ -27,7 +30,7 @@ from .report import emit
 
 def bare_render_fps(scenario: Scenario) -> float:
     """Frames per second of rendering alone, over the recording's own shots."""
-    optics = [plan_optics(c.model, c.supersample) for c in scenario.cameras]
+    optics = [plan_camera_optics(c.model, c.supersample) for c in scenario.cameras]
     duration_s = max(n / c.rate_hz + c.phase_s
                      for n, c in zip(scenario.frame_counts, scenario.cameras, strict=True))
     trajectories = [
@@ -79,15 +82,17 @@ def main() -> None:
     parser.add_argument("--frames", type=int, default=600)
     parser.add_argument("--repeats", type=int, default=2)
     args = parser.parse_args()
-    rows: list[tuple[str, dict[str, object]]] = [
-        ("ideal camera", {}),
-        ("plumb_bob k1=-0.2, supersample 2", {"distortion": [-0.2, 0.05, 0.0, 0.0, 0.0]}),
+    rows: list[tuple[str, str, dict[str, object]]] = [
+        ("ideal camera", args.scenario, {}),
+        ("plumb_bob k1=-0.2, supersample 2", args.scenario,
+         {"distortion": [-0.2, 0.05, 0.0, 0.0, 0.0]}),
+        ("fisheye 176 deg, multi-view warp", "mono_fisheye", {}),
     ]
     print(f"{'scenario':18} {'case':34} {'bare fps':>9} {'record fps':>11} {'ratio':>6} "
           f"{'end-to-end':>11} {'MB':>6}")
-    for label, overrides in rows:
-        r = run(args.scenario, args.frames, args.repeats, overrides)
-        print(f"{args.scenario:18} {label:34} {r['bare_fps']:9.1f} {r['record_fps']:11.1f} "
+    for label, scenario, overrides in rows:
+        r = run(scenario, args.frames, args.repeats, overrides)
+        print(f"{scenario:18} {label:34} {r['bare_fps']:9.1f} {r['record_fps']:11.1f} "
               f"{r['ratio']:6.2f} {r['end_to_end_fps']:11.1f} {r['mb']:6.1f}")
         emit(f"record {label}", baseline="bare render", baseline_value=r["bare_fps"],
              measured="record", measured_value=r["record_fps"], unit="fps", ratio=r["ratio"],

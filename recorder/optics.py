@@ -23,10 +23,25 @@ import cv2
 import numpy as np
 
 from replay.camera import CameraModel
+from replay.messages import F64
 
 from .errors import ScenarioError
 
 MAX_RENDER_SIDE = 4096
+
+
+@dataclass(frozen=True)
+class View:
+    """One ideal pinhole render from a camera's optical centre (OpenCV conventions: pixel
+    centres at integer coordinates), and where it sits in the camera's atlas of renders."""
+
+    camera_from_view: F64  # (3, 3) rotation of the view's optical frame
+    width: int
+    height: int
+    focal_px: float
+    cx: float
+    cy: float
+    atlas_row: int  # first row of this view in the atlas (views stacked top to bottom)
 
 
 @dataclass(frozen=True)
@@ -43,6 +58,18 @@ class Optics:
     map_x: np.ndarray | None
     map_y: np.ndarray | None
     output_size: tuple[int, int]  # (W, H)
+
+    @property
+    def views(self) -> tuple[View, ...]:
+        """The one render: the camera's own view, centred, square pixels."""
+        focal = (self.render_height / 2) / math.tan(math.radians(self.fovy_deg) / 2)
+        return (View(np.eye(3), self.render_width, self.render_height, focal,
+                     (self.render_width - 1) / 2, (self.render_height - 1) / 2, 0),)
+
+    @property
+    def render_sizes(self) -> list[tuple[int, int]]:
+        """(W, H) of the render."""
+        return [(self.render_width, self.render_height)]
 
     @property
     def box_offset_px(self) -> float:

@@ -22,14 +22,14 @@ from replay import Image, PoseStamped, open_writer
 from replay._version import VERSION
 from replay.formats import LogWriter
 from replay.geometry import invert, quat_xyzw_from_rotation
+from replay.records import RenderView, ScenarioCamera, ScenarioTarget
 from replay.records import Scenario as ScenarioRecord
-from replay.records import ScenarioCamera, ScenarioTarget
 from replay.topics import SCENARIO, CameraTopics
 
 from .clock import Shot, schedule
 from .errors import RecorderError
 from .motion import Trajectory, plan_trajectory
-from .optics import Optics, plan_optics
+from .multiview import CameraOptics, MultiViewOptics, plan_camera_optics
 from .render import SceneRenderer, gl_backend
 from .scenario import Scenario
 from .scene import board_corners_in_target
@@ -65,8 +65,18 @@ def rng_for(scenario: Scenario, stream: int, index: int) -> np.random.Generator:
     return np.random.default_rng([scenario.seed, stream, index])
 
 
+def _views_record(optics: CameraOptics) -> dict[str, Any]:
+    """The pinhole views a multi-view camera was rendered from (nothing for one view)."""
+    if not isinstance(optics, MultiViewOptics):
+        return {}
+    views = [RenderView(size=(v.width, v.height), focal_px=v.focal_px,
+                        principal_px=(v.cx, v.cy), camera_from_view=v.camera_from_view)
+             for v in optics.views]
+    return {"render_views": views, "samples_per_side": optics.samples_per_side}
+
+
 def scenario_record(
-    scenario: Scenario, optics: list[Optics], dropped: dict[int, np.ndarray]
+    scenario: Scenario, optics: list[CameraOptics], dropped: dict[int, np.ndarray]
 ) -> ScenarioRecord:
     """Everything that shaped the recording, stored in the log (``/camlog/scenario``)."""
     import mujoco
@@ -77,8 +87,8 @@ def scenario_record(
             width=camera.model.width, height=camera.model.height, k=camera.model.k,
             distortion_model=camera.model.distortion_model, d=camera.model.d,
             world_from_camera=camera.world_from_camera,
-            render_size=(optics[index].render_width, optics[index].render_height),
-            supersample=optics[index].supersample, dropped_frames=dropped[index].tolist())
+            render_size=optics[index].render_sizes[0], supersample=optics[index].supersample,
+            dropped_frames=dropped[index].tolist(), **_views_record(optics[index]))
         for index, camera in enumerate(scenario.cameras)
     ]
     targets = [
@@ -110,7 +120,7 @@ class _Pipeline:
     thread, since some storages (SQLite) refuse to be used from another."""
 
     def __init__(
-        self, scenario: Scenario, optics: list[Optics], open_log: Callable[[], LogWriter]
+        self, scenario: Scenario, optics: list[CameraOptics], open_log: Callable[[], LogWriter]
     ) -> None:
         self.scenario = scenario
         self.optics = optics
@@ -211,7 +221,7 @@ def record(
     """Render ``scenario`` and write its log to ``output`` (atomically)."""
     output = Path(output)
     started = time.perf_counter()
-    optics = [plan_optics(c.model, c.supersample) for c in scenario.cameras]
+    optics = [plan_camera_optics(c.model, c.supersample) for c in scenario.cameras]
     frame_counts = scenario.frame_counts
     duration_s = max(n / c.rate_hz + c.phase_s
                      for n, c in zip(frame_counts, scenario.cameras, strict=True))

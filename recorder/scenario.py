@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from replay.camera import DISTORTION_MODELS, CameraModel, focal_from_hfov
+from replay.camera import CAMERA_MODELS, FISHEYE_MODELS, CameraModel, focal_from_hfov
 from replay.geometry import frame_from_axes, rotation_from_rpy
 from replay.messages import F64, IMAGE_ENCODINGS
 
@@ -283,19 +283,18 @@ def _parse_camera(
     namespace = f.text("namespace", f"/{name}")
     if not namespace.startswith("/"):
         raise f._fail("namespace", f"must start with '/', got {namespace!r}")
-    width = f.integer("width", 640)
-    height = f.integer("height", 480)
-    hfov = f.number("hfov_rad", 0.6, low=1e-3, high=3.0)
-    fx0 = focal_from_hfov(width, hfov)
+    width, height = f.integer("width", 640), f.integer("height", 480)
+    dist_model = f.text("distortion_model", "plumb_bob", choices=tuple(CAMERA_MODELS))
+    fisheye = dist_model in FISHEYE_MODELS  # its field of view may pass 180 degrees
+    hfov = f.number("hfov_rad", 0.6, low=1e-3, high=2 * math.pi - 0.1 if fisheye else 3.0)
+    fx0 = (width / 2) / (hfov / 2) if fisheye else focal_from_hfov(width, hfov)
     fx = f.number("fx", fx0, positive=True)
     fy = f.number("fy", fx, positive=True)
-    cx = f.number("cx", (width - 1) / 2)
-    cy = f.number("cy", (height - 1) / 2)
-    dist_model = f.text("distortion_model", "plumb_bob", choices=tuple(DISTORTION_MODELS))
-    distortion = f.vector("distortion", None, [0.0] * DISTORTION_MODELS[dist_model])
-    if distortion.size > DISTORTION_MODELS[dist_model]:
-        raise f._fail("distortion", f"{dist_model} takes at most "
-                      f"{DISTORTION_MODELS[dist_model]} coefficients, got {distortion.size}")
+    cx, cy = f.number("cx", (width - 1) / 2), f.number("cy", (height - 1) / 2)
+    count = CAMERA_MODELS[dist_model]
+    distortion = f.vector("distortion", None, [0.0] * count)
+    if distortion.size > count:
+        raise f._fail("distortion", f"{dist_model} takes at most {count} coefficients")
     k = np.array([[fx, 0, cx], [0, fy, cy], [0, 0, 1.0]])
     model = CameraModel(width, height, k, dist_model, distortion)
     if "relative_to" in table:

@@ -15,10 +15,16 @@ import numpy as np
 from replay.geometry import OPTICAL_FROM_MJCAMERA, quat_xyzw_from_rotation
 from replay.messages import F64
 
+from .optics import View
 from .scenario import Scenario, TargetSpec
 
 BLACK_THICKNESS_M = 2e-5
 PLATE_THICKNESS_M = 3e-3
+#: MuJoCo's headlight shines along the rendering camera's view; a camera rendered as several
+#: views gets the same light as a fixed directional light along its optical axis instead
+#: (``camera_light_name``), so that its views agree where they meet
+HEADLIGHT_AMBIENT = (0.45, 0.45, 0.45)
+HEADLIGHT_DIFFUSE = (0.5, 0.5, 0.5)
 
 
 def _vec(values: F64 | list[float] | tuple[float, ...]) -> str:
@@ -68,8 +74,37 @@ def _checkerboard_geoms(target: TargetSpec) -> list[str]:
     return geoms
 
 
-def build_mjcf(scenario: Scenario, *, offscreen_size: tuple[int, int]) -> str:
-    """MJCF text of the scenario's scene; ``offscreen_size`` is the largest render (W, H)."""
+def view_camera_name(camera_name: str, index: int) -> str:
+    """MJCF name of one of a camera's extra pinhole views (cube-map faces)."""
+    return f"{camera_name}/view{index}"
+
+
+def camera_light_name(camera_name: str) -> str:
+    """MJCF name of the light that stands in for the headlight of a multi-view camera."""
+    return f"{camera_name}/headlight"
+
+
+def _view_camera(name: str, world_from_camera: F64, view: View) -> str:
+    """A MuJoCo camera with the view's pose and intrinsics (MuJoCo's principal point is the
+    offset of the image centre from OpenCV's, in pixels)."""
+    world_from_mjcam = world_from_camera[:3, :3] @ view.camera_from_view @ OPTICAL_FROM_MJCAMERA
+    xyaxes = np.concatenate([world_from_mjcam[:, 0], world_from_mjcam[:, 1]])
+    w, h = view.width, view.height
+    principal = ((w - 1) / 2 - view.cx, (h - 1) / 2 - view.cy)
+    return (
+        f'  <camera name={quoteattr(name)} pos="{_vec(world_from_camera[:3, 3])}" '
+        f'xyaxes="{_vec(xyaxes)}" resolution="{w} {h}" sensorsize="{_vec((w * 1e-6, h * 1e-6))}" '
+        f'focalpixel="{_vec((view.focal_px, view.focal_px))}" '
+        f'principalpixel="{_vec(principal)}"/>'
+    )
+
+
+def build_mjcf(
+    scenario: Scenario, *, offscreen_size: tuple[int, int],
+    views: dict[str, tuple[View, ...]] | None = None,
+) -> str:
+    """MJCF text of the scenario's scene; ``offscreen_size`` is the largest render (W, H);
+    ``views`` adds each named camera's pinhole views (``view_camera_name``)."""
     width, height = offscreen_size
     parts = [
         f'<mujoco model={quoteattr("camlog_" + scenario.name)}>',
@@ -79,7 +114,8 @@ def build_mjcf(scenario: Scenario, *, offscreen_size: tuple[int, int]) -> str:
         "<visual>",
         f'  <global offwidth="{width}" offheight="{height}"/>',
         '  <quality offsamples="8"/>',
-        '  <headlight ambient="0.45 0.45 0.45" diffuse="0.5 0.5 0.5" specular="0 0 0"/>',
+        f'  <headlight ambient="{_vec(HEADLIGHT_AMBIENT)}" diffuse="{_vec(HEADLIGHT_DIFFUSE)}" '
+        'specular="0 0 0"/>',
         '  <map znear="0.005" zfar="20"/>',
         "</visual>",
         "<asset>",
@@ -107,6 +143,19 @@ def build_mjcf(scenario: Scenario, *, offscreen_size: tuple[int, int]) -> str:
             f'  <camera name={quoteattr(camera.name)} '
             f'pos="{_vec(camera.world_from_camera[:3, 3])}" xyaxes="{_vec(xyaxes)}" fovy="30"/>'
         )
+        camera_views = (views or {}).get(camera.name, ())
+        if camera_views:
+            parts.append(
+                f'  <light name={quoteattr(camera_light_name(camera.name))} directional="false" '
+                f'pos="{_vec(camera.world_from_camera[:3, 3])}" '
+                f'dir="{_vec(camera.world_from_camera[:3, 2])}" cutoff="180" exponent="0" '
+                'attenuation="1 0 0" '
+                f'ambient="{_vec(HEADLIGHT_AMBIENT)}" diffuse="{_vec(HEADLIGHT_DIFFUSE)}" '
+                'specular="0 0 0" castshadow="false" active="false"/>'
+            )
+        for index, view in enumerate(camera_views):
+            parts.append(_view_camera(view_camera_name(camera.name, index),
+                                      camera.world_from_camera, view))
     for target in scenario.targets:
         pose = target.motion.world_from_target
         quat = quat_xyzw_from_rotation(pose[:3, :3])

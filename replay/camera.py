@@ -1,7 +1,13 @@
-"""Pinhole camera with plumb_bob / rational_polynomial distortion, OpenCV conventions.
+"""Camera models in OpenCV conventions: pinhole with plumb_bob / rational_polynomial
+distortion, and the equidistant fisheye (OpenCV's ``cv2.fisheye``, Kannala-Brandt).
 
 Optical frame: x right, y down, z forward. Pixel centres sit at integer coordinates, so an
 ideal W x H camera has its principal point at ((W - 1) / 2, (H - 1) / 2).
+
+The equidistant model maps a ray at angle ``theta`` from the optical axis to the distorted
+radius ``theta_d = theta (1 + k1 theta^2 + k2 theta^4 + k3 theta^6 + k4 theta^8)`` along the
+ray's direction in the image plane, then applies ``K``; it holds beyond 90 degrees, where
+pinhole coordinates ``X / Z`` do not exist.
 """
 
 from __future__ import annotations
@@ -16,6 +22,11 @@ from .messages import F64, CameraInfo
 
 #: distortion model -> number of coefficients OpenCV uses for it
 DISTORTION_MODELS = {"plumb_bob": 5, "rational_polynomial": 8}
+#: fisheye model -> number of coefficients (``cv2.fisheye``'s k1..k4)
+FISHEYE_MODELS = {"equidistant": 4}
+#: every model :class:`CameraModel` understands (ROS ``distortion_model`` names)
+CAMERA_MODELS = DISTORTION_MODELS | FISHEYE_MODELS
+_FISHEYE_NEWTON_STEPS = 30
 _UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-14)
 
 
@@ -35,12 +46,12 @@ class CameraModel:
     d: F64 = field(default_factory=lambda: np.zeros(5))
 
     def __post_init__(self) -> None:
-        if self.distortion_model not in DISTORTION_MODELS:
+        if self.distortion_model not in CAMERA_MODELS:
             raise ValueError(
                 f"unknown distortion model {self.distortion_model!r} "
-                f"(use {' or '.join(DISTORTION_MODELS)})"
+                f"(use {', '.join(CAMERA_MODELS)})"
             )
-        n = DISTORTION_MODELS[self.distortion_model]
+        n = CAMERA_MODELS[self.distortion_model]
         d = np.zeros(n)
         given = np.asarray(self.d, dtype=np.float64).reshape(-1)
         if given.size > n:
@@ -83,10 +94,16 @@ class CameraModel:
         return float(self.k[1, 2])
 
     @property
+    def is_fisheye(self) -> bool:
+        """True for the equidistant (``cv2.fisheye``) model."""
+        return self.distortion_model in FISHEYE_MODELS
+
+    @property
     def is_ideal(self) -> bool:
-        """True for a distortion-free camera with square pixels and centred principal point."""
+        """True for a distortion-free pinhole with square pixels and centred principal point."""
         return (
-            not np.any(self.d)
+            not self.is_fisheye
+            and not np.any(self.d)
             and self.fx == self.fy
             and self.k[0, 1] == 0
             and self.cx == (self.width - 1) / 2
@@ -107,10 +124,48 @@ class CameraModel:
         )
 
     def project(self, points_in_camera: F64) -> F64:
-        """Pixels ``(N, 2)`` of points ``(N, 3)`` in the optical frame (z > 0)."""
+        """Pixels ``(N, 2)`` of points ``(N, 3)`` in the optical frame (z > 0; a fisheye
+        also projects points beside and behind it, at angles up to 180 degrees)."""
         pts = np.asarray(points_in_camera, dtype=np.float64).reshape(-1, 3)
+        if self.is_fisheye:
+            return self._project_fisheye(pts)
         uv, _ = cv2.projectPoints(pts, np.zeros(3), np.zeros(3), self.k, self.d)
         return np.asarray(uv, dtype=np.float64).reshape(-1, 2)
+
+    def _project_fisheye(self, pts: F64) -> F64:
+        # cv2.fisheye.projectPoints, with theta = atan2(r, z) so that it holds past 90 degrees
+        r = np.hypot(pts[:, 0], pts[:, 1])
+        theta = np.arctan2(r, pts[:, 2])
+        k1, k2, k3, k4 = self.d
+        t2 = theta * theta
+        theta_d = theta * (1 + t2 * (k1 + t2 * (k2 + t2 * (k3 + t2 * k4))))
+        scale = np.divide(theta_d, r, out=np.zeros_like(r), where=r > 0)
+        distorted = np.column_stack([pts[:, 0] * scale, pts[:, 1] * scale, np.ones(len(pts))])
+        return np.asarray(distorted @ self.k[:2].T, dtype=np.float64)
+
+    def pixel_rays(self, uv: F64) -> F64:
+        """Unit rays ``(N, 3)`` in the optical frame of observed pixels ``(N, 2)``; exact
+        inverse of :meth:`project` where the model is invertible."""
+        uv = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
+        if not self.is_fisheye:
+            rays = np.column_stack([self.undistort_pixels(uv), np.ones(len(uv))])
+            return np.asarray(rays / np.linalg.norm(rays, axis=1, keepdims=True))
+        homogeneous = np.column_stack([uv, np.ones(len(uv))])
+        distorted = (homogeneous @ np.linalg.inv(self.k).T)[:, :2]
+        theta_d = np.hypot(distorted[:, 0], distorted[:, 1])
+        k1, k2, k3, k4 = self.d
+        theta = theta_d.copy()
+        for _ in range(_FISHEYE_NEWTON_STEPS):  # theta (1 + k1 t^2 + ...) = theta_d
+            t2 = theta * theta
+            value = theta * (1 + t2 * (k1 + t2 * (k2 + t2 * (k3 + t2 * k4)))) - theta_d
+            slope = 1 + t2 * (3 * k1 + t2 * (5 * k2 + t2 * (7 * k3 + t2 * 9 * k4)))
+            step = value / slope
+            theta = theta - step
+            if not np.any(np.abs(step) > 1e-15):
+                break
+        direction = np.divide(distorted, theta_d[:, None], out=np.zeros_like(distorted),
+                              where=theta_d[:, None] > 0)
+        return np.column_stack([direction * np.sin(theta)[:, None], np.cos(theta)])
 
     def distort_normalized(self, xy: F64) -> F64:
         """Pixels ``(N, 2)`` of ideal normalized coordinates ``(N, 2)`` (``x = X / Z``)."""
@@ -121,8 +176,15 @@ class CameraModel:
         """Ideal normalized coordinates ``(N, 2)`` of observed pixels ``(N, 2)``.
 
         Iterates OpenCV's fixed-point undistortion to convergence; the result re-projects to
-        ``uv`` within 1e-6 px for distortion that is invertible over the image.
+        ``uv`` within 1e-6 px for distortion that is invertible over the image. A fisheye's
+        pixels whose rays are 90 degrees or more from the axis have no such coordinates (NaN).
         """
+        if self.is_fisheye:
+            rays = self.pixel_rays(uv)
+            ahead = rays[:, 2:] > 0
+            xy = np.divide(rays[:, :2], rays[:, 2:], out=np.full((len(rays), 2), np.nan),
+                           where=ahead)
+            return np.asarray(xy, dtype=np.float64)
         uv = np.asarray(uv, dtype=np.float64).reshape(-1, 1, 2)
         if not np.any(self.d):
             xy = cv2.undistortPoints(uv, self.k, None)

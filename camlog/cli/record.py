@@ -7,6 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from recorder.scenario import DEFAULT_SCENARIO, builtin_names
+from replay.camera import CAMERA_MODELS
 from replay.formats import FORMATS, format_for_output
 
 
@@ -38,10 +39,10 @@ def _resolution(text: str) -> tuple[int, int]:
 
 def _distortion(text: str) -> tuple[str, list[float]]:
     model, _, coeffs = text.partition(":")
-    if model not in ("plumb_bob", "rational_polynomial") or not coeffs:
+    if model not in CAMERA_MODELS or not coeffs:
         raise argparse.ArgumentTypeError(
-            f"expected plumb_bob:k1,k2,p1,p2,k3 or rational_polynomial:k1,k2,p1,p2,k3,k4,k5,k6, "
-            f"got {text!r}"
+            f"expected plumb_bob:k1,k2,p1,p2,k3, rational_polynomial:k1,k2,p1,p2,k3,k4,k5,k6 or "
+            f"equidistant:k1,k2,k3,k4, got {text!r}"
         )
     return model, _floats(coeffs)
 
@@ -67,8 +68,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--intrinsics", type=_intrinsics, metavar="FX,FY,CX,CY",
                    help="pinhole intrinsics in pixels (overrides --hfov)")
     p.add_argument("--distortion", type=_distortion, metavar="MODEL:K1,K2,...",
-                   help="lens distortion, e.g. plumb_bob:-0.2,0.05,0,0,0 or "
-                        "rational_polynomial:k1,k2,p1,p2,k3,k4,k5,k6")
+                   help="lens distortion, e.g. plumb_bob:-0.2,0.05,0,0,0, "
+                        "rational_polynomial:k1,k2,p1,p2,k3,k4,k5,k6 or equidistant:k1,k2,k3,k4 "
+                        "(a fisheye, rendered as several views)")
     p.add_argument("--noise", type=float, metavar="SIGMA",
                    help="Gaussian sensor noise, standard deviation in 8-bit levels")
     p.add_argument("--supersample", type=int, choices=(1, 2, 3, 4),

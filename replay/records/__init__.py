@@ -17,7 +17,7 @@ from .calibration import (
     ViewResiduals,
 )
 from .resync import OffsetStats, ResyncStats
-from .scenario import Scenario, ScenarioCamera, ScenarioTarget
+from .scenario import RenderView, Scenario, ScenarioCamera, ScenarioTarget
 
 __all__ = [
     "BoardSummary",
@@ -31,6 +31,7 @@ __all__ = [
     "RangeProgress",
     "RejectedJointView",
     "RejectedView",
+    "RenderView",
     "ResyncStats",
     "Scenario",
     "ScenarioCamera",

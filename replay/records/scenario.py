@@ -13,11 +13,22 @@ from typing import Any
 
 import numpy as np
 
-from ..camera import CameraModel
+from ..camera import FISHEYE_MODELS, CameraModel
 from ..messages import F64
 from .base import OMIT_NONE, JsonRecord
 
-__all__ = ["Scenario", "ScenarioCamera", "ScenarioTarget"]
+__all__ = ["RenderView", "Scenario", "ScenarioCamera", "ScenarioTarget"]
+
+
+@dataclass(frozen=True)
+class RenderView:
+    """One pinhole view a wide camera was rendered from: its size (W, H), focal length and
+    principal point in pixels, and its rotation ``camera_from_view`` (3, 3)."""
+
+    size: tuple[int, int]
+    focal_px: float
+    principal_px: tuple[float, float]
+    camera_from_view: F64
 
 
 @dataclass(frozen=True)
@@ -37,6 +48,10 @@ class ScenarioCamera:
     render_size: tuple[int, int]
     supersample: int
     dropped_frames: list[int] = field(default_factory=list)
+    #: a camera rendered as several pinhole views (a fisheye): the views, and the samples
+    #: per output pixel side of its warp
+    render_views: list[RenderView] | None = field(default=None, metadata=OMIT_NONE)
+    samples_per_side: int | None = field(default=None, metadata=OMIT_NONE)
 
     def model(self) -> CameraModel:
         """The camera's true intrinsic model."""
@@ -44,7 +59,8 @@ class ScenarioCamera:
 
     def parameters(self) -> dict[str, float]:
         """True fx, fy, cx, cy and distortion coefficients by OpenCV name (k1, k2, p1, ...)."""
-        names = ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6")
+        names = (("k1", "k2", "k3", "k4") if self.distortion_model in FISHEYE_MODELS
+                 else ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"))
         values = {"fx": float(self.k[0, 0]), "fy": float(self.k[1, 1]),
                   "cx": float(self.k[0, 2]), "cy": float(self.k[1, 2])}
         coefficients = [*np.asarray(self.d, dtype=np.float64).reshape(-1).tolist(), *[0.0] * 8]

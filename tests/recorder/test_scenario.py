@@ -19,12 +19,16 @@ BUILTINS = sorted(p.stem for p in SCENARIO_DIR.glob("*.toml"))
 
 
 def test_builtins_are_the_shipped_specs() -> None:
-    assert BUILTINS == ["mono_checkerboard", "red_block", "stereo_checkerboard",
-                        "stereo_unsynced"]
+    assert BUILTINS == ["mono_checkerboard", "mono_fisheye", "red_block",
+                        "stereo_checkerboard", "stereo_unsynced"]
     assert builtin_names() == BUILTINS
 
 
-@pytest.mark.parametrize("name", BUILTINS)
+#: the scenarios of the chapter's camera; the others are calibration cases with their own lens
+CHAPTER = ["mono_checkerboard", "red_block", "stereo_checkerboard", "stereo_unsynced"]
+
+
+@pytest.mark.parametrize("name", CHAPTER)
 def test_builtin_cameras_are_the_chapter_camera(name: str) -> None:
     s = load_scenario(name)
     raw = tomllib.loads((SCENARIO_DIR / f"{name}.toml").read_text())
@@ -198,3 +202,23 @@ def test_bad_values_name_file_and_key(tmp_path: Path, case: str) -> None:
 def test_bad_overrides_are_spec_errors(overrides: dict[str, Any], key: str) -> None:
     with pytest.raises(ScenarioError, match=key):
         load_scenario("mono_checkerboard", overrides)
+
+
+def test_mono_fisheye_sees_more_than_150_degrees_across() -> None:
+    (camera,) = load_scenario("mono_fisheye").cameras
+    model = camera.model
+    assert model.is_fisheye and model.distortion_model == "equidistant"
+    assert model.d.size == 4 and np.any(model.d)
+    left_right = model.pixel_rays(np.array([[0.0, model.cy], [model.width - 1.0, model.cy]]))
+    assert np.degrees(np.arccos(left_right[:, 2])).sum() >= 150
+    np.testing.assert_allclose(camera.world_from_camera[:3, 2], [0, 0, -1], atol=1e-12)
+
+
+def test_fisheye_field_of_view_may_pass_180_degrees() -> None:
+    """For a fisheye ``hfov_rad`` sets fx = (W / 2) / (hfov / 2); a pinhole stays below pi."""
+    fisheye = load_scenario("mono_checkerboard", {"distortion_model": "equidistant",
+                                                  "distortion": [0.0], "hfov_rad": 3.5})
+    (camera,) = fisheye.cameras
+    assert camera.model.fx == pytest.approx(320 / 1.75)
+    with pytest.raises(ScenarioError, match="hfov_rad"):
+        load_scenario("mono_checkerboard", {"hfov_rad": 3.5})

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from camlog.cli import build_parser, main
-from replay import Image, Text, open_reader
+from replay import CameraInfo, Image, Text, open_reader
 from tests.conftest import REPO_ROOT
 from tests.outputs import temp_outputs
 
@@ -106,6 +106,22 @@ def test_record_writes_the_output_and_no_partial(
         images = [r.message for r in reader.messages(["/simple_camera/image_raw"])]
     assert len(images) == 2
     assert all(isinstance(i, Image) and i.pixels.shape == (48, 64, 3) for i in images)
+
+
+def test_record_a_fisheye_from_the_command_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    output = tmp_path / "fisheye.mcap"
+    code, _, err = run(capsys, "record", "-o", str(output), *QUICK, "--hfov", "1.2",
+                       "--distortion", "equidistant:-0.04,0.0012,0,0")
+    assert (code, err) == (0, "")
+    with open_reader(output) as reader:
+        infos = [r.message for r in reader.messages(["/simple_camera/camera_info"])]
+    assert len(infos) == 2
+    info = infos[0]
+    assert isinstance(info, CameraInfo) and info.distortion_model == "equidistant"
+    np.testing.assert_allclose(info.d, [-0.04, 0.0012, 0, 0])
+    assert info.k[0, 0] == pytest.approx(32 / 0.6)  # equidistant: fx = (W / 2) / (hfov / 2)
 
 
 @pytest.mark.parametrize(("name", "fmt"), [("run.bag", "ros1"), ("run", "rosbag2")])

@@ -1,0 +1,86 @@
+"""CameraModel's equidistant fisheye against OpenCV's cv2.fisheye, and past 90 degrees."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+from replay.camera import CAMERA_MODELS, DISTORTION_MODELS, CameraModel
+from replay.messages import F64
+
+K = np.array([[214.7, 0.0, 322.3], [0.0, 214.9, 237.6], [0.0, 0.0, 1.0]])
+D = np.array([-0.0063, 0.0414, -0.0389, 0.0070])
+
+
+def fisheye(d: F64 = D) -> CameraModel:
+    return CameraModel(640, 480, K, "equidistant", d)
+
+
+def rays_at(theta_rad: F64, phi_rad: F64) -> F64:
+    """Unit rays (N, 3) at angle theta from the optical axis, azimuth phi."""
+    return np.column_stack([np.sin(theta_rad) * np.cos(phi_rad),
+                            np.sin(theta_rad) * np.sin(phi_rad), np.cos(theta_rad)])
+
+
+def test_equidistant_is_a_fisheye_model_with_four_coefficients() -> None:
+    assert CAMERA_MODELS["equidistant"] == 4
+    assert "equidistant" not in DISTORTION_MODELS  # pinhole models only
+    model = fisheye()
+    assert model.is_fisheye and not model.is_ideal
+    assert not CameraModel(640, 480, K).is_fisheye
+    with pytest.raises(ValueError, match="at most 4"):
+        CameraModel(640, 480, K, "equidistant", np.zeros(5))
+    info = model.camera_info(stamp_ns=1, frame_id="fisheye")
+    assert info.distortion_model == "equidistant"
+    np.testing.assert_array_equal(CameraModel.from_camera_info(info).d, D)
+
+
+def test_projection_is_cv2_fisheye() -> None:
+    rng = np.random.default_rng(0)
+    points = rng.normal(size=(500, 3))
+    points[:, 2] = np.abs(points[:, 2]) + 0.05  # in front: cv2.fisheye's domain
+    expected, _ = cv2.fisheye.projectPoints(points.reshape(-1, 1, 3), np.zeros(3), np.zeros(3),
+                                            K, D)
+    np.testing.assert_allclose(fisheye().project(points), expected.reshape(-1, 2), atol=1e-9)
+
+
+def test_undistort_pixels_is_cv2_fisheye() -> None:
+    model = fisheye()
+    theta = np.linspace(0.0, math.radians(80), 40)
+    pixels = model.project(rays_at(theta, np.linspace(0, 6, 40)))
+    expected = cv2.fisheye.undistortPoints(
+        pixels.reshape(-1, 1, 2), K, D,
+        criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-14))
+    np.testing.assert_allclose(model.undistort_pixels(pixels), expected.reshape(-1, 2),
+                               atol=1e-9)
+
+
+def test_rays_round_trip_beyond_90_degrees() -> None:
+    """A ray 110 degrees off axis (behind the image plane) has a pixel and comes back."""
+    model = fisheye()
+    theta = np.linspace(0.0, math.radians(115), 60)
+    phi = np.linspace(-3.0, 3.0, 60)
+    rays = rays_at(theta, phi)
+    pixels = model.project(rays)
+    assert np.all(np.isfinite(pixels))
+    # the distorted radius grows with theta along each azimuth: theta_d (1 + k1 theta^2 ...)
+    t2 = theta**2
+    theta_d = theta * (1 + t2 * (D[0] + t2 * (D[1] + t2 * (D[2] + t2 * D[3]))))
+    expected = np.column_stack([K[0, 0] * theta_d * np.cos(phi) + K[0, 2],
+                                K[1, 1] * theta_d * np.sin(phi) + K[1, 2]])
+    np.testing.assert_allclose(pixels, expected, atol=1e-9)
+    np.testing.assert_allclose(model.pixel_rays(pixels), rays, atol=1e-12)
+    # no pinhole coordinates from 90 degrees on
+    behind = model.undistort_pixels(pixels)[theta >= math.radians(90)]
+    assert np.isnan(behind).all()
+
+
+def test_pinhole_rays_are_unit_undistorted_directions() -> None:
+    model = CameraModel(640, 480, K, "plumb_bob", np.array([-0.2, 0.05, 0.001, 0.0, 0.0]))
+    pixels = np.array([[0.0, 0.0], [322.3, 237.6], [639.0, 479.0]])
+    rays = model.pixel_rays(pixels)
+    np.testing.assert_allclose(np.linalg.norm(rays, axis=1), 1.0)
+    np.testing.assert_allclose(model.project(rays), pixels, atol=1e-6)
