@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scenario import CameraSpec
+from .cameras import CameraSpec
 
 
 @dataclass(frozen=True)

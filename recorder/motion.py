@@ -10,9 +10,10 @@ import numpy as np
 from replay.geometry import invert, rotation_about
 from replay.messages import F64
 
+from .cameras import CameraSpec
 from .errors import ScenarioError
-from .scenario import CameraSpec, TargetSpec
-from .scene import outline_in_target
+from .target_spec import TargetSpec
+from .targets import center_in_target, outline_in_target
 
 #: a fully visible board keeps this margin (px at 640 px width, scaled with the width) from
 #: the image border: the calibration's detector drops corners within 8 px of it
@@ -76,16 +77,9 @@ def _random_pose(target: TargetSpec, rng: np.random.Generator) -> F64:
     rotation = tilt @ yaw @ face_up
     pose = np.eye(4)
     pose[:3, :3] = rotation
-    offset = _center_in_target(target)
+    offset = center_in_target(target)
     pose[:3, 3] = center - rotation @ offset
     return pose
-
-
-def _center_in_target(target: TargetSpec) -> F64:
-    if target.kind == "checkerboard":
-        cols, rows = target.inner_corners
-        return np.array([(cols - 1) / 2, (rows - 1) / 2, 0.0]) * target.square_m
-    return np.zeros(3)
 
 
 def plan_trajectory(

@@ -22,7 +22,7 @@ from replay import Image, PoseStamped, open_writer
 from replay._version import VERSION
 from replay.formats import LogWriter
 from replay.geometry import invert, quat_xyzw_from_rotation
-from replay.records import RenderView, ScenarioCamera, ScenarioTarget
+from replay.records import RenderView, ScenarioCamera
 from replay.records import Scenario as ScenarioRecord
 from replay.topics import SCENARIO, CameraTopics
 
@@ -32,7 +32,7 @@ from .motion import Trajectory, plan_trajectory
 from .multiview import CameraOptics, MultiViewOptics, plan_camera_optics
 from .render import SceneRenderer, gl_backend
 from .scenario import Scenario
-from .scene import board_corners_in_target
+from .targets import target_record
 
 #: seed streams, so that changing one aspect of a scenario does not reshuffle the others
 MOTION_STREAM, CLOCK_STREAM, NOISE_STREAM = 1, 2, 3
@@ -91,18 +91,7 @@ def scenario_record(
             dropped_frames=dropped[index].tolist(), **_views_record(optics[index]))
         for index, camera in enumerate(scenario.cameras)
     ]
-    targets = [
-        ScenarioTarget(
-            name=target.name, kind=target.kind,
-            inner_corners=target.inner_corners,
-            square_m=target.square_m, corners_in_target=board_corners_in_target(target),
-            frame="origin at the first inner corner, x along cols, y along rows, "
-                  "z into the board")
-        if target.kind == "checkerboard" else
-        ScenarioTarget(name=target.name, kind=target.kind, size_m=target.size_m,
-                       rgba=tuple(target.rgba), frame="origin at the box centre")
-        for target in scenario.targets
-    ]
+    targets = [target_record(target) for target in scenario.targets]
     return ScenarioRecord(
         scenario=scenario.name, source=scenario.source, seed=scenario.seed,
         camlog_version=VERSION, mujoco_version=mujoco.__version__,

@@ -1,9 +1,7 @@
 """MJCF for a scenario: ground, light, cameras and mocap-driven targets.
 
-A checkerboard is built from geometry, not a texture, so that its corners are exact: black
-squares 20 um thick lie on a white plate, their faces on the board plane z = 0. The board
-frame has its origin at the first inner corner, x along the ``cols`` inner corners, y along
-the ``rows``, and z into the board (the printed face looks along -z).
+Calibration targets are geometry, not textures, so that their features are exact
+(:mod:`recorder.targets`).
 """
 
 from __future__ import annotations
@@ -16,10 +14,9 @@ from replay.geometry import OPTICAL_FROM_MJCAMERA, quat_xyzw_from_rotation
 from replay.messages import F64
 
 from .optics import View
-from .scenario import Scenario, TargetSpec
+from .scenario import Scenario
+from .targets import CIRCLE_SLICES, PLANAR_KINDS, target_geoms
 
-BLACK_THICKNESS_M = 2e-5
-PLATE_THICKNESS_M = 3e-3
 #: MuJoCo's headlight shines along the rendering camera's view; a camera rendered as several
 #: views gets the same light as a fixed directional light along its optical axis instead
 #: (``camera_light_name``), so that its views agree where they meet
@@ -29,49 +26,6 @@ HEADLIGHT_DIFFUSE = (0.5, 0.5, 0.5)
 
 def _vec(values: F64 | list[float] | tuple[float, ...]) -> str:
     return " ".join(f"{float(v):.9g}" for v in values)
-
-
-def board_corners_in_target(target: TargetSpec) -> F64:
-    """Inner corners ``(rows * cols, 3)`` in the board frame, row-major (x fastest)."""
-    cols, rows = target.inner_corners
-    xs, ys = np.meshgrid(np.arange(cols), np.arange(rows))
-    grid = np.column_stack([xs.ravel(), ys.ravel(), np.zeros(xs.size)])
-    return np.asarray(grid * target.square_m, dtype=np.float64)
-
-
-def outline_in_target(target: TargetSpec) -> F64:
-    """Points ``(N, 3)`` that must be visible for the target to count as fully in view."""
-    if target.kind == "checkerboard":
-        cols, rows = target.inner_corners
-        s = target.square_m
-        x0, x1, y0, y1 = -s, cols * s, -s, rows * s
-        return np.array([[x0, y0, 0], [x1, y0, 0], [x1, y1, 0], [x0, y1, 0]])
-    half = target.size_m / 2
-    signs = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)])
-    return signs * half
-
-
-def _checkerboard_geoms(target: TargetSpec) -> list[str]:
-    cols, rows = target.inner_corners
-    s = target.square_m
-    b = target.border_squares * s
-    x0, x1 = -s - b, cols * s + b
-    y0, y1 = -s - b, rows * s + b
-    plate_center = ((x0 + x1) / 2, (y0 + y1) / 2, BLACK_THICKNESS_M + PLATE_THICKNESS_M / 2)
-    plate_half = ((x1 - x0) / 2, (y1 - y0) / 2, PLATE_THICKNESS_M / 2)
-    geoms = [
-        f'<geom type="box" pos="{_vec(plate_center)}" size="{_vec(plate_half)}" material="white"/>'
-    ]
-    half = (s / 2, s / 2, BLACK_THICKNESS_M / 2)
-    for i in range(rows + 1):
-        for j in range(cols + 1):
-            if (i + j) % 2:
-                continue
-            center = ((j - 0.5) * s, (i - 0.5) * s, BLACK_THICKNESS_M / 2)
-            geoms.append(
-                f'<geom type="box" pos="{_vec(center)}" size="{_vec(half)}" material="black"/>'
-            )
-    return geoms
 
 
 def view_camera_name(camera_name: str, index: int) -> str:
@@ -106,6 +60,7 @@ def build_mjcf(
     """MJCF text of the scenario's scene; ``offscreen_size`` is the largest render (W, H);
     ``views`` adds each named camera's pinhole views (``view_camera_name``)."""
     width, height = offscreen_size
+    circles = any(t.kind in ("circles", "acircles") for t in scenario.targets)
     parts = [
         f'<mujoco model={quoteattr("camlog_" + scenario.name)}>',
         '<compiler angle="radian"/>',
@@ -113,7 +68,8 @@ def build_mjcf(
         '<statistic extent="1" center="0 0 0.25"/>',
         "<visual>",
         f'  <global offwidth="{width}" offheight="{height}"/>',
-        '  <quality offsamples="8"/>',
+        '  <quality offsamples="8"/>' if not circles else
+        f'  <quality offsamples="8" numslices="{CIRCLE_SLICES}"/>',
         f'  <headlight ambient="{_vec(HEADLIGHT_AMBIENT)}" diffuse="{_vec(HEADLIGHT_DIFFUSE)}" '
         'specular="0 0 0"/>',
         '  <map znear="0.005" zfar="20"/>',
@@ -164,8 +120,8 @@ def build_mjcf(
             f'quat="{_vec([quat[3], *quat[:3]])}">'
         )
         geoms = (
-            _checkerboard_geoms(target)
-            if target.kind == "checkerboard"
+            target_geoms(target)
+            if target.kind in PLANAR_KINDS
             else [f'<geom type="box" size="{_vec(target.size_m / 2)}" '
                   f'material="{target.name}_mat"/>']
         )

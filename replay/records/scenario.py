@@ -69,9 +69,19 @@ class ScenarioCamera:
 
 @dataclass(frozen=True)
 class ScenarioTarget:
-    """A target: a checkerboard (``inner_corners`` (cols, rows), ``square_m``, its inner
-    corners ``corners_in_target`` (N, 3)) or a box (``size_m`` (3,), ``rgba``); ``frame``
-    says where the target frame sits."""
+    """A target and its exact geometry in the target frame (``frame`` says where it sits):
+
+    - ``checkerboard``: ``inner_corners`` (cols, rows), ``square_m``, the inner corners
+      ``corners_in_target`` (N, 3), row-major;
+    - ``charuco``: OpenCV's CharucoBoard of ``squares`` (cols, rows), ``square_m``,
+      ``marker_m``, ``dictionary`` (``legacy_pattern`` False): its chessboard corners
+      ``corners_in_target`` (N, 3) with ``corner_ids``, its ``marker_ids`` (M,) and
+      ``marker_corners_in_target`` (M, 4, 3);
+    - ``circles`` / ``acircles``: ``circles`` (cols, rows), ``spacing_m``, ``diameter_m``,
+      ``asymmetric``, the circle centres ``centres_in_target`` (N, 3) in findCirclesGrid's
+      order;
+    - ``box``: ``size_m`` (3,), ``rgba``.
+    """
 
     name: str
     kind: str
@@ -80,12 +90,27 @@ class ScenarioTarget:
     corners_in_target: F64 | None = field(default=None, metadata=OMIT_NONE)
     size_m: F64 | None = field(default=None, metadata=OMIT_NONE)
     rgba: tuple[float, ...] | None = field(default=None, metadata=OMIT_NONE)
+    squares: tuple[int, int] | None = field(default=None, metadata=OMIT_NONE)
+    marker_m: float | None = field(default=None, metadata=OMIT_NONE)
+    dictionary: str | None = field(default=None, metadata=OMIT_NONE)
+    legacy_pattern: bool | None = field(default=None, metadata=OMIT_NONE)
+    corner_ids: list[int] | None = field(default=None, metadata=OMIT_NONE)
+    marker_ids: list[int] | None = field(default=None, metadata=OMIT_NONE)
+    marker_corners_in_target: F64 | None = field(default=None, metadata=OMIT_NONE)
+    circles: tuple[int, int] | None = field(default=None, metadata=OMIT_NONE)
+    spacing_m: float | None = field(default=None, metadata=OMIT_NONE)
+    diameter_m: float | None = field(default=None, metadata=OMIT_NONE)
+    asymmetric: bool | None = field(default=None, metadata=OMIT_NONE)
+    centres_in_target: F64 | None = field(default=None, metadata=OMIT_NONE)
     frame: str = ""
 
     def points_in_target(self) -> F64 | None:
-        """Points ``(N, 3)`` worth projecting: a board's inner corners, a box's vertices."""
-        if self.corners_in_target is not None:
-            points = np.asarray(self.corners_in_target, dtype=np.float64)
+        """Points ``(N, 3)`` worth projecting: a board's corners or circle centres, a box's
+        vertices."""
+        for given in (self.corners_in_target, self.centres_in_target):
+            if given is None:
+                continue
+            points = np.asarray(given, dtype=np.float64)
             return points.reshape(-1, 3) if points.size and points.size % 3 == 0 else None
         if self.kind == "box" and self.size_m is not None and np.size(self.size_m) == 3:
             half = np.asarray(self.size_m, dtype=np.float64).reshape(3) / 2

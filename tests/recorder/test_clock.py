@@ -9,8 +9,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from recorder.cameras import CameraSpec
 from recorder.clock import camera_times, schedule
-from recorder.scenario import CameraSpec, builtin_dir, load_scenario
+from recorder.scenario import builtin_dir, load_scenario
 
 from .logs import Log, record_log
 

@@ -15,7 +15,7 @@ from recorder.multiview import plan_multiview_optics
 from recorder.optics import plan_optics
 from recorder.render import SceneRenderer
 from recorder.scenario import load_scenario
-from recorder.scene import board_corners_in_target
+from recorder.targets import feature_points_in_target
 from replay.camera import CameraModel
 from replay.messages import F64
 
@@ -195,7 +195,7 @@ def test_views_render_a_pinhole_as_its_direct_render_does(spec: Path) -> None:
         target = next(t for t in scenario.targets if t.name == board)
         world_from_board = target.motion.world_from_target
         camera_from_board = np.linalg.inv(camera.world_from_camera) @ world_from_board
-        corners = board_corners_in_target(target) @ camera_from_board[:3, :3].T
+        corners = feature_points_in_target(target) @ camera_from_board[:3, :3].T
         truth = camera.model.project(corners + camera_from_board[:3, 3])
         found = [cv2.cornerSubPix(image, truth.astype(np.float32).reshape(-1, 1, 2), (3, 3),
                                   (-1, -1), SUBPIX_CRITERIA).reshape(-1, 2) for image in images]

@@ -10,7 +10,8 @@ import pytest
 
 from recorder.errors import ScenarioError
 from recorder.motion import Trajectory, plan_trajectory, visible_fraction
-from recorder.scenario import Scenario, TargetSpec, load_scenario
+from recorder.scenario import Scenario, load_scenario
+from recorder.target_spec import TargetSpec
 from replay.geometry import invert
 from replay.messages import F64
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from recorder.scenario import load_scenario
-from recorder.scene import board_corners_in_target
+from recorder.targets import feature_points_in_target
 from replay.camera import CameraModel
 from replay.messages import F64
 
@@ -31,7 +31,7 @@ SUBPIX_CRITERIA = (cv2.TERM_CRITERIA_EPS + cv2.TERM_CRITERIA_COUNT, 100, 1e-4)
 def test_board_corners_are_row_major_from_the_first_inner_corner() -> None:
     (target,) = load_scenario("mono_checkerboard").targets
     cols, rows = target.inner_corners
-    corners = board_corners_in_target(target)
+    corners = feature_points_in_target(target)
     assert corners.shape == (cols * rows, 3)
     s = target.square_m
     np.testing.assert_allclose(corners[0], [0, 0, 0])
