@@ -24,9 +24,10 @@ from pathlib import Path
 import numpy as np
 
 from camlog.processing.process_log import process_log
-from processors.base import Output, Processor
-from processors.edges import EDGES, Edges
-from processors.red_pixels import CENTROID, COUNT, OUTPUT_VIDEO, RedPixels
+from processors.base import Output
+from processors.red_pixels import CENTROID, COUNT, OUTPUT_VIDEO
+from processors.registry import configure, spec_of
+from processors.spec import Configured, ProcessorSpec
 from replay import Image, PointStamped, open_reader
 
 from .report import emit
@@ -37,11 +38,6 @@ TOPIC = "/stereo_camera/left/image_raw"
 class NullProcessor:
     """The red-pixels + edges outputs, same types and sizes, from the input's own bytes."""
 
-    name = "null"
-
-    def outputs(self) -> dict[str, str]:
-        return {**RedPixels().outputs(), **Edges().outputs()}
-
     def __call__(self, image: Image) -> list[Output]:
         flat = image.pixels.reshape(-1)
         gray = flat[: image.width * image.height].reshape(image.height, image.width)
@@ -50,8 +46,15 @@ class NullProcessor:
             (OUTPUT_VIDEO, Image(image.stamp_ns, image.frame_id, "rgb8", image.pixels)),
             (CENTROID, point),
             (COUNT, point),
-            (EDGES, Image(image.stamp_ns, image.frame_id, "mono8", gray)),
+            ("edges", Image(image.stamp_ns, image.frame_id, "mono8", gray)),
         ]
+
+
+#: the null processor declared with the outputs of red pixels and edges
+NULL = Configured(ProcessorSpec(
+    name="null", summary="red pixels + edges outputs without computing",
+    implementation="benchmarks.process_fps:NullProcessor",
+    outputs=spec_of("red_pixels").outputs + spec_of("edges").outputs))
 
 
 def decode_fps(log: Path) -> float:
@@ -66,9 +69,9 @@ def decode_fps(log: Path) -> float:
     return frames / (time.perf_counter() - started)
 
 
-def pipeline_fps(log: Path, out: Path, processors: list[Processor]) -> tuple[float, int]:
+def pipeline_fps(log: Path, out: Path, processors: list[Configured]) -> tuple[float, int]:
     """Frames per second of ``process_log`` and the output size in bytes."""
-    result = process_log(log, out, topic=TOPIC, processors=processors, overwrite=True)
+    result = process_log(log, out, topics=[TOPIC], processors=processors, overwrite=True)
     return result.fps, out.stat().st_size
 
 
@@ -87,9 +90,10 @@ def run(log: Path, repeats: int, tmp: Path) -> dict[str, float]:
     sizes = {}
     for _ in range(repeats):  # interleaved so that drifting machine load hits all three
         decode.append(decode_fps(log))
-        fps, sizes["copy"] = pipeline_fps(log, tmp / "copy.mcap", [NullProcessor()])
+        fps, sizes["copy"] = pipeline_fps(log, tmp / "copy.mcap", [NULL])
         copy.append(fps)
-        fps, sizes["process"] = pipeline_fps(log, tmp / "process.mcap", [RedPixels(), Edges()])
+        fps, sizes["process"] = pipeline_fps(log, tmp / "process.mcap",
+                                          [configure("red_pixels"), configure("edges")])
         process.append(fps)
     return {"decode_fps": max(decode), "copy_fps": max(copy), "process_fps": max(process),
             "ratio": max(process) / max(copy), "copy_mb": sizes["copy"] / 1e6,

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from processors.calibration.board import make_board
 from processors.calibration.solve import CalibrationOptions
-from processors.registry import make_processor
+from processors.registry import configure
 from recorder.record import record
 from recorder.scenario import load_scenario
 from replay.export import view_logs
@@ -80,8 +80,8 @@ def run_demo(out_dir: Path, *, duration_s: float = 20.0, seed: int = 0,
          "see report.md")
 
     processed = out_dir / "red_block_processed.mcap"
-    proc = process_log(red, processed, topic="/stereo_camera/left/image_raw",
-                       processors=[make_processor("red_pixels"), make_processor("edges")],
+    proc = process_log(red, processed, topics=["/stereo_camera/left/image_raw"],
+                       processors=[configure("red_pixels"), configure("edges")],
                        overwrite=True)
     done("process", processed, f"red pixels + edges on {proc.frames_processed} frames")
 

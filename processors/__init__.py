@@ -1,21 +1,37 @@
 """Pure image processors and stereo pairing over camlog's typed messages.
 
 Processors map an :class:`replay.Image` to output messages and never open files; the
-``camlog process`` / ``camlog resync`` commands stream logs through them.
+``camlog process`` / ``camlog resync`` commands stream logs through them. Their
+declarations (:mod:`processors.registry`) load no numerical library.
 """
 
 from .base import Output, Processor
-from .errors import ConfigError, FrameError, InputError, ProcessorError, SyncError
-from .registry import PROCESSORS, make_processor
+from .errors import (
+    ConfigError,
+    FrameError,
+    InputError,
+    OptionValueError,
+    ProcessorError,
+    SyncError,
+)
+from .registry import PROCESSORS, configure, make_processor
+from .spec import Configured, Option, OptionKind, OutputSpec, ProcessorSpec
 
 __all__ = [
     "PROCESSORS",
     "ConfigError",
+    "Configured",
     "FrameError",
     "InputError",
+    "Option",
+    "OptionKind",
+    "OptionValueError",
     "Output",
+    "OutputSpec",
     "Processor",
     "ProcessorError",
+    "ProcessorSpec",
     "SyncError",
+    "configure",
     "make_processor",
 ]

@@ -8,26 +8,19 @@ from replay.codec import to_mono8
 from replay.messages import Image
 
 from .base import Output
-from .errors import ConfigError
-
-EDGES = "/image_converter/edges"
+from .errors import OptionValueError
 
 
 class Edges:
     """Grayscale, then ``cv2.Canny(gray, low, high)``; publishes a mono8 edge image (255 on
     edges). Thresholds are on the 8-bit gradient magnitude (L1 norm, OpenCV's default)."""
 
-    name = "edges"
-
     def __init__(self, *, low: float = 50.0, high: float = 150.0) -> None:
         if not 0 <= low <= high:
-            raise ConfigError(f"Canny thresholds need 0 <= low <= high, got {low}, {high}")
+            raise OptionValueError("edges", ("low", "high"),
+                                   f"Canny thresholds need 0 <= low <= high, got {low}, {high}")
         self.low, self.high = low, high
-
-    def outputs(self) -> dict[str, str]:
-        """Output topic -> message kind."""
-        return {EDGES: "sensor_msgs/msg/Image"}
 
     def __call__(self, image: Image) -> list[Output]:
         edges = cv2.Canny(to_mono8(image), self.low, self.high)
-        return [(EDGES, Image(image.stamp_ns, image.frame_id, "mono8", edges))]
+        return [("edges", Image(image.stamp_ns, image.frame_id, "mono8", edges))]

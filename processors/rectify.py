@@ -6,52 +6,56 @@ import cv2
 import numpy as np
 
 from replay.camera import DISTORTION_MODELS
-from replay.messages import CameraInfo, Image
+from replay.messages import F64, CameraInfo, Image
 
 from .base import Output
-from .errors import ConfigError, FrameError
-
-IMAGE_RECT = "/image_converter/image_rect"
+from .errors import FrameError, OptionValueError
 
 
-class Rectifier:
-    """Undistort and rectify with ``K``, ``D``, ``R`` and ``P`` of a camera model.
+class Remap:
+    """Resample images of one camera model through fixed maps: output pixel ``(u, v)`` of
+    the camera ``new_k`` (turned by ``rotation``) samples the raw image where the distorted
+    model ``K, D`` puts its ray (bilinear), as image_proc does. Outputs keep the input
+    encoding and size. ``processor`` and ``output`` name the errors and the output."""
 
-    Output pixel ``(u, v)`` of the rectified camera ``P[:, :3]`` samples the raw image
-    where ``R`` and the distorted model ``K, D`` put it (bilinear), as image_proc does.
-    The output keeps the input encoding and size.
-    """
-
-    name = "rectify"
-
-    def __init__(self, *, camera_info: CameraInfo) -> None:
-        info = camera_info
+    def __init__(self, info: CameraInfo, *, rotation: F64, new_k: F64, processor: str,
+                 output: str) -> None:
         model = info.distortion_model or "plumb_bob"
+        problem = None
         if model not in DISTORTION_MODELS:
-            raise ConfigError(
-                f"cannot rectify distortion model {model!r} (use {' or '.join(DISTORTION_MODELS)})"
-            )
-        if info.binning_x > 1 or info.binning_y > 1 or any(info.roi[:4]):
-            raise ConfigError("rectifying binned or ROI camera models is not supported")
-        if info.width <= 0 or info.height <= 0:
-            raise ConfigError(f"camera model has no image size ({info.width}x{info.height})")
-        new_k = info.p[:, :3] if np.any(info.p[:, :3]) else info.k
+            problem = (f"cannot resample distortion model {model!r} (use "
+                       f"{' or '.join(DISTORTION_MODELS)})")
+        elif info.binning_x > 1 or info.binning_y > 1 or any(info.roi[:4]):
+            problem = "binned or ROI camera models are not supported"
+        elif info.width <= 0 or info.height <= 0:
+            problem = f"the camera model has no image size ({info.width}x{info.height})"
+        if problem is not None:
+            raise OptionValueError(processor, ("camera_info",), problem)
+        self.output = output
         self.width, self.height = info.width, info.height
         # fixed-point maps: remap is faster and they are computed once
         self.map1, self.map2 = cv2.initUndistortRectifyMap(
-            info.k, info.d, info.r, new_k, (info.width, info.height), cv2.CV_16SC2
+            info.k, info.d, rotation, new_k, (info.width, info.height), cv2.CV_16SC2
         )
 
-    def outputs(self) -> dict[str, str]:
-        """Output topic -> message kind."""
-        return {IMAGE_RECT: "sensor_msgs/msg/Image"}
-
     def __call__(self, image: Image) -> list[Output]:
+        """The resampled image under this remap's output name."""
         if (image.width, image.height) != (self.width, self.height):
             raise FrameError(
                 f"image is {image.width}x{image.height} but the calibration is for "
                 f"{self.width}x{self.height}"
             )
         pixels: np.ndarray = image.pixels
-        rect = cv2.remap(pixels, self.map1, self.map2, cv2.INTER_LINEAR)
-        return [(IMAGE_RECT, Image(image.stamp_ns, image.frame_id, image.encoding, rect))]
+        out = cv2.remap(pixels, self.map1, self.map2, cv2.INTER_LINEAR)
+        return [(self.output, Image(image.stamp_ns, image.frame_id, image.encoding, out))]
+
+
+class Rectifier(Remap):
+    """Undistort and rectify with ``K``, ``D``, ``R`` and ``P`` of a camera model (the
+    rectified camera is ``P[:, :3]``, or ``K`` when P is empty)."""
+
+    def __init__(self, *, camera_info: CameraInfo) -> None:
+        info = camera_info
+        new_k = info.p[:, :3] if np.any(info.p[:, :3]) else info.k
+        super().__init__(info, rotation=info.r, new_k=new_k, processor="rectify",
+                         output="image_rect")

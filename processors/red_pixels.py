@@ -14,13 +14,12 @@ from replay.codec import to_rgb8
 from replay.messages import Image, PointStamped
 
 from .base import Output
-from .errors import ConfigError
+from .errors import ConfigError, OptionValueError
 
 U8 = npt.NDArray[np.uint8]
 
-OUTPUT_VIDEO = "/image_converter/output_video"
-CENTROID = "/image_converter/red_centroid"
-COUNT = "/image_converter/red_count"
+#: output names (declared in the registry)
+OUTPUT_VIDEO, CENTROID, COUNT = "output_video", "red_centroid", "red_count"
 #: the centroid marker is a filled square of (2 * HALF_BOX + 1) pixels, as in the chapter
 HALF_BOX = 5
 BLUE_RGB = (0, 0, 255)
@@ -73,20 +72,10 @@ class RedPixels:
     Nothing goes to the centroid topic when no pixel is red; the count is always published.
     """
 
-    name = "red_pixels"
-
     def __init__(self, *, ratio: int = 10) -> None:
         if ratio < 0:
-            raise ConfigError(f"red ratio must be >= 0, got {ratio}")
+            raise OptionValueError("red_pixels", ("ratio",), f"must be >= 0, got {ratio}")
         self.ratio = ratio
-
-    def outputs(self) -> dict[str, str]:
-        """Output topic -> message kind."""
-        return {
-            OUTPUT_VIDEO: "sensor_msgs/msg/Image",
-            CENTROID: "geometry_msgs/msg/PointStamped",
-            COUNT: "geometry_msgs/msg/PointStamped",
-        }
 
     def __call__(self, image: Image) -> list[Output]:
         mask = red_mask(to_rgb8(image), self.ratio)

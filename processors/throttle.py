@@ -1,7 +1,8 @@
-"""Which frames to process: every N-th, or at most HZ by header stamp (a throttle node).
+"""Which frames pass: every N-th, or at most HZ by header stamp (a throttle node).
 
-Both are small state machines fed one stamp at a time, so that a stream needs no look-ahead;
-:func:`throttle_mask` runs one over a whole array.
+Both are small state machines fed one stamp at a time, in stream order, so that a stream
+needs no look-ahead; :func:`throttle_mask` runs one over a whole array. The registry's
+``throttle`` processor is :func:`make_throttle`: the frames it keeps pass through unchanged.
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from typing import Protocol
 import numpy as np
 import numpy.typing as npt
 
-from .errors import ConfigError
+from .errors import OptionValueError
 
 
 class Throttle(Protocol):
@@ -26,7 +27,7 @@ class KeepAll:
     """No throttling."""
 
     def keep(self, stamp_ns: int) -> bool:
-        """Always keep the frame."""
+        """Always true."""
         return True
 
 
@@ -35,7 +36,7 @@ class EveryNth:
 
     def __init__(self, n: int) -> None:
         if n < 1:
-            raise ConfigError(f"--every needs N >= 1, got {n}")
+            raise OptionValueError("throttle", ("every",), f"must be >= 1, got {n}")
         self.n = n
         self._seen = 0
 
@@ -53,7 +54,7 @@ class RateLimit:
 
     def __init__(self, rate_hz: float) -> None:
         if not rate_hz > 0:
-            raise ConfigError(f"--rate needs HZ > 0, got {rate_hz}")
+            raise OptionValueError("throttle", ("rate",), f"must be > 0, got {rate_hz}")
         self.period_ns = round(1e9 / rate_hz)
         self._last_ns: int | None = None
 
@@ -65,14 +66,14 @@ class RateLimit:
         return True
 
 
-def make_throttle(*, every: int | None = None, rate_hz: float | None = None) -> Throttle:
-    """The throttle for ``--every N`` or ``--rate HZ`` (not both), or none."""
-    if every is not None and rate_hz is not None:
-        raise ConfigError("use --every or --rate, not both")
+def make_throttle(*, every: int | None = None, rate: float | None = None) -> Throttle:
+    """The throttle keeping every N-th frame or at most ``rate`` Hz (not both), or all."""
+    if every is not None and rate is not None:
+        raise OptionValueError("throttle", ("every", "rate"), "give one of them, not both")
     if every is not None:
         return EveryNth(every)
-    if rate_hz is not None:
-        return RateLimit(rate_hz)
+    if rate is not None:
+        return RateLimit(rate)
     return KeepAll()
 
 

@@ -7,7 +7,9 @@ optical frame) and the log-wide ``/camlog/scenario`` (:class:`~replay.records.Sc
 ``{ns}/calibrated/camera_info``, ``{ns}/image_rect`` (stereo) and ``/calibration/summary``
 (:class:`~replay.records.CalibrationSummary`); ``camlog resync`` writes the pairs under a
 prefix (default ``/stereo_sync``) with ``{prefix}/offset_s`` and ``{prefix}/stats``
-(:class:`~replay.records.ResyncStats`).
+(:class:`~replay.records.ResyncStats`); ``camlog process`` writes its outputs where the user
+asks and says what each is on ``/camlog/processed``
+(:class:`~replay.records.ProcessedOutputs`).
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ __all__ = [
     "DETECTIONS",
     "GROUND_TRUTH",
     "IMAGE_RECT",
+    "PROCESSED",
     "RESIDUALS",
     "RESYNC_PREFIX",
     "SCENARIO",
@@ -41,6 +44,8 @@ __all__ = [
 SCENARIO = "/camlog/scenario"
 #: camlog calibrate's summary (std_msgs/String, JSON)
 CALIBRATION_SUMMARY = "/calibration/summary"
+#: camlog process's record of what each output topic is (std_msgs/String, JSON; one per run)
+PROCESSED = "/camlog/processed"
 #: where camlog resync writes the re-stamped pairs by default
 RESYNC_PREFIX = "/stereo_sync"
 

@@ -19,6 +19,11 @@ red_pixels = true
 edges = {low = 50, high = 150}
 ```
 
+The ``process`` step's keys are generated from :mod:`processors.registry`: a processor with
+a flag is ``NAME = true``, a table of its options, or its primary option's value
+(``rectify = "ost.yaml"``); a flagless one (throttle) gives its options as keys
+(``every = 3``).
+
 Each step runs one of camlog's functions on an input log and may produce a log that later
 steps read. :func:`run_step` is the only place that knows the step kinds.
 """
@@ -28,16 +33,21 @@ from __future__ import annotations
 import hashlib
 import json
 import tomllib
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from processors.errors import OptionValueError
+from processors.registry import SPECS, spec_of
+from processors.spec import Configured, ProcessorSpec
 from replay.atomic import write_text_atomic
 from replay.storage import Location
 from replay.topics import RESYNC_PREFIX
 
 from ..errors import PipelineError
+from ..processing.options import configure_values
 
 
 @dataclass(frozen=True)
@@ -76,14 +86,56 @@ class Pipeline:
 
 # --- step kinds --------------------------------------------------------------------------
 
-def _bool_or_table(value: Any, key: str, step: str) -> dict[str, Any] | None:
-    if value is False or value is None:
+def _topics(o: dict[str, Any], step: str) -> list[str]:
+    topics = o.get("topic")
+    if isinstance(topics, str):
+        return [topics]
+    if isinstance(topics, list) and topics and all(isinstance(t, str) for t in topics):
+        return topics
+    raise PipelineError(f"{step}: give topic = the image topic (or a list of topics) to process")
+
+
+def _processor_values(spec: ProcessorSpec, o: dict[str, Any]) -> dict[str, Any] | None:
+    """The values a step gives one processor, or None when it does not choose it."""
+    if not spec.flag:
+        values = {opt.name: o.get(opt.name) for opt in spec.options}
+        return values if any(v is not None for v in values.values()) else None
+    value = o.get(spec.name)
+    if value is None or value is False:
         return None
     if value is True:
         return {}
     if isinstance(value, dict):
         return dict(value)
-    raise PipelineError(f"step {step!r}: {key} must be true, false or a table of options")
+    if spec.primary:
+        return {spec.primary: value}
+    raise PipelineError(f"{spec.name} must be true, false or a table of options")
+
+
+@contextmanager
+def keys_worded(step: str, specs: tuple[ProcessorSpec, ...]) -> Iterator[None]:
+    """Reword :class:`OptionValueError` with the step's keys (``edges.low``, ``every``)."""
+    try:
+        yield
+    except OptionValueError as err:
+        spec = next((s for s in specs if s.name == err.processor), None)
+        if spec is None:
+            raise
+        keys = [name if not spec.flag else spec.name if name == spec.primary
+                else f"{spec.name}.{name}" for name in err.options]
+        raise PipelineError(f"{step}: {', '.join(keys) or spec.name}: {err.problem}") from None
+
+
+def step_processors(o: dict[str, Any], specs: tuple[ProcessorSpec, ...],
+                    step: str = "process") -> list[Configured]:
+    """The processors a step chooses, configured (errors name the step's keys)."""
+    chosen = []
+    with keys_worded(step, specs):
+        for spec in specs:
+            values = _processor_values(spec, o)
+            if values is not None:
+                chosen.append(configure_values(spec, values))
+    return chosen
 
 
 def _resync(log: Location, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
@@ -134,30 +186,33 @@ def _calibrate(log: Location, out: Path, o: dict[str, Any], workers: int) -> Ste
 
 
 def _process(log: Location, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
-    from processors.registry import make_processor
-    from processors.throttle import make_throttle
-
     from ..processing.process_log import process_log
 
-    if "topic" not in o:
-        raise PipelineError("process: give topic = the image topic to process")
-    chosen = []
-    for key, name in (("red_pixels", "red_pixels"), ("edges", "edges")):
-        options = _bool_or_table(o.get(key), key, "process")
-        if options is not None:
-            chosen.append(make_processor(name, **options))
-    if o.get("rectify"):
-        from replay.calibration_yaml import load_calibration
-
-        chosen.append(make_processor(
-            "rectify", camera_info=load_calibration(Path(o["rectify"])).camera_info))
-    if not chosen:
-        raise PipelineError("process: enable at least one of red_pixels, edges, rectify")
-    result = process_log(log, out / "processed.mcap", topic=o["topic"], processors=chosen,
-                         throttle=make_throttle(every=o.get("every"), rate_hz=o.get("rate")),
-                         compress=o.get("compress"), overwrite=True, workers=workers)
+    topics = _topics(o, "process")
+    chosen = step_processors(o, SPECS)
+    if not any(not c.spec.selects for c in chosen):
+        raise PipelineError("process: enable at least one of "
+                          f"{', '.join(s.name for s in SPECS if s.flag)}")
+    with keys_worded("process", SPECS):
+        result = process_log(log, out / "processed.mcap", topics=topics, processors=chosen,
+                             output_ns=o.get("output_ns"), compress=o.get("compress"),
+                             drop_input=bool(o.get("drop_input", False)), overwrite=True,
+                             workers=workers)
     return StepOutcome(result.output, {"frames": result.frames_processed,
                                        "fps": round(result.fps, 1)}, [result.output])
+
+
+def _throttle(log: Location, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
+    from ..processing.process_log import process_log
+
+    topics = _topics(o, "throttle")
+    chosen = step_processors(o, (spec_of("throttle"),), "throttle")
+    if not chosen:
+        raise PipelineError("throttle: give every = N or rate = HZ")
+    result = process_log(log, out / "throttled.mcap", topics=topics, processors=chosen,
+                         thin=True, overwrite=True)
+    return StepOutcome(result.output, {"kept": result.frames_processed,
+                                       "of": result.frames_read}, [result.output])
 
 
 def _info(log: Location, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
@@ -181,8 +236,11 @@ STEPS: dict[str, tuple[frozenset[str], Runner]] = {
                              "fix_principal_point", "fix_aspect_ratio", "zero_tangent_dist",
                              "tangent_dist", "k_coefficients", "camera_name", "max_views"}),
                   _calibrate),
-    "process": (frozenset({"topic", "red_pixels", "edges", "rectify", "every", "rate",
-                           "compress"}), _process),
+    "process": (frozenset({"topic", "output_ns", "compress", "drop_input"}
+                          | {s.name for s in SPECS if s.flag}
+                          | {o.name for s in SPECS if not s.flag for o in s.options}), _process),
+    "throttle": (frozenset({"topic", *(o.name for o in spec_of("throttle").options)}),
+                 _throttle),
     "info": (frozenset(), _info),
 }
 

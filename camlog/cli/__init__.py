@@ -19,8 +19,10 @@ COMMANDS: dict[str, tuple[str, str]] = {
              "process, view", "demo"),
     "record": ("simulate a scenario in MuJoCo and write its camera log", "record"),
     "info": ("summarise a log: format, duration, topics, rates, encodings", "info"),
-    "process": ("run image processors (red pixels, edges, rectify) over one topic of a log",
-                "process"),
+    "process": ("run image processors (red pixels, edges, rectify, ...) over image topics of "
+                "a log", "process"),
+    "throttle": ("thin topics of a log to every N-th message or at most HZ (copied as stored)",
+                 "throttle"),
     "resync": ("pair and re-stamp the images of two unsynchronised cameras", "resync"),
     "batch": ("run a pipeline (resync, calibrate, process, ...) over many logs in parallel",
               "batch"),

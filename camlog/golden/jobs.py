@@ -16,8 +16,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
-from processors.base import Processor
-from processors.registry import make_processor
+from processors.registry import configure
+from processors.spec import Configured
 from replay.formats import open_reader
 from replay.info import summarize
 from replay.messages import Image, PointStamped
@@ -196,15 +196,15 @@ class Process:
     processors: tuple[str, ...]
     calibration: str | None = None  # for rectify: another job's YAML, relative to the folder
 
-    def build(self, folder: Path) -> list[Processor]:
-        """The processors, with the calibration file for rectify."""
+    def build(self, folder: Path) -> list[Configured]:
+        """The job's processors, configured (rectify with the calibration file)."""
         from replay.calibration_yaml import load_calibration
 
         options: dict[str, dict[str, Any]] = {}
         if self.calibration is not None:
             info = load_calibration(folder / self.calibration).camera_info
             options["rectify"] = {"camera_info": info}
-        return [make_processor(name, **options.get(name, {})) for name in self.processors]
+        return [configure(name, **options.get(name, {})) for name in self.processors]
 
     def run(self, log: Path, folder: Path, workers: int) -> Artifacts:
         """Process and keep the output frames, tracks and the log summary."""
@@ -213,13 +213,13 @@ class Process:
         processors = self.build(folder)
         output = folder / self.name / "output.mcap"
         output.parent.mkdir(parents=True, exist_ok=True)
-        process_log(log, output, topic=self.topic, processors=processors, overwrite=True,
-                    workers=workers)
-        topics = {t: kind for p in processors for t, kind in p.outputs().items()}
+        result = process_log(log, output, topics=[self.topic], processors=processors,
+                             overwrite=True, workers=workers)
+        topics = [o.topic for o in result.outputs]
         return _frame_artifacts(output, topics) | {"output.txt": log_summary(output)}
 
 
-def _frame_artifacts(output: Path, topics: dict[str, str]) -> Artifacts:
+def _frame_artifacts(output: Path, topics: list[str]) -> Artifacts:
     first: dict[str, np.ndarray] = {}
     last: dict[str, np.ndarray] = {}
     centroid: dict[int, tuple[float, float]] = {}

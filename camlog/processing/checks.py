@@ -9,6 +9,9 @@ from replay.formats import LogReader
 from ..errors import InputError
 
 IMAGE_TYPES = ("sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage")
+#: types with a header stamp (what a throttle can thin)
+STAMPED_TYPES = (*IMAGE_TYPES, "sensor_msgs/msg/CameraInfo", "geometry_msgs/msg/PointStamped",
+                 "geometry_msgs/msg/PoseStamped")
 
 
 def require_messages(reader: LogReader) -> None:

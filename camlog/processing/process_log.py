@@ -1,10 +1,13 @@
-"""Stream one image topic of a log through processors and write a new log.
+"""Stream image topics of a log through processors and write a new log.
 
 The reader's raw messages are copied through untouched (``write_raw``: no decode or
-re-encode). Frames of the processed topic are decoded on the reading thread (a header and
-a view of the pixel buffer) and run through the processors on a thread pool (OpenCV and
-numpy release the GIL); outputs are serialized on the workers too and written in frame
-order. At most ``in_flight`` frames are pending, so memory does not grow with the log.
+re-encode). Frames of the processed topics are decoded on the reading thread (a header and
+a view of the pixel buffer), selected there in stream order (throttle), and run through the
+processors on a thread pool (OpenCV and numpy release the GIL); outputs are serialized on
+the workers too and written in frame order. At most ``in_flight`` frames are pending, so
+memory does not grow with the log. The output log also gets one record on
+:data:`replay.topics.PROCESSED` naming each output topic, its source, its processor
+and how it is displayed.
 """
 
 from __future__ import annotations
@@ -12,55 +15,60 @@ from __future__ import annotations
 import os
 import time
 from collections import deque
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
 
 from processors.base import Processor
 from processors.errors import ProcessorError
-from processors.throttle import KeepAll, Throttle
+from processors.spec import Configured, OptionKind
+from processors.throttle import Throttle
+from replay._version import VERSION
 from replay.atomic import check_not_input
 from replay.codec import decode_compressed, encode_compressed, msgtype_of, serialize
 from replay.errors import ReplayError
-from replay.formats import RawMessage, open_reader, open_writer
+from replay.formats import LogReader, LogWriter, RawMessage, open_reader, open_writer
 from replay.messages import CompressedImage, Image, Message
+from replay.records import ProcessedOutput, ProcessedOutputs
 from replay.storage import Location, local_paths
+from replay.topics import PROCESSED
 
 from ..errors import ProcessingError, UsageError
 from .checks import (
     IMAGE_TYPES,
+    STAMPED_TYPES,
     require_free_topics,
     require_messages,
     require_topic,
 )
-
-COMPRESSIONS = ("jpeg", "png")
+from .outputs import COMPRESSIONS, plan_outputs
 
 
 @dataclass(frozen=True)
 class ProcessResult:
-    """What :func:`process_log` did."""
+    """What :func:`process_log` did (frame counts summed over the processed topics)."""
 
     output: Path
-    frames_read: int  # frames of the topic that were read
+    frames_read: int  # frames of the topics that were read
     frames_processed: int  # after throttling
     messages_written: int
     wall_s: float
+    outputs: tuple[ProcessedOutput, ...] = ()
 
     @property
     def fps(self) -> float:
-        """Frames of the topic read per second of wall time."""
+        """Frames of the topics read per second of wall time."""
         return self.frames_read / self.wall_s if self.wall_s > 0 else 0.0
 
 
 @dataclass(frozen=True)
 class _Job:
-    """Everything a worker needs for one frame (no shared mutable state)."""
+    """Everything a worker needs for one frame of one topic (no shared mutable state)."""
 
-    processors: tuple[Processor, ...]
+    stages: tuple[tuple[Processor, Mapping[str, str]], ...]  # processor, output -> topic
     compress: str | None
     serialization: str
     where: str  # "LOG: TOPIC" for error messages
@@ -71,13 +79,12 @@ class _Job:
             image = decode_compressed(frame) if isinstance(frame, CompressedImage) else frame
             assert isinstance(image, Image)
             raws = []
-            for processor in self.processors:
+            for processor, topics in self.stages:
                 for name, output in processor(image):
-                    topic, message = name, output
+                    message: Message = output
                     if self.compress and isinstance(output, Image):
-                        topic = name + "/compressed"
                         message = encode_compressed(output, self.compress)
-                    raws.append(RawMessage(topic, msgtype_of(message), log_time_ns,
+                    raws.append(RawMessage(topics[name], msgtype_of(message), log_time_ns,
                                            serialize(message, self.serialization),
                                            self.serialization))
             return raws
@@ -86,94 +93,158 @@ class _Job:
             raise ProcessingError(f"{self.where}: frame stamped {stamp}: {text}") from None
 
 
-def output_topics(processors: Sequence[Processor], compress: str | None) -> dict[str, str]:
-    """Every topic the processors may write, with its type after compression."""
-    topics: dict[str, str] = {}
-    for processor in processors:
-        for name, kind in processor.outputs().items():
-            topic, msgtype = name, kind
-            if compress and kind == "sensor_msgs/msg/Image":
-                topic, msgtype = name + "/compressed", "sensor_msgs/msg/CompressedImage"
-            if topic in topics:
-                raise UsageError(f"two processors write {topic}")
-            topics[topic] = msgtype
-    return topics
+@dataclass
+class _Topic:
+    """One processed topic: its job, its own throttles (stateful) and its frame count."""
+
+    job: _Job
+    throttles: list[Throttle]
+    read: int = 0
+
+    def keep(self, stamp_ns: int) -> bool:
+        """Whether every throttle passes the frame (each sees every frame)."""
+        return all([throttle.keep(stamp_ns) for throttle in self.throttles])
+
+
+@dataclass
+class _Counts:
+    read: int = 0
+    processed: int = 0
+    written: int = 0
+    pending: deque[Future[list[RawMessage]]] = field(default_factory=deque)
+
+
+def _check_options(processors: Sequence[Configured], topics: Sequence[str],
+                   compress: str | None, thin: bool) -> None:
+    if not processors:
+        raise UsageError("no processor chosen")
+    if not topics or len(set(topics)) != len(topics):
+        raise UsageError("give each topic to process once")
+    for configured in processors:
+        if len(topics) > 1 and any(o.kind is OptionKind.CAMERA_INFO
+                                   for o in configured.spec.options):
+            raise UsageError(f"{configured.name} takes one camera's calibration: process "
+                              "one topic with it per run")
+    if thin and any(not c.spec.selects for c in processors):
+        raise UsageError("thinning passes frames through: use only selecting processors")
+    if compress is not None and compress not in COMPRESSIONS:
+        raise UsageError(f"unknown compression {compress!r} (use {' or '.join(COMPRESSIONS)})")
+
+
+def _record(plans: Mapping[str, list[list[tuple[str, ProcessedOutput]]]],
+            processors: Sequence[Configured]) -> ProcessedOutputs:
+    outputs = [o for per_topic in plans.values() for per in per_topic for _, o in per]
+    options = {c.name: c.described_options() for c in processors if not c.spec.selects}
+    return ProcessedOutputs(outputs, options, VERSION)
 
 
 def process_log(
     input_path: Location,
     output: Path,
     *,
-    topic: str,
-    processors: Sequence[Processor],
-    throttle: Throttle | None = None,
+    topics: Sequence[str],
+    processors: Sequence[Configured],
+    output_ns: str | None = None,
     compress: str | None = None,
     drop_input: bool = False,
+    thin: bool = False,
     max_frames: int | None = None,
     fmt: str | None = None,
     overwrite: bool = False,
     workers: int | None = None,
     recover: bool = False,
 ) -> ProcessResult:
-    """Run ``processors`` over ``topic`` of ``input_path`` and write ``output`` atomically.
+    """Run ``processors`` over ``topics`` of ``input_path`` and write ``output`` atomically.
 
     The output keeps every input message (unless ``drop_input``) plus the processors'
-    outputs, which carry the input frame's log time and header. ``max_frames`` stops after
-    that many frames of the topic (and the messages logged before them).
+    outputs, which carry the input frame's log time and header; output topics are planned
+    by :func:`.outputs.plan_outputs`. Selecting processors (throttle) choose the frames the
+    others see; with ``thin`` (selecting processors only) the processed topics keep only
+    the chosen frames, copied as stored. ``max_frames`` stops once every topic has that
+    many frames (and the messages logged before them).
     """
     started = time.perf_counter()
-    if not processors:
-        raise UsageError("no processor chosen (e.g. --red-pixels, --edges, --rectify)")
-    if compress is not None and compress not in COMPRESSIONS:
-        raise UsageError(f"unknown compression {compress!r} (use {' or '.join(COMPRESSIONS)})")
-    throttle = throttle or KeepAll()
+    _check_options(processors, topics, compress, thin)
     check_not_input(output, local_paths(input_path))
-    new_topics = output_topics(processors, compress)
+    computing = [c for c in processors if not c.spec.selects]
+    plans = plan_outputs(topics, computing, output_ns=output_ns, compress=compress)
+    record = _record(plans, processors)
+    new_topics = {o.topic for o in record.outputs}
     with open_reader(input_path, recover=recover) as reader:
         require_messages(reader)
-        require_topic(reader, topic, IMAGE_TYPES)
+        for topic in topics:
+            require_topic(reader, topic, IMAGE_TYPES if computing else STAMPED_TYPES)
         if not drop_input:
-            require_free_topics(reader, new_topics, hint="pass --drop-input to leave the "
-                                "input topics out")
+            require_free_topics(reader, new_topics, hint="leave the input topics out or "
+                                "choose another output namespace")
+        built = [c.build() for c in computing]
         workers = workers or min(4, os.cpu_count() or 1)
-        in_flight = 2 * workers + 2
         with open_writer(output, fmt=fmt, overwrite=overwrite,
                          inputs=local_paths(input_path)) as writer:
-            job = _Job(tuple(processors), compress, writer.serialization,
-                       f"{reader.path}: {topic}")
-            for first in reader.raw_messages([topic]):  # fail early; warm up serializers
-                job(reader.decode(first), first.log_time_ns)
-                break
-            read = processed = written = 0
-            pending: deque[Future[list[RawMessage]]] = deque()
+            jobs = {topic: _Topic(_Job(
+                tuple((proc, {name: o.topic for name, o in outs})
+                      for proc, outs in zip(built, plans[topic], strict=True)),
+                compress, writer.serialization, f"{reader.path}: {topic}"),
+                [c.build() for c in processors if c.spec.selects]) for topic in topics}
+            if computing:
+                _warm_up(reader, jobs)
+                writer.write(PROCESSED, record.to_message(), log_time_ns=reader.start_ns or 0)
+            counts = _stream(reader, writer, jobs, workers=workers, drop_input=drop_input,
+                             thin=thin, max_frames=max_frames)
+    return ProcessResult(output, counts.read, counts.processed, counts.written + bool(computing),
+                         time.perf_counter() - started, tuple(record.outputs))
 
-            def flush(keep: int) -> int:
-                count = 0
-                while len(pending) > keep:
-                    for raw in pending.popleft().result():
-                        writer.write_raw(raw)
-                        count += 1
-                return count
 
-            with ThreadPoolExecutor(workers, thread_name_prefix="camlog-process") as pool:
-                try:
-                    for raw in reader.raw_messages():
-                        if not drop_input:
-                            writer.write_raw(raw)
-                            written += 1
-                        if raw.topic != topic:
-                            continue
-                        read += 1
-                        frame = reader.decode(raw)
-                        if throttle.keep(getattr(frame, "stamp_ns", raw.log_time_ns)):
-                            processed += 1
-                            pending.append(pool.submit(job, frame, raw.log_time_ns))
-                            written += flush(in_flight)
-                        if max_frames is not None and read >= max_frames:
-                            break
-                    written += flush(0)
-                except BaseException:
-                    for future in pending:
-                        future.cancel()
-                    raise
-    return ProcessResult(output, read, processed, written, time.perf_counter() - started)
+def _warm_up(reader: LogReader, jobs: Mapping[str, _Topic]) -> None:
+    """Run the first frame of each topic: fail before writing anything, warm serializers."""
+    for topic, state in jobs.items():
+        for first in reader.raw_messages([topic]):
+            state.job(reader.decode(first), first.log_time_ns)
+            break
+
+
+def _stream(reader: LogReader, writer: LogWriter, jobs: Mapping[str, _Topic], *, workers: int,
+            drop_input: bool, thin: bool, max_frames: int | None) -> _Counts:
+    """The copy-and-process pass over the log."""
+    counts = _Counts()
+    in_flight = 2 * workers + 2
+
+    def flush(keep: int) -> None:
+        while len(counts.pending) > keep:
+            for raw in counts.pending.popleft().result():
+                writer.write_raw(raw)
+                counts.written += 1
+
+    def copy(raw: RawMessage) -> None:
+        if not drop_input:
+            writer.write_raw(raw)
+            counts.written += 1
+
+    with ThreadPoolExecutor(workers, thread_name_prefix="camlog-process") as pool:
+        try:
+            for raw in reader.raw_messages():
+                state = jobs.get(raw.topic)
+                if state is None:
+                    copy(raw)
+                    continue
+                if max_frames is not None and state.read >= max_frames:
+                    continue  # this topic is done; others are not yet
+                state.read += 1
+                counts.read += 1
+                frame = reader.decode(raw)
+                kept = state.keep(getattr(frame, "stamp_ns", raw.log_time_ns))
+                if kept or not thin:
+                    copy(raw)
+                if kept:
+                    counts.processed += 1
+                    if state.job.stages:
+                        counts.pending.append(pool.submit(state.job, frame, raw.log_time_ns))
+                        flush(in_flight)
+                if max_frames is not None and all(s.read >= max_frames for s in jobs.values()):
+                    break
+            flush(0)
+        except BaseException:
+            for future in counts.pending:
+                future.cancel()
+            raise
+    return counts

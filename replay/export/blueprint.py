@@ -2,9 +2,9 @@
 
 Top row: one 2D view per camera, side by side (a grid beyond three), each showing the
 camera's images with every overlay that belongs to them. Middle row (when present): the
-rectified images side by side, with horizontal guide rows. Bottom row: one time-series view
-per kind of metric, then tabs with the 3D rig (when the log knows it) and the text records.
-The time panel starts on the ``log_time`` timeline.
+rectified images side by side, with horizontal guide rows, and other processed images.
+Bottom row: one time-series view per kind of metric, then tabs with the 3D rig (when the
+log knows it) and the text records. The time panel starts on the ``log_time`` timeline.
 """
 
 from __future__ import annotations
@@ -37,6 +37,8 @@ def make_blueprint(plan: ScenePlan, *, timeline: str = LOG_TIME,
                for cam in plan.cameras.values() if cam.viewable]
     rectified = [rrb.Spatial2DView(origin=entity, name=entity.removeprefix("rectified"))
                  for entity in plan.rectified]
+    rectified += [rrb.Spatial2DView(origin=entity, name=entity.removeprefix("processed"))
+                  for entity in plan.images]
     bottom: list[Any] = [rrb.TimeSeriesView(origin=s.origin, name=s.title) for s in plan.series]
     tabs: list[Any] = []
     if plan.rig.world_from_camera:

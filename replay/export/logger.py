@@ -40,7 +40,7 @@ from .overlays import (
     project_target,
     stamp_free_key,
 )
-from .scene import CameraPlan, ScenePlan, rectified_entity, series_entity, text_entity
+from .scene import CameraPlan, ScenePlan, image_entity, series_entity, text_entity
 from .topics import Kind, Route
 
 __all__ = ["LoggerOptions", "SceneLogger"]
@@ -98,11 +98,12 @@ class SceneLogger:
         self._handlers: dict[Kind, Callable[[RawMessage, Route], None]] = {
             Kind.IMAGE: self._image, Kind.CAMERA_INFO: self._camera_info,
             Kind.CALIBRATED_INFO: self._camera_info, Kind.RECTIFIED: self._rectified,
-            Kind.DETECTIONS: self._detections, Kind.RESIDUALS: self._residuals,
-            Kind.VIEW_ERROR: self._series, Kind.RED_COUNT: self._series,
+            Kind.PROCESSED_IMAGE: self._rectified, Kind.DETECTIONS: self._detections,
+            Kind.RESIDUALS: self._residuals,
+            Kind.VIEW_ERROR: self._series, Kind.SCALAR: self._series,
             Kind.STEREO_OFFSET: self._series, Kind.POINT_SERIES: self._series,
-            Kind.RED_MASK: self._segmentation, Kind.EDGES: self._segmentation,
-            Kind.RED_CENTROID: self._centroid, Kind.GROUND_TRUTH: self._ground_truth,
+            Kind.MASK: self._segmentation, Kind.EDGES: self._segmentation,
+            Kind.POINT_2D: self._point_2d, Kind.GROUND_TRUTH: self._ground_truth,
             Kind.TEXT: self._text,
         }
 
@@ -123,7 +124,7 @@ class SceneLogger:
                         static=True)
         for route_topic, route in self.plan.routes.items():
             if route.kind is Kind.POINT_SERIES:
-                rec.log(series_entity(route.kind, route_topic),
+                rec.log(series_entity(route, route_topic),
                         rr.SeriesLines(names=["x", "y", "z"]), static=True)
 
     # --- entry point -----------------------------------------------------------------------
@@ -249,14 +250,15 @@ class SceneLogger:
             image_plane_distance=self.plan.image_plane_distance_m))
 
     def _rectified(self, raw: RawMessage, route: Route) -> None:
+        """A rectified (with guide rows) or other processed image, in its own view."""
         message = self._decode(raw)
         assert isinstance(message, Image | CompressedImage)
         cam = self._camera_of(route, message)
         if cam is not None and not self._shows(cam, message.stamp_ns):
             return
-        entity = rectified_entity(raw.topic)
         self._times(raw, message.stamp_ns)
-        if entity not in self._guides:
+        entity = image_entity(route.kind, raw.topic)
+        if route.kind is Kind.RECTIFIED and entity not in self._guides:
             self._guides.add(entity)
             self._guide_rows(entity, message)
         self._emit(entity + "/image", self._archetype(message))
@@ -308,12 +310,12 @@ class SceneLogger:
     def _series(self, raw: RawMessage, route: Route) -> None:
         message = self._decode(raw)
         assert isinstance(message, PointStamped)
-        if route.kind is Kind.RED_COUNT:
+        if route.kind is Kind.SCALAR and route.by_frame:
             cam = self._camera_of(route, message)
             namespace = cam.plan.namespace if cam is not None else message.frame_id
         else:
             namespace = route.namespace
-        entity = series_entity(route.kind, namespace)
+        entity = series_entity(route, namespace)
         self._times(raw, message.stamp_ns)
         match route.kind:
             case Kind.STEREO_OFFSET:
@@ -331,26 +333,24 @@ class SceneLogger:
         if cam is None or not self._shows(cam, message.stamp_ns):
             return
         image = self._pixels(message)
-        if route.kind is Kind.RED_MASK:
-            entity, classes, opacity, order = "red_pixels/mask", mask_classes(to_rgb8(image)), \
-                0.5, ORDER_MASK
+        if route.kind is Kind.MASK:
+            classes, opacity, order = mask_classes(to_rgb8(image)), 0.5, ORDER_MASK
         else:
-            entity, classes, opacity, order = "edges", edge_classes(to_mono8(image)), 0.8, \
-                ORDER_EDGES
+            classes, opacity, order = edge_classes(to_mono8(image)), 0.8, ORDER_EDGES
         self._times(raw, message.stamp_ns)
-        self._overlay(raw, cam, f"{cam.plan.entity}/{entity}", message.stamp_ns,
+        self._overlay(raw, cam, f"{cam.plan.entity}/{route.entity}", message.stamp_ns,
                       rr.SegmentationImage(classes, opacity=opacity, draw_order=order))
 
-    def _centroid(self, raw: RawMessage, route: Route) -> None:
+    def _point_2d(self, raw: RawMessage, route: Route) -> None:
         message = self._decode(raw)
         assert isinstance(message, PointStamped)
         cam = self._camera_of(route, message)
         if cam is None or not self._shows(cam, message.stamp_ns):
             return
         self._times(raw, message.stamp_ns)
-        entity = f"{cam.plan.entity}/red_pixels/centroid"
+        entity = f"{cam.plan.entity}/{route.entity}"
         self._overlay(raw, cam, entity, message.stamp_ns, self._points(
-            entity, [message.point[:2]], CYAN, CENTROID_RADIUS, label="red centroid"))
+            entity, [message.point[:2]], CYAN, CENTROID_RADIUS, label=route.label or None))
 
     def _ground_truth(self, raw: RawMessage, route: Route) -> None:
         points = self.plan.targets.get(route.detail)

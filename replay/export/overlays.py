@@ -28,18 +28,20 @@ __all__ = [
 
 U8 = npt.NDArray[np.uint8]
 
-BACKGROUND, RED_PIXEL, CENTROID_MARKER, EDGE = 0, 1, 2, 3
+BACKGROUND, MASK_PIXEL, CENTROID_MARKER, EDGE = 0, 1, 2, 3
 #: class id -> (label, RGBA); class 0 is transparent so overlays show the image beneath
 CLASSES: dict[int, tuple[str, tuple[int, int, int, int]]] = {
     BACKGROUND: ("background", (0, 0, 0, 0)),
-    RED_PIXEL: ("red pixel", (255, 40, 40, 255)),
+    MASK_PIXEL: ("mask pixel", (255, 40, 40, 255)),
     CENTROID_MARKER: ("centroid marker", (40, 90, 255, 255)),
     EDGE: ("Canny edge", (40, 255, 90, 255)),
 }
 
 
 def mask_classes(mask_rgb: U8) -> U8:
-    """``(H, W)`` class ids of the red-pixel output: white -> red pixel, blue -> marker.
+    """``(H, W)`` class ids of a mask as RGB: white (or any bright red) -> mask pixel, blue
+    -> marker (the red-pixel output's centroid square); a mono8 mask converted to RGB
+    classifies by its brightness.
 
     Thresholds at half range, so a JPEG-compressed mask classifies the same.
 
@@ -49,7 +51,7 @@ def mask_classes(mask_rgb: U8) -> U8:
     """
     red = mask_rgb[..., 0] > 127
     blue = mask_rgb[..., 2] > 127
-    classes = np.where(red, RED_PIXEL, np.where(blue, CENTROID_MARKER, BACKGROUND))
+    classes = np.where(red, MASK_PIXEL, np.where(blue, CENTROID_MARKER, BACKGROUND))
     return classes.astype(np.uint8)
 
 

@@ -9,16 +9,19 @@ Entity paths (``{ns}`` is a camera namespace such as ``stereo_camera/left``)::
     world/{ns}/calibration/corners         Points2D, corners of a used view
     world/{ns}/calibration/residuals       Arrows2D, residuals x --residual-scale
     world/{ns}/calibration/status          Boxes2D framing the image: used / rejected
-    world/{ns}/red_pixels/mask             SegmentationImage (red pixels, centroid marker)
-    world/{ns}/red_pixels/centroid         Points2D
-    world/{ns}/edges                       SegmentationImage (Canny edges)
+    world/{ns}/{entity}                    a processor's mask or edges (SegmentationImage) or
+                                           2-D point (Points2D), e.g. red_pixels/mask,
+                                           red_pixels/centroid, edges
     world/{ns}/ground_truth/{target}       Points2D, the target's points projected
     rectified/{topic}                      rectified images, and rows: LineStrips2D guides
+    processed/{topic}                      other images processors computed
     metrics/{series}/{ns}                  Scalars (view RMS px, red count, offset ms, ...)
     text/{topic}                           TextDocument (scenario, summaries, stats)
 
-Outputs that name their camera by ``frame_id`` only (processors) go under the camera whose
-images carry that frame; a frame no camera has becomes a camera ``world/frame/{frame_id}``.
+Processor outputs recorded in the log go under the camera of their source image, at the
+entity their processor declared. Outputs known only by name (the chapter's
+``/image_converter/...``) go under the camera whose images carry their ``frame_id``; a frame
+no camera has becomes a camera ``world/frame/{frame_id}``.
 """
 
 from __future__ import annotations
@@ -34,12 +37,12 @@ from .topics import Kind, Route
 __all__ = ["CameraPlan", "ScenePlan", "SeriesPlan", "camera_entity", "plan_scene"]
 
 #: kinds whose messages are drawn inside a camera's 2D view
-_VIEWABLE = frozenset({Kind.IMAGE, Kind.DETECTIONS, Kind.RESIDUALS, Kind.RED_MASK,
-                       Kind.RED_CENTROID, Kind.EDGES, Kind.GROUND_TRUTH})
-#: kind -> (metrics group, view title)
+_VIEWABLE = frozenset({Kind.IMAGE, Kind.DETECTIONS, Kind.RESIDUALS, Kind.MASK,
+                       Kind.POINT_2D, Kind.EDGES, Kind.GROUND_TRUTH})
+#: kind -> (metrics group, view title); a processor's scalar names its own
 SERIES: dict[Kind, tuple[str, str]] = {
     Kind.VIEW_ERROR: ("calibration_view_rms_px", "calibration view RMS (px)"),
-    Kind.RED_COUNT: ("red_pixel_count", "red pixel count"),
+    Kind.SCALAR: ("scalars", "processor outputs"),
     Kind.STEREO_OFFSET: ("stereo_offset_ms", "stereo stamp offset right − left (ms)"),
     Kind.POINT_SERIES: ("points", "other PointStamped topics (x, y, z)"),
 }
@@ -83,6 +86,7 @@ class ScenePlan:
     image_plane_distance_m: float
     series: list[SeriesPlan] = field(default_factory=list)
     rectified: list[str] = field(default_factory=list)  # rectified image entities
+    images: list[str] = field(default_factory=list)  # other processed image entities
     texts: list[str] = field(default_factory=list)  # text document entities
     targets: dict[str, F64] = field(default_factory=dict)  # target -> points (N, 3)
     rejected: dict[str, dict[int, str]] = field(default_factory=dict)  # ns -> stamp -> why
@@ -90,9 +94,11 @@ class ScenePlan:
     counts: dict[str, int] = field(default_factory=dict)  # topic -> messages in the log
 
 
-def rectified_entity(topic: str) -> str:
-    """``/stereo/left/image_rect/compressed`` -> ``rectified/stereo/left/image_rect``."""
-    return "rectified/" + topic.removesuffix("/compressed").strip("/")
+def image_entity(kind: Kind, topic: str) -> str:
+    """The own view of an image topic: ``/stereo/left/image_rect/compressed`` ->
+    ``rectified/stereo/left/image_rect``; other processed images under ``processed/``."""
+    prefix = "rectified/" if kind is Kind.RECTIFIED else "processed/"
+    return prefix + topic.removesuffix("/compressed").strip("/")
 
 
 def text_entity(topic: str) -> str:
@@ -100,9 +106,18 @@ def text_entity(topic: str) -> str:
     return "text/" + topic.strip("/")
 
 
-def series_entity(kind: Kind, namespace: str) -> str:
+def series_group(route: Route) -> tuple[str, str]:
+    """(metrics group, view title) of a time-series route: a processor's scalar by its
+    entity and label."""
+    group, title = SERIES[route.kind]
+    if route.kind is Kind.SCALAR:
+        return route.entity or group, route.label or route.entity or title
+    return group, title
+
+
+def series_entity(route: Route, namespace: str) -> str:
     """``metrics/{group}/{namespace}``."""
-    return f"metrics/{SERIES[kind][0]}/{namespace.strip('/')}"
+    return f"metrics/{series_group(route)[0]}/{namespace.strip('/')}"
 
 
 def orphan_namespace(frame_id: str) -> str:
@@ -185,9 +200,12 @@ def plan_scene(found: Survey) -> ScenePlan:
                     infos=infos, scenario=found.scenario)
     for ns, pose in rig.world_from_camera.items():
         ordered[ns].world_from_camera = pose
-    kinds = {route.kind for route in routes.values()}
-    series = [SeriesPlan(f"metrics/{group}", title) for kind, (group, title) in SERIES.items()
-              if kind in kinds]
+    groups = sorted({(list(SERIES).index(r.kind), *series_group(r)) for r in routes.values()
+                     if r.kind in SERIES})
+    titles: dict[str, str] = {}
+    for _, group, title in groups:
+        titles.setdefault(group, title)  # one view per group
+    series = [SeriesPlan(f"metrics/{group}", title) for group, title in titles.items()]
     return ScenePlan(
         routes=routes,
         cameras=ordered,
@@ -195,8 +213,10 @@ def plan_scene(found: Survey) -> ScenePlan:
         rig=rig,
         image_plane_distance_m=_plane_distance_m(rig),
         series=series,
-        rectified=sorted({rectified_entity(t) for t, r in routes.items()
+        rectified=sorted({image_entity(r.kind, t) for t, r in routes.items()
                           if r.kind is Kind.RECTIFIED}),
+        images=sorted({image_entity(r.kind, t) for t, r in routes.items()
+                       if r.kind is Kind.PROCESSED_IMAGE}),
         texts=[text_entity(t) for t, r in sorted(routes.items()) if r.kind is Kind.TEXT],
         targets=_targets(found.scenario),
         rejected=found.calibration_summary.rejected_stamps()

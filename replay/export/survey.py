@@ -12,21 +12,26 @@ from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
 from ..errors import ReplayError
-from ..formats.base import LogReader, TopicInfo
+from ..formats.base import LogReader, RawMessage, TopicInfo
 from ..messages import CameraInfo
-from ..records import CalibrationSummary, JsonRecord, Scenario
-from ..topics import CALIBRATION_SUMMARY, SCENARIO
+from ..records import (
+    CalibrationSummary,
+    JsonRecord,
+    ProcessedOutput,
+    ProcessedOutputs,
+    Scenario,
+    outputs_by_topic,
+)
+from ..topics import CALIBRATION_SUMMARY, PROCESSED, SCENARIO
 from .topics import Kind, Route, classify
 
 __all__ = ["Survey", "survey"]
 
 R = TypeVar("R", bound=JsonRecord)
 
-#: kinds whose first message tells which camera (frame_id) they belong to
-_FRAME_KINDS = frozenset({
-    Kind.IMAGE, Kind.CAMERA_INFO, Kind.CALIBRATED_INFO, Kind.RED_MASK, Kind.RED_CENTROID,
-    Kind.RED_COUNT, Kind.EDGES, Kind.RECTIFIED,
-})
+#: kinds whose first message tells which camera (frame_id) they belong to (and every
+#: route that finds its camera by frame)
+_FRAME_KINDS = frozenset({Kind.IMAGE, Kind.CAMERA_INFO, Kind.CALIBRATED_INFO, Kind.RECTIFIED})
 
 
 @dataclass
@@ -41,16 +46,21 @@ class Survey:
     camera_infos: dict[str, CameraInfo] = field(default_factory=dict)  # topic -> first
     scenario: Scenario | None = None
     calibration_summary: CalibrationSummary | None = None
+    outputs: dict[str, ProcessedOutput] = field(default_factory=dict)  # recorded outputs
     duplicates: list[str] = field(default_factory=list)  # topics left out: an earlier log has them
 
 
 def _first(reader: LogReader, topic: str, start_ns: int | None, end_ns: int | None) -> Any:
     for raw in reader.raw_messages([topic], start_ns, end_ns):
-        try:
-            return reader.decode(raw)
-        except ReplayError:
-            return None
+        return _decoded(reader, raw)
     return None
+
+
+def _decoded(reader: LogReader, raw: RawMessage) -> Any:
+    try:
+        return reader.decode(raw)
+    except ReplayError:
+        return None
 
 
 def _record(message: Any, record: type[R]) -> R | None:
@@ -61,6 +71,21 @@ def _record(message: Any, record: type[R]) -> R | None:
         return None
 
 
+def processed_outputs(readers: Sequence[LogReader]) -> dict[str, ProcessedOutput]:
+    """Every output recorded on :data:`~replay.topics.PROCESSED` in any of the logs
+    (whatever topics are chosen: the record is metadata); unreadable records are ignored
+    (their topics are then routed by name)."""
+    records = []
+    for reader in readers:
+        if PROCESSED not in reader.topics:
+            continue
+        for raw in reader.raw_messages([PROCESSED]):
+            record = _record(_decoded(reader, raw), ProcessedOutputs)
+            if record is not None:
+                records.append(record)
+    return outputs_by_topic(records)
+
+
 def survey(
     readers: Sequence[LogReader],
     chosen: Sequence[list[str] | None],
@@ -68,7 +93,7 @@ def survey(
     end_ns: int | None = None,
 ) -> Survey:
     """Survey ``readers`` restricted to their ``chosen`` topics (None: all)."""
-    result = Survey()
+    result = Survey(outputs=processed_outputs(readers))
     for index, (reader, wanted) in enumerate(zip(readers, chosen, strict=True)):
         for name in sorted(reader.topics) if wanted is None else wanted:
             info = reader.topics[name]
@@ -78,8 +103,8 @@ def survey(
                 result.duplicates.append(f"{name} ({reader.path})")
                 continue
             result.topics[name], result.owner[name] = info, index
-            result.routes[name] = route = classify(name, info.msgtype)
-            if route.kind in _FRAME_KINDS:
+            result.routes[name] = route = classify(name, info.msgtype, result.outputs)
+            if route.kind in _FRAME_KINDS or route.by_frame:
                 message = _first(reader, name, start_ns, end_ns)
                 if message is None:
                     continue

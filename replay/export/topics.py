@@ -1,20 +1,30 @@
-"""What each topic of a camlog log is, from its name and type alone.
+"""What each topic of a camlog log is: from the log's record of processed outputs, else
+from its name and type alone.
 
 Cameras own ``{ns}/image_raw[/compressed]`` and ``{ns}/camera_info``; the calibration adds
-``{ns}/calibration/...`` and ``{ns}/calibrated/camera_info``; processors write under
-``/image_converter/...`` with the source image's ``frame_id``, which is how their outputs
-find the camera they belong to (``Route.by_frame``).
+``{ns}/calibration/...`` and ``{ns}/calibrated/camera_info``. ``camlog process`` records
+each output it writes (:class:`replay.records.ProcessedOutputs`): its source image topic
+names the camera and its display (:class:`replay.display.Display`) says how to draw it.
+Logs without that record are routed by name: the chapter's ``/image_converter/...``
+outputs carry the source image's ``frame_id``, which is how they find the camera they
+belong to (``Route.by_frame``).
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import Enum
+from typing import TYPE_CHECKING
 
 from .. import topics as names
+from ..display import Display
 from ..topics import ResyncTopics
 
-__all__ = ["Kind", "Route", "classify"]
+if TYPE_CHECKING:
+    from ..records import ProcessedOutput
+
+__all__ = ["Kind", "Route", "classify", "route_output"]
 
 IMAGE = "sensor_msgs/msg/Image"
 COMPRESSED = "sensor_msgs/msg/CompressedImage"
@@ -36,10 +46,11 @@ class Kind(Enum):
     DETECTIONS = "detections"  # calibration image with the drawn corners
     RESIDUALS = "residuals"  # calibration corners and residual arrows (JSON)
     VIEW_ERROR = "view_error"  # per-view calibration RMS (PointStamped x, px)
-    RED_MASK = "red_mask"  # red-pixel mask with the centroid square (rgb8)
-    RED_CENTROID = "red_centroid"  # PointStamped x = u, y = v (px)
-    RED_COUNT = "red_count"  # PointStamped x = count
-    EDGES = "edges"  # Canny edges (mono8)
+    PROCESSED_IMAGE = "processed_image"  # a processor's image, shown in its own view
+    MASK = "mask"  # a processor's mask (mono8, or rgb8 with a blue marker) over the camera
+    POINT_2D = "point_2d"  # a processor's PointStamped x = u, y = v (px) on the camera
+    SCALAR = "scalar"  # a processor's PointStamped x as a time series
+    EDGES = "edges"  # a processor's edge image (mono8) over the camera
     GROUND_TRUTH = "ground_truth"  # target pose in the camera optical frame
     STEREO_OFFSET = "stereo_offset"  # PointStamped x = right - left stamp (s)
     POINT_SERIES = "point_series"  # any other PointStamped: x, y, z as time series
@@ -51,21 +62,36 @@ class Kind(Enum):
 class Route:
     """Where a topic goes: its kind, the camera namespace it names (if any), and whether
     the camera must be found from each message's ``frame_id`` instead. ``detail`` is the
-    target name for ground truth."""
+    target name for ground truth; a processor's output has the ``entity`` it is drawn at
+    under its camera (the series name of a scalar) and a ``label``."""
 
     kind: Kind
     namespace: str = ""
     by_frame: bool = False
     detail: str = ""
+    entity: str = ""
+    label: str = ""
 
 
-#: processor topics (image topics without ``/compressed``); their camera is found by frame
-BY_FRAME: dict[str, Kind] = {
-    f"{PROCESSOR_NS}/output_video": Kind.RED_MASK,
-    f"{PROCESSOR_NS}/edges": Kind.EDGES,
-    f"{PROCESSOR_NS}/image_rect": Kind.RECTIFIED,
-    f"{PROCESSOR_NS}/red_centroid": Kind.RED_CENTROID,
-    f"{PROCESSOR_NS}/red_count": Kind.RED_COUNT,
+#: how each display of a processor output is routed
+DISPLAY_KINDS: dict[Display, Kind] = {
+    Display.IMAGE: Kind.PROCESSED_IMAGE, Display.RECTIFIED: Kind.RECTIFIED,
+    Display.MASK: Kind.MASK, Display.EDGES: Kind.EDGES, Display.POINT_2D: Kind.POINT_2D,
+    Display.SCALAR: Kind.SCALAR, Display.POINT_SERIES: Kind.POINT_SERIES,
+}
+
+#: the chapter's processor topics in logs without a record (image topics without
+#: ``/compressed``); their camera is found by frame
+BY_FRAME: dict[str, Route] = {
+    f"{PROCESSOR_NS}/output_video": Route(Kind.MASK, by_frame=True, entity="red_pixels/mask",
+                                          label="red pixels"),
+    f"{PROCESSOR_NS}/edges": Route(Kind.EDGES, by_frame=True, entity="edges",
+                                   label="Canny edges"),
+    f"{PROCESSOR_NS}/image_rect": Route(Kind.RECTIFIED, by_frame=True, label="rectified"),
+    f"{PROCESSOR_NS}/red_centroid": Route(Kind.POINT_2D, by_frame=True,
+                                          entity="red_pixels/centroid", label="red centroid"),
+    f"{PROCESSOR_NS}/red_count": Route(Kind.SCALAR, by_frame=True, entity="red_pixel_count",
+                                       label="red pixel count"),
 }
 #: type -> (suffix, kind) tried in order; the camera namespace is what precedes the suffix
 SUFFIXES: dict[str, tuple[tuple[str, Kind], ...]] = {
@@ -84,14 +110,32 @@ FALLBACK: dict[str, Kind] = {
 }
 
 
-def classify(topic: str, msgtype: str) -> Route:
-    """The route of one topic.
+def route_output(output: ProcessedOutput) -> Route | None:
+    """The route of a recorded processor output: drawn on the camera of its source image
+    (a point series on its own); None for a display this camlog does not know."""
+    display = output.shown_as
+    if display is None:
+        return None
+    kind = DISPLAY_KINDS[display]
+    source = output.source.removesuffix("/compressed") or output.source
+    namespace = output.topic if kind is Kind.POINT_SERIES else source.rpartition("/")[0]
+    return Route(kind, namespace, entity=output.entity, label=output.label)
 
-    >>> classify("/stereo_camera/left/image_raw/compressed", COMPRESSED)
-    Route(kind=<Kind.IMAGE: 'image'>, namespace='/stereo_camera/left', by_frame=False, detail='')
+
+def classify(topic: str, msgtype: str,
+             outputs: Mapping[str, ProcessedOutput] | None = None) -> Route:
+    """The route of one topic, from the recorded ``outputs`` (topic -> output) first.
+
+    >>> classify("/stereo_camera/left/image_raw/compressed", COMPRESSED).namespace
+    '/stereo_camera/left'
     >>> classify("/image_converter/red_centroid", POINT).by_frame
     True
     """
+    route = route_output(outputs[topic]) if outputs and topic in outputs else None
+    return route or _by_name(topic, msgtype)
+
+
+def _by_name(topic: str, msgtype: str) -> Route:
     name = topic
     if msgtype == COMPRESSED:
         msgtype, name = IMAGE, topic.removesuffix("/compressed") or topic
@@ -102,7 +146,7 @@ def classify(topic: str, msgtype: str) -> Route:
     if msgtype not in FALLBACK:
         return Route(Kind.SKIPPED)
     if name in BY_FRAME:
-        return Route(BY_FRAME[name], by_frame=True)
+        return BY_FRAME[name]
     for suffix, kind in SUFFIXES[msgtype]:
         if name.endswith(suffix) and len(name) > len(suffix):
             return Route(kind, name[: -len(suffix)])

@@ -16,6 +16,7 @@ from .calibration import (
     TangentialSummary,
     ViewResiduals,
 )
+from .processed import ProcessedOutput, ProcessedOutputs, outputs_by_topic
 from .resync import OffsetStats, ResyncStats
 from .scenario import RenderView, Scenario, ScenarioCamera, ScenarioTarget
 
@@ -28,6 +29,8 @@ __all__ = [
     "OffsetStats",
     "OptionsSummary",
     "ParameterEstimate",
+    "ProcessedOutput",
+    "ProcessedOutputs",
     "RangeProgress",
     "RejectedJointView",
     "RejectedView",
@@ -41,5 +44,6 @@ __all__ = [
     "TangentialSummary",
     "ViewResiduals",
     "from_json",
+    "outputs_by_topic",
     "to_json",
 ]

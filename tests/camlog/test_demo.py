@@ -29,8 +29,8 @@ def test_demo_runs_every_step_and_says_where_outputs_went(
     assert all("truth" in cam["parameters"]["fx"] for cam in summary["cameras"])
     assert summary["stereo"]["baseline_m"] == pytest.approx(0.02, rel=0.01)
     with open_reader(out / "red_block_processed.mcap") as reader:
-        assert reader.topics["/image_converter/red_centroid"].count > 0
-        assert reader.topics["/image_converter/edges"].count > 0
+        assert reader.topics["/stereo_camera/left/red_centroid"].count > 0
+        assert reader.topics["/stereo_camera/left/edges"].count > 0
     assert (out / "demo.rrd").stat().st_size > 100_000
     # a second run replaces the demo's own outputs
     assert main(["demo", "-o", str(out), "--duration", "4", "--no-progress"]) == 0

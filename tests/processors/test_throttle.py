@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from processors.errors import ConfigError
+from processors.errors import OptionValueError
 from processors.throttle import EveryNth, KeepAll, RateLimit, make_throttle, throttle_mask
 
 MS = 1_000_000
@@ -38,10 +38,10 @@ def test_rate_limit_on_exact_stamps() -> None:
 def test_make_throttle_chooses_one() -> None:
     assert isinstance(make_throttle(), KeepAll)
     assert isinstance(make_throttle(every=2), EveryNth)
-    assert isinstance(make_throttle(rate_hz=5), RateLimit)
-    with pytest.raises(ConfigError):
-        make_throttle(every=2, rate_hz=5)
-    with pytest.raises(ConfigError):
-        EveryNth(0)
-    with pytest.raises(ConfigError):
-        RateLimit(0)
+    assert isinstance(make_throttle(rate=5), RateLimit)
+    for make, options in ((lambda: make_throttle(every=2, rate=5), ("every", "rate")),
+                          (lambda: EveryNth(0), ("every",)), (lambda: RateLimit(0), ("rate",))):
+        with pytest.raises(OptionValueError) as err:
+            make()
+        # options by name, never by a command line's flag (the command words those)
+        assert err.value.options == options and "--" not in str(err.value)

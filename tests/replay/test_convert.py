@@ -87,11 +87,13 @@ def test_topics_and_time_window(red_processed_log: Path, tmp_path: Path) -> None
     with open_reader(red_processed_log) as reader:
         start = reader.start_ns
     assert start is not None
-    assert {t for t, _, _ in got} == {"/stereo_camera/left/image_raw",
-                                      "/stereo_camera/left/camera_info",
-                                      "/stereo_camera/left/ground_truth/red_block"}
+    # the camera's own topics and the processor outputs written under its namespace
+    topics = {f"/stereo_camera/left/{name}" for name in (
+        "image_raw", "camera_info", "ground_truth/red_block", "edges", "output_video",
+        "red_centroid", "red_count")}
+    assert {t for t, _, _ in got} == topics
     assert all(start + 200_000_000 <= t < start + 400_000_000 for _, t, _ in got)
-    assert len(got) == 3 * 6  # frames 6..11 at 30 Hz
+    assert len(got) == len(topics) * 6  # frames 6..11 at 30 Hz
 
 
 def test_compress_png_is_lossless_and_renames(red_log: Path, tmp_path: Path) -> None:

@@ -77,3 +77,51 @@ def test_bad_pipelines_name_the_problem(tmp_path: Path, text: str, message: str)
 def test_missing_pipeline_file(tmp_path: Path) -> None:
     with pytest.raises(PipelineError, match="does not exist"):
         load_pipeline(tmp_path / "none.toml")
+
+
+def test_process_keys_come_from_the_registry() -> None:
+    from camlog.batch.pipeline import STEPS
+    from processors.registry import PROCESSORS
+
+    keys = STEPS["process"][0]
+    for spec in PROCESSORS.values():
+        if spec.flag:
+            assert spec.name in keys
+        else:
+            assert {o.name for o in spec.options} <= keys
+    assert {"topic", "output_ns", "compress", "drop_input"} <= keys
+    assert STEPS["throttle"][0] == {"topic", "every", "rate"}
+
+
+@pytest.mark.parametrize(("options", "chosen"), [
+    ({"edges": True}, [("edges", {"low": 50.0, "high": 150.0})]),
+    ({"edges": {"low": 40, "high": 120}, "every": 3},
+     [("edges", {"low": 40.0, "high": 120.0}), ("throttle", {"every": 3, "rate": None})]),
+    ({"red_pixels": {"ratio": 5}, "edges": False}, [("red_pixels", {"ratio": 5})]),
+])
+def test_process_step_options_configure_processors(options: dict[str, object],
+                                                   chosen: list[tuple[str, object]]) -> None:
+    from camlog.batch.pipeline import step_processors
+    from processors.registry import SPECS
+
+    got = step_processors(dict(options), SPECS)
+    assert [(c.name, dict(c.options)) for c in got] == chosen
+
+
+@pytest.mark.parametrize(("options", "message"), [
+    ({"edges": {"low": -1}}, "process: edges.low: must be >= 0"),
+    ({"edges": {"low": 200, "high": 100}}, "process: edges.low, edges.high: Canny"),
+    ({"edges": {"sigma": 1}}, "process: edges.sigma: no such option"),
+    ({"red_pixels": "yes"}, "red_pixels must be true, false or a table"),
+    ({"every": 0}, "process: every: must be >= 1"),
+    ({"rectify": 3}, "process: rectify: expected a camera model"),
+])
+def test_process_step_option_errors_name_the_keys(options: dict[str, object],
+                                                  message: str) -> None:
+    from camlog.batch.pipeline import keys_worded, step_processors
+    from processors.registry import SPECS
+
+    with pytest.raises(PipelineError, match=message) as err, keys_worded("process", SPECS):
+        for configured in step_processors(dict(options), SPECS):
+            configured.build()
+    assert "--" not in str(err.value)

@@ -70,7 +70,7 @@ def test_batch_survives_a_corrupt_log_and_reports_it(
         assert s["steps"][0]["figures"]["pairs"] > 10
         assert s["steps"][1]["figures"]["frames"] == s["steps"][0]["figures"]["pairs"]
         info = Path(s["steps"][2]["files"][0]).read_text()
-        assert "/image_converter/edges" in info and "/stereo_sync/left/image_raw" in info
+        assert "/stereo_sync/left/edges" in info and "/stereo_sync/left/image_raw" in info
     # per-log folders, one per step
     assert sorted(p.name for p in (out / "cam1").iterdir()) == [
         "01_resync", "02_process", "03_info", "batch_status.json"]

@@ -16,6 +16,7 @@ from replay.calibration_yaml import save_calibration
 from replay.camera import CameraModel
 from replay.codec import decode_compressed, encode_compressed
 from replay.geometry import rotation_from_quat_xyzw
+from replay.topics import PROCESSED
 from tests.outputs import temp_outputs
 
 LEFT = "/stereo_camera/left"
@@ -90,12 +91,12 @@ def distance_to_outline(points: np.ndarray, poly: np.ndarray) -> np.ndarray:
 
 
 def test_red_block_centroid_is_the_image_centre(processed: Path, red_block: Path) -> None:
-    out = read(processed, "/image_converter/red_centroid", "/image_converter/red_count",
-               "/image_converter/output_video", IMAGE)
-    centroids = out["/image_converter/red_centroid"]
+    out = read(processed, f"{LEFT}/red_centroid", f"{LEFT}/red_count",
+               f"{LEFT}/output_video", IMAGE)
+    centroids = out[f"{LEFT}/red_centroid"]
     assert len(centroids) == len(out[IMAGE]) == 3
-    for centroid, count, video, image in zip(centroids, out["/image_converter/red_count"],
-                                             out["/image_converter/output_video"], out[IMAGE],
+    for centroid, count, video, image in zip(centroids, out[f"{LEFT}/red_count"],
+                                             out[f"{LEFT}/output_video"], out[IMAGE],
                                              strict=True):
         assert isinstance(centroid, PointStamped) and isinstance(count, PointStamped)
         assert isinstance(video, Image) and isinstance(image, Image)
@@ -114,16 +115,16 @@ def test_input_is_kept_byte_for_byte_and_never_modified(red_block: Path, tmp_pat
         original = [(r.topic, r.log_time_ns, bytes(r.data)) for r in src.raw_messages()]
         copied = [(r.topic, r.log_time_ns, bytes(r.data)) for r in dst.raw_messages(src.topics)]
         assert copied == original
-        assert set(dst.topics) == set(src.topics) | {"/image_converter/edges"}
+        assert set(dst.topics) == set(src.topics) | {f"{LEFT}/edges", PROCESSED}
     dropped = tmp_path / "only.mcap"
     assert main(["process", str(red_block), "--topic", IMAGE, "--edges", "--drop-input",
                  "-o", str(dropped)]) == 0
     with open_reader(dropped) as reader:
-        assert set(reader.topics) == {"/image_converter/edges"}
+        assert set(reader.topics) == {f"{LEFT}/edges", PROCESSED}
 
 
 def test_edges_lie_on_the_projected_block_outline(processed: Path) -> None:
-    out = read(processed, "/image_converter/edges", f"{LEFT}/ground_truth/red_block",
+    out = read(processed, f"{LEFT}/edges", f"{LEFT}/ground_truth/red_block",
                f"{LEFT}/camera_info")
     edges, pose, info = (out[t][0] for t in out)
     assert isinstance(edges, Image) and isinstance(pose, PoseStamped)
@@ -147,13 +148,13 @@ def test_moving_block_centroid_follows_the_ground_truth(tmp_path: Path) -> None:
                  "--frames", "24", "--resolution", "320x240")
     out = tmp_path / "out.mcap"
     assert main(["process", str(log), "--topic", IMAGE, "--red-pixels", "-o", str(out)]) == 0
-    got = read(out, "/image_converter/red_centroid", f"{LEFT}/ground_truth/red_block",
+    got = read(out, f"{LEFT}/red_centroid", f"{LEFT}/ground_truth/red_block",
                f"{LEFT}/camera_info")
     info = got[f"{LEFT}/camera_info"][0]
     assert isinstance(info, CameraInfo)
     truth = {p.stamp_ns: p for p in got[f"{LEFT}/ground_truth/red_block"]
              if isinstance(p, PoseStamped)}
-    centroids = got["/image_converter/red_centroid"]
+    centroids = got[f"{LEFT}/red_centroid"]
     assert len(centroids) == len(truth) == 24
     positions = set()
     for centroid in centroids:
@@ -182,7 +183,7 @@ def test_every_third_frame_and_rate_limit(tmp_path: Path) -> None:
         out = tmp_path / f"every{flag[1]}.mcap"
         assert main(["process", str(log), "--topic", IMAGE, "--red-pixels", *flag,
                      "-o", str(out)]) == 0
-        got = read(out, "/image_converter/red_count")["/image_converter/red_count"]
+        got = read(out, f"{LEFT}/red_count")[f"{LEFT}/red_count"]
         assert [m.stamp_ns for m in got if isinstance(m, PointStamped)] == [
             stamps[i] for i in kept]
 
@@ -198,18 +199,18 @@ def test_compressed_input_and_output(red_block: Path, tmp_path: Path) -> None:
     out = tmp_path / "out.mcap"
     assert main(["process", str(log), "--topic", f"{IMAGE}/compressed", "--red-pixels",
                  "--edges", "--compress", "png", "-o", str(out)]) == 0
-    got = read(out, "/image_converter/output_video/compressed",
-               "/image_converter/edges/compressed", "/image_converter/red_centroid")
-    reference = read(_processed_again(red_block, tmp_path), "/image_converter/output_video",
-                     "/image_converter/edges")
+    got = read(out, f"{LEFT}/output_video/compressed",
+               f"{LEFT}/edges/compressed", f"{LEFT}/red_centroid")
+    reference = read(_processed_again(red_block, tmp_path), f"{LEFT}/output_video",
+                     f"{LEFT}/edges")
     for name in ("output_video", "edges"):
-        mine = got[f"/image_converter/{name}/compressed"]
-        theirs = reference[f"/image_converter/{name}"]
+        mine = got[f"{LEFT}/{name}/compressed"]
+        theirs = reference[f"{LEFT}/{name}"]
         assert len(mine) == len(theirs) == 3
         for compressed, image in zip(mine, theirs, strict=True):
             assert isinstance(compressed, CompressedImage) and "png" in compressed.format
             assert decode_compressed(compressed) == image  # png is lossless
-    assert len(got["/image_converter/red_centroid"]) == 3
+    assert len(got[f"{LEFT}/red_centroid"]) == 3
 
 
 def _processed_again(red_block: Path, tmp_path: Path) -> Path:
@@ -234,9 +235,9 @@ def test_rectify_with_a_calibration_file(red_block: Path, tmp_path: Path) -> Non
     out = tmp_path / "rect.mcap"
     assert main(["process", str(red_block), "--topic", IMAGE, "--rectify", str(yaml),
                  "-o", str(out)]) == 0
-    got = read(out, "/image_converter/image_rect", IMAGE)
+    got = read(out, f"{LEFT}/image_rect", IMAGE)
     rectifier = Rectifier(camera_info=calibrated)
-    for rect, image in zip(got["/image_converter/image_rect"], got[IMAGE], strict=True):
+    for rect, image in zip(got[f"{LEFT}/image_rect"], got[IMAGE], strict=True):
         assert isinstance(rect, Image) and isinstance(image, Image)
         (_, expected), = rectifier(image)
         assert rect == expected and not np.array_equal(rect.pixels, image.pixels)
@@ -337,5 +338,5 @@ def test_refuses_to_overwrite_the_input_or_mix_outputs(
     assert red_block.read_bytes() == before
     out = tmp_path / "twice.mcap"
     code = main(["process", str(processed), "--topic", IMAGE, "--edges", "-o", str(out)])
-    assert_failed_cleanly(capsys, out, code, "already has /image_converter/edges",
-                          "--drop-input")
+    assert_failed_cleanly(capsys, out, code, f"already has {LEFT}/edges",
+                          "output namespace")

@@ -17,7 +17,7 @@ def test_view_writes_an_rrd_beside_the_log(red_processed_log: Path, tmp_path: Pa
     log.write_bytes(red_processed_log.read_bytes())
     assert main(["view", str(log), "--no-progress"]) == 0
     out, err = capsys.readouterr()
-    assert out.splitlines()[0].startswith("logged 201 messages (40 images, 2 cameras: "
+    assert out.splitlines()[0].startswith("logged 202 messages (40 images, 2 cameras: "
                                           "/stereo_camera/left, /stereo_camera/right)")
     assert out.splitlines()[-1] == f"wrote {tmp_path / 'run.rrd'}" and err == ""
     verify = rerun_cli("rrd", "verify", "run.rrd", cwd=tmp_path)

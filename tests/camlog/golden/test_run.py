@@ -145,12 +145,12 @@ def test_numbers_compare_within_their_tolerance(tmp_path: Path) -> None:
 def test_text_differences_come_with_a_unified_diff() -> None:
     name = f"{RED}/left/output.txt"
     actual = {n: read_artifact(EXPECTED / n) for n in _expected_files(RED)}
-    actual[name] = actual[name].replace("/image_converter/edges  sensor_msgs/msg/Image  10",
-                                        "/image_converter/edges  sensor_msgs/msg/Image  9")
+    actual[name] = actual[name].replace("/stereo_camera/left/edges  sensor_msgs/msg/Image  10",
+                                        "/stereo_camera/left/edges  sensor_msgs/msg/Image  9")
     (difference,) = golden.compare(EXPECTED, actual)
     assert str(difference) == f"{name}: text differs (2 lines added or removed)"
-    assert "-/image_converter/edges  sensor_msgs/msg/Image  10" in difference.detail
-    assert "+/image_converter/edges  sensor_msgs/msg/Image  9" in difference.detail
+    assert "-/stereo_camera/left/edges  sensor_msgs/msg/Image  10" in difference.detail
+    assert "+/stereo_camera/left/edges  sensor_msgs/msg/Image  9" in difference.detail
 
 
 def test_update_rewrites_only_what_changed(tmp_path: Path) -> None:

@@ -10,7 +10,7 @@ from replay.codec import serialize
 from replay.export.overlays import (
     CENTROID_MARKER,
     EDGE,
-    RED_PIXEL,
+    MASK_PIXEL,
     edge_classes,
     mask_classes,
     project_target,
@@ -25,7 +25,7 @@ def test_mask_classes_of_the_red_pixels_output() -> None:
     rgb = draw_marker(mask, 37.0, 15.0)  # blue 11x11 square over the red pixels' centre
     classes = mask_classes(rgb)
     assert classes[15, 37] == CENTROID_MARKER
-    assert classes[10, 30] == RED_PIXEL
+    assert classes[10, 30] == MASK_PIXEL
     assert classes[0, 0] == 0
     assert int((classes == CENTROID_MARKER).sum()) == 11 * 11
 

@@ -5,17 +5,20 @@ from __future__ import annotations
 import pytest
 
 from replay.camera import CameraModel
+from replay.display import Display
 from replay.export.scene import plan_scene
 from replay.export.survey import Survey
 from replay.export.topics import classify
 from replay.formats.base import TopicInfo
+from replay.records import ProcessedOutput
 
 
-def survey_of(topics: dict[str, tuple[str, int]], frame_ids: dict[str, str]) -> Survey:
+def survey_of(topics: dict[str, tuple[str, int]], frame_ids: dict[str, str],
+              outputs: dict[str, ProcessedOutput] | None = None) -> Survey:
     found = Survey()
     for name, (msgtype, count) in topics.items():
         found.topics[name] = TopicInfo(name, msgtype, count, "cdr")
-        found.routes[name] = classify(name, msgtype)
+        found.routes[name] = classify(name, msgtype, outputs)
         found.owner[name] = 0
     found.frame_ids.update(frame_ids)
     return found
@@ -47,6 +50,23 @@ def test_outputs_find_their_camera_by_frame_or_get_one() -> None:
     assert plan.frames["lonely"] == ["/frame/lonely"]
     assert plan.cameras["/frame/lonely"].viewable
     assert plan.cameras["/frame/lonely"].entity == "world/frame/lonely"
+
+
+def test_recorded_outputs_plan_their_camera_series_and_views() -> None:
+    declared = [("/b/edges", IMAGE, Display.EDGES, "edges", "Canny edges"),
+                ("/b/n", POINT, Display.SCALAR, "blob_count", "blob count"),
+                ("/b/r/n", POINT, Display.SCALAR, "blob_count", "blob count"),
+                ("/b/small", IMAGE, Display.IMAGE, "resize/small", "resized")]
+    outputs = {topic: ProcessedOutput(topic, "/b/image_raw", "p", topic.rpartition("/")[2],
+                                      msgtype, display.value, entity, label)
+               for topic, msgtype, display, entity, label in declared}
+    found = survey_of({topic: (msgtype, 5) for topic, msgtype, *_ in declared}
+                      | {"/c/image_raw": (IMAGE, 5)}, {"/c/image_raw": "c"}, outputs)
+    plan = plan_scene(found)
+    # the source camera's images are not in these logs: its outputs still get its view
+    assert list(plan.cameras) == ["/b", "/c"] and plan.cameras["/b"].viewable
+    assert [(s.origin, s.title) for s in plan.series] == [("metrics/blob_count", "blob count")]
+    assert plan.images == ["processed/b/small"] and plan.rectified == []
 
 
 def test_baseline_rig_and_plane_distance() -> None:

@@ -10,10 +10,11 @@ import pytest
 
 from replay import CameraInfo, Image, PointStamped, Text, open_reader, open_writer
 from replay.export import LoggerOptions, view_logs
-from replay.export.overlays import CENTROID_MARKER, RED_PIXEL
+from replay.export.overlays import CENTROID_MARKER, MASK_PIXEL
 from tests.rrd import load_rrd, rerun_cli
 
 LEFT, RIGHT = "/world/stereo_camera/left", "/world/stereo_camera/right"
+SOURCE = "/stereo_camera/left"  # the processed camera's namespace in the log
 PINHOLE = "Pinhole:image_from_camera"
 
 
@@ -61,12 +62,12 @@ def test_processor_outputs_are_drawn_on_their_camera(processed_rrd: Path,
     # outputs on every frame replace each other: nothing needs clearing
     assert rec.count(f"{LEFT}/red_pixels/mask", "Clear:is_recursive") == 0
     centroids = [m.point[:2].tolist() for m in messages(red_processed_log,
-                                                         "/image_converter/red_centroid")
+                                                         f"{SOURCE}/red_centroid")
                  if isinstance(m, PointStamped)]
     assert len(centroids) == 20
     logged = [row[0] for row in rec.column(f"{LEFT}/red_pixels/centroid", "Points2D:positions")]
     np.testing.assert_allclose(logged, centroids, atol=1e-4)
-    counts = [m.point[0] for m in messages(red_processed_log, "/image_converter/red_count")
+    counts = [m.point[0] for m in messages(red_processed_log, f"{SOURCE}/red_count")
               if isinstance(m, PointStamped)]
     scalars = rec.column("/metrics/red_pixel_count/stereo_camera/left", "Scalars:scalars")
     assert [row[0] for row in scalars] == counts and counts[0] > 0
@@ -84,17 +85,16 @@ def test_mask_classes_survive_in_the_recording(red_processed_log: Path, tmp_path
     from rerun.chunk import RrdReader
 
     out = tmp_path / "mask.rrd"
-    view_logs([red_processed_log], output=out, topics=["/image_converter/output_video"],
+    view_logs([red_processed_log], output=out, topics=[f"{SOURCE}/output_video"],
               end_s=0.01, progress=False)
     (store,) = RrdReader(out).recordings()
     buffers = [chunk.to_record_batch().column("SegmentationImage:buffer").to_pylist()
                for chunk in RrdReader(out).stream(store=store)
                if chunk.entity_path.endswith("/red_pixels/mask")]
     (classes,) = [np.array(b) for rows in buffers for b in rows if b is not None]
-    assert set(np.unique(classes)) == {0, RED_PIXEL, CENTROID_MARKER}
-    # with no camera images in the selection, the outputs get a camera of their frame
-    assert "/world/frame/left_camera_optical_frame/red_pixels/mask" in [
-        c.entity_path for c in RrdReader(out).stream(store=store)]
+    assert set(np.unique(classes)) == {0, MASK_PIXEL, CENTROID_MARKER}
+    # with no camera images in the selection, the outputs still go to their source camera
+    assert f"{LEFT}/red_pixels/mask" in [c.entity_path for c in RrdReader(out).stream(store=store)]
 
 
 def test_calibration_corners_residuals_and_errors(mono_calibration_log: Path,
@@ -152,7 +152,7 @@ def test_resync_offsets_and_shared_frames(resynced_log: Path, tmp_path: Path) ->
 def test_every_jpeg_window_and_topics(red_processed_log: Path, tmp_path: Path) -> None:
     out = tmp_path / "small.rrd"
     result = view_logs([red_processed_log], output=out, progress=False, start_s=0.1,
-                       end_s=0.5, topics=["/stereo_camera/left/*", "/image_converter/*"],
+                       end_s=0.5, topics=["/stereo_camera/left/*"],
                        options=LoggerOptions(every=3, jpeg_quality=80))
     rec = load_rrd(out)
     # 0.1 s <= t < 0.5 s at 30 Hz: frames 3..14 (12 frames), every third kept
