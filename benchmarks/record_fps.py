@@ -8,7 +8,8 @@ rendering down (target >= 0.9). End-to-end recording fps, setup included, is pri
     python -m benchmarks.record_fps [SCENARIO] [--frames N] [--repeats R]
 
 SCENARIO (default mono_checkerboard) shapes the ideal and distorted rows; the fisheye row
-records mono_fisheye (a multi-view render and its warp).
+records mono_fisheye (a multi-view render and its warp), the blur row mono_moving_blur (its
+baseline renders the same sub-frames).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ import time
 from pathlib import Path
 
 from recorder.clock import schedule
+from recorder.exposure import rendered_shots
 from recorder.motion import plan_trajectory
 from recorder.multiview import plan_camera_optics
 from recorder.record import CLOCK_STREAM, MOTION_STREAM, record, rng_for
@@ -42,12 +44,9 @@ def bare_render_fps(scenario: Scenario) -> float:
     renderer = SceneRenderer(scenario, optics)
     try:
         started = time.perf_counter()
-        last_t = None
-        for shot in shots:
-            if shot.t_s != last_t:
-                renderer.set_poses([tr.at(shot.t_s) for tr in trajectories])
-                last_t = shot.t_s
-            renderer.render(shot.camera_index)
+        for _ in rendered_shots(renderer, scenario.cameras, scenario.targets, trajectories,
+                                shots):
+            pass
         return len(shots) / (time.perf_counter() - started)
     finally:
         renderer.close()
@@ -87,6 +86,7 @@ def main() -> None:
         ("plumb_bob k1=-0.2, supersample 2", args.scenario,
          {"distortion": [-0.2, 0.05, 0.0, 0.0, 0.0]}),
         ("fisheye 176 deg, multi-view warp", "mono_fisheye", {}),
+        ("moving board, 8 ms exposure (blur)", "mono_moving_blur", {}),
     ]
     print(f"{'scenario':18} {'case':34} {'bare fps':>9} {'record fps':>11} {'ratio':>6} "
           f"{'end-to-end':>11} {'MB':>6}")

@@ -37,6 +37,9 @@ class CameraSpec:
     jitter_s: float
     drop_probability: float
     baseline_tx: float  # CameraInfo P[0, 3] (= -fx * B for the right camera of a rig)
+    #: shutter open time; > 0 averages sub-frame renders over it (motion blur), the frame
+    #: stamped at mid-exposure
+    exposure_s: float = 0.0
 
 
 def parse_camera(
@@ -99,8 +102,12 @@ def parse_camera(
         jitter_s=f.number("jitter_s", 0.0, low=0.0),
         drop_probability=f.number("drop_probability", 0.0, low=0.0, high=0.9),
         baseline_tx=baseline_tx,
+        exposure_s=f.number("exposure_s", 0.0, low=0.0),
     )
     if spec.supersample > 4:
         raise f.fail("supersample", f"must be 1..4, got {spec.supersample}")
+    if spec.exposure_s >= 1.0 / spec.rate_hz:
+        raise f.fail("exposure_s", f"must be shorter than the frame period "
+                                   f"({1.0 / spec.rate_hz:.4g} s), got {spec.exposure_s}")
     f.check_unknown()
     return spec

@@ -59,52 +59,90 @@ def visible_fraction(
     return worst
 
 
-def _random_pose(target: TargetSpec, rng: np.random.Generator) -> F64:
+def _random_parameters(target: TargetSpec, rng: np.random.Generator) -> F64:
+    """A random pose as (x, y, z of the board's middle, yaw, tilt axis angle, tilt)."""
     motion = target.motion
-    center = motion.center_m + np.array([
-        rng.uniform(-motion.xy_range_m, motion.xy_range_m),
-        rng.uniform(-motion.xy_range_m, motion.xy_range_m),
-        0.0,
-    ])
-    center[2] = rng.uniform(*motion.z_range_m)
-    # Face up (target z down, towards the ground), random yaw, then tilt about a random
-    # horizontal axis.
-    face_up = np.diag([1.0, -1.0, -1.0])
-    yaw = rotation_about(np.array([0.0, 0.0, 1.0]), rng.uniform(-math.pi, math.pi))
+    x = rng.uniform(-motion.xy_range_m, motion.xy_range_m)
+    y = rng.uniform(-motion.xy_range_m, motion.xy_range_m)
+    z = rng.uniform(*motion.z_range_m)
+    yaw = rng.uniform(-math.pi, math.pi)
     axis_angle = rng.uniform(0, 2 * math.pi)
-    tilt = rotation_about(np.array([math.cos(axis_angle), math.sin(axis_angle), 0.0]),
-                          motion.max_tilt_rad * math.sqrt(rng.uniform(0, 1)))
+    tilt = motion.max_tilt_rad * math.sqrt(rng.uniform(0, 1))
+    return np.array([motion.center_m[0] + x, motion.center_m[1] + y, z, yaw, axis_angle, tilt])
+
+
+def _pose(target: TargetSpec, parameters: F64) -> F64:
+    """``world_from_target`` of pose parameters: the board faces up (target z towards the
+    ground), turned by ``yaw``, then tilted about a horizontal axis."""
+    x, y, z, yaw_rad, axis_angle, tilt_rad = (float(v) for v in parameters)
+    face_up = np.diag([1.0, -1.0, -1.0])
+    yaw = rotation_about(np.array([0.0, 0.0, 1.0]), yaw_rad)
+    tilt = rotation_about(np.array([math.cos(axis_angle), math.sin(axis_angle), 0.0]), tilt_rad)
     rotation = tilt @ yaw @ face_up
     pose = np.eye(4)
     pose[:3, :3] = rotation
-    offset = center_in_target(target)
-    pose[:3, 3] = center - rotation @ offset
+    pose[:3, 3] = np.array([x, y, z]) - rotation @ center_in_target(target)
     return pose
+
+
+@dataclass(frozen=True)
+class SmoothTrajectory:
+    """A board that never stops: a Catmull-Rom spline (continuous velocity) through random
+    waypoints ``parameters[i]`` (x, y, z, yaw, tilt x, tilt y) reached at ``i * segment_s``."""
+
+    target: TargetSpec
+    segment_s: float
+    parameters: F64  # (N, 6)
+
+    def at(self, t_s: float) -> F64:
+        """``world_from_target`` (4, 4) at time ``t_s``."""
+        last = len(self.parameters) - 1
+        position = min(max(t_s, 0.0) / self.segment_s, float(last))
+        k = min(int(position), last - 1)
+        u = position - k
+        p0, p1, p2, p3 = (self.parameters[min(max(i, 0), last)] for i in range(k - 1, k + 3))
+        value = 0.5 * (2 * p1 + (p2 - p0) * u + (2 * p0 - 5 * p1 + 4 * p2 - p3) * u * u
+                       + (3 * p1 - p0 - 3 * p2 + p3) * u * u * u)
+        tilt_x, tilt_y = value[4], value[5]
+        return _pose(self.target, np.array([*value[:4], math.atan2(tilt_y, tilt_x),
+                                            math.hypot(tilt_x, tilt_y)]))
+
+
+def _smooth_parameters(parameters: F64) -> F64:
+    """Waypoints in coordinates a spline can blend: yaw unwrapped, the tilt as a vector."""
+    yaw = np.unwrap(parameters[:, 3])
+    tilt = np.column_stack([parameters[:, 5] * np.cos(parameters[:, 4]),
+                            parameters[:, 5] * np.sin(parameters[:, 4])])
+    return np.column_stack([parameters[:, :3], yaw, tilt])
 
 
 def plan_trajectory(
     target: TargetSpec, cameras: tuple[CameraSpec, ...], duration_s: float,
     rng: np.random.Generator,
-) -> Trajectory:
-    """Poses for ``duration_s``; random poses are fully in view of every camera, except
-    a ``partial_view_probability`` share that are deliberately cut by the image border."""
+) -> Trajectory | SmoothTrajectory:
+    """Poses for ``duration_s``; random poses (held ones, or a smooth path's waypoints) are
+    fully in view of every camera, except a ``partial_view_probability`` share that are
+    deliberately cut by the image border."""
     motion = target.motion
     if motion.kind == "static":
         return Trajectory(duration_s + 1.0, motion.world_from_target[None])
     outline = outline_in_target(target)
-    count = math.ceil(duration_s / motion.hold_s) + 1
-    poses = []
+    step_s = motion.segment_s if motion.kind == "smooth" else motion.hold_s
+    count = math.ceil(duration_s / step_s) + (2 if motion.kind == "smooth" else 1)
+    chosen = []
     for _ in range(count):
         partial = rng.uniform() < motion.partial_view_probability
         for _try in range(MAX_TRIES):
-            pose = _random_pose(target, rng)
-            seen = visible_fraction(pose, outline, cameras)
+            parameters = _random_parameters(target, rng)
+            seen = visible_fraction(_pose(target, parameters), outline, cameras)
             if (0.25 <= seen < 1.0) if partial else seen == 1.0:
-                poses.append(pose)
+                chosen.append(parameters)
                 break
         else:
             raise ScenarioError(
                 f"target {target.name!r}: no {'partly' if partial else 'fully'} visible pose "
                 f"found in {MAX_TRIES} tries; widen the camera view or shrink the motion ranges"
             )
-    return Trajectory(motion.hold_s, np.stack(poses))
+    if motion.kind == "smooth":
+        return SmoothTrajectory(target, motion.segment_s, _smooth_parameters(np.stack(chosen)))
+    return Trajectory(motion.hold_s, np.stack([_pose(target, p) for p in chosen]))

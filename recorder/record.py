@@ -28,7 +28,8 @@ from replay.topics import SCENARIO, CameraTopics
 
 from .clock import Shot, schedule
 from .errors import RecorderError
-from .motion import Trajectory, plan_trajectory
+from .exposure import rendered_shots
+from .motion import plan_trajectory
 from .multiview import CameraOptics, MultiViewOptics, plan_camera_optics
 from .render import SceneRenderer, gl_backend
 from .scenario import Scenario
@@ -88,7 +89,8 @@ def scenario_record(
             distortion_model=camera.model.distortion_model, d=camera.model.d,
             world_from_camera=camera.world_from_camera,
             render_size=optics[index].render_sizes[0], supersample=optics[index].supersample,
-            dropped_frames=dropped[index].tolist(), **_views_record(optics[index]))
+            dropped_frames=dropped[index].tolist(), **_views_record(optics[index]),
+            exposure_s=camera.exposure_s or None)
         for index, camera in enumerate(scenario.cameras)
     ]
     targets = [target_record(target) for target in scenario.targets]
@@ -214,7 +216,7 @@ def record(
     frame_counts = scenario.frame_counts
     duration_s = max(n / c.rate_hz + c.phase_s
                      for n, c in zip(frame_counts, scenario.cameras, strict=True))
-    trajectories: list[Trajectory] = [
+    trajectories = [
         plan_trajectory(t, scenario.cameras, duration_s, rng_for(scenario, MOTION_STREAM, i))
         for i, t in enumerate(scenario.targets)
     ]
@@ -245,14 +247,8 @@ def record(
         bar = tqdm(total=len(shots), unit="frame", desc=f"record {scenario.name}",
                    disable=None if progress is None else not progress, leave=False)
         try:
-            last_t = None
-            poses: list[np.ndarray] = []
-            for shot in shots:
-                if shot.t_s != last_t:
-                    poses = [trajectory.at(shot.t_s) for trajectory in trajectories]
-                    renderer.set_poses(poses)
-                    last_t = shot.t_s
-                rendered = renderer.render(shot.camera_index)
+            for shot, rendered, poses in rendered_shots(renderer, scenario.cameras,
+                                                        scenario.targets, trajectories, shots):
                 truth = [camera_from_world[shot.camera_index] @ p for p in poses]
                 pipeline.put((shot, rendered, truth))
                 frames[scenario.cameras[shot.camera_index].name] += 1

@@ -102,7 +102,7 @@ def load_scenario(
 #: override key -> the camera field it sets on every camera
 _CAMERA_OVERRIDES = (
     "width", "height", "hfov_rad", "intrinsics", "distortion_model", "distortion", "noise_std",
-    "supersample", "encoding",
+    "supersample", "encoding", "exposure_s",
 )
 
 

@@ -16,10 +16,12 @@ from .spec_table import SpecTable
 
 @dataclass(frozen=True)
 class MotionSpec:
-    """How a target moves: ``static`` or ``random_hold`` (random poses held ``hold_s``)."""
+    """How a target moves: ``static``, ``random_hold`` (random poses held ``hold_s``) or
+    ``smooth`` (never still: a C1 path through a random pose every ``segment_s``)."""
 
     kind: str
     hold_s: float
+    segment_s: float
     center_m: F64
     xy_range_m: float
     z_range_m: tuple[float, float]
@@ -109,7 +111,7 @@ def parse_target(
 def parse_motion(table: Any, where: str, source: str, cameras: list[CameraSpec]) -> MotionSpec:
     """Resolve a target's ``motion`` table."""
     f = SpecTable(table, where, source)
-    kind = f.text("kind", choices=("static", "random_hold"))
+    kind = f.text("kind", choices=("static", "random_hold", "smooth"))
     world_from_target = np.eye(4)
     if kind == "static":
         target_pose = np.eye(4)
@@ -129,6 +131,7 @@ def parse_motion(table: Any, where: str, source: str, cameras: list[CameraSpec])
     spec = MotionSpec(
         kind=kind,
         hold_s=f.number("hold_s", 0.5, positive=True),
+        segment_s=f.number("segment_s", 0.6, positive=True),
         center_m=f.vector("center_m", 3, [0.0, 0.0, 0.2]),
         xy_range_m=f.number("xy_range_m", 0.05, low=0.0),
         z_range_m=(float(z_range[0]), float(z_range[1])),

@@ -52,6 +52,8 @@ class ScenarioCamera:
     #: per output pixel side of its warp
     render_views: list[RenderView] | None = field(default=None, metadata=OMIT_NONE)
     samples_per_side: int | None = field(default=None, metadata=OMIT_NONE)
+    #: shutter time of a camera with motion blur (frames stamped at mid-exposure)
+    exposure_s: float | None = field(default=None, metadata=OMIT_NONE)
 
     def model(self) -> CameraModel:
         """The camera's true intrinsic model."""

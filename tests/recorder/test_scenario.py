@@ -19,7 +19,7 @@ BUILTINS = sorted(p.stem for p in SCENARIO_DIR.glob("*.toml"))
 
 
 def test_builtins_are_the_shipped_specs() -> None:
-    assert BUILTINS == ["mono_checkerboard", "mono_fisheye", "red_block",
+    assert BUILTINS == ["mono_checkerboard", "mono_fisheye", "mono_moving_blur", "red_block",
                         "stereo_checkerboard", "stereo_unsynced"]
     assert builtin_names() == BUILTINS
 

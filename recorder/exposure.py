@@ -1,0 +1,103 @@
+"""Motion blur: a frame as the mean of sub-frame renders over the camera's exposure.
+
+A camera with ``exposure_s > 0`` keeps its shutter open from ``t - exposure_s / 2`` to
+``t + exposure_s / 2`` around its frame stamp ``t`` (so the stamp and the truth pose are at
+mid-exposure). The frame is the mean of ``n`` renders at the centres of ``n`` equal slices
+of that interval, ``n`` chosen per frame so that no target point moves more than
+``BLUR_STEP_PX`` in the image between two sub-frames (at most ``MAX_SUBFRAMES``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Iterator, Sequence
+from typing import Protocol
+
+import numpy as np
+
+from replay.geometry import invert
+from replay.messages import F64
+
+from .cameras import CameraSpec
+from .clock import Shot
+from .render import SceneRenderer
+from .target_spec import TargetSpec
+from .targets import outline_in_target
+
+BLUR_STEP_PX = 1.0
+MAX_SUBFRAMES = 12
+
+
+class PoseSource(Protocol):
+    """Anything that gives a target's pose at a time (a trajectory)."""
+
+    def at(self, t_s: float) -> F64:
+        """``world_from_target`` (4, 4) at ``t_s``."""
+        ...
+
+
+def subframe_times(t_s: float, exposure_s: float, count: int) -> F64:
+    """Centres ``(count,)`` of ``count`` equal slices of the exposure around ``t_s``."""
+    return np.asarray(t_s + exposure_s * ((np.arange(count) + 0.5) / count - 0.5))
+
+
+def subframe_count(camera: CameraSpec, trajectories: Sequence[PoseSource],
+                   outlines: Sequence[F64], t_s: float) -> int:
+    """Sub-frames that keep every target point within ``BLUR_STEP_PX`` between renders:
+    from how far its outline moves in the image from the start to the end of exposure."""
+    if camera.exposure_s <= 0:
+        return 1
+    camera_from_world = invert(camera.world_from_camera)
+    moved_px = 0.0
+    half = camera.exposure_s / 2
+    for trajectory, outline in zip(trajectories, outlines, strict=True):
+        ends = []
+        for t in (t_s - half, t_s + half):
+            pose = camera_from_world @ trajectory.at(t)
+            ends.append(outline @ pose[:3, :3].T + pose[:3, 3])
+        ahead = (ends[0][:, 2] > 0.01) & (ends[1][:, 2] > 0.01)
+        if ahead.any():
+            uv = [camera.model.project(end[ahead]) for end in ends]
+            moved_px = max(moved_px, float(np.linalg.norm(uv[1] - uv[0], axis=1).max()))
+    return max(1, min(MAX_SUBFRAMES, math.ceil(moved_px / BLUR_STEP_PX)))
+
+
+def render_exposure(renderer: SceneRenderer, camera_index: int, camera: CameraSpec, *,
+                    trajectories: Sequence[PoseSource], outlines: Sequence[F64],
+                    t_s: float) -> np.ndarray:
+    """The ideal render ``(Hr, Wr, 3)`` uint8 of one frame exposed around ``t_s`` (the
+    renderer's poses are left at the last sub-frame)."""
+    count = subframe_count(camera, trajectories, outlines, t_s)
+    total: np.ndarray | None = None
+    for t in subframe_times(t_s, camera.exposure_s, count):
+        renderer.set_poses([trajectory.at(float(t)) for trajectory in trajectories])
+        frame = renderer.render(camera_index)
+        total = frame.astype(np.uint32) if total is None else total + frame
+    assert total is not None
+    return np.asarray((total + count // 2) // count, dtype=np.uint8)
+
+
+def rendered_shots(
+    renderer: SceneRenderer, cameras: Sequence[CameraSpec], targets: Sequence[TargetSpec],
+    trajectories: Sequence[PoseSource], shots: Iterable[Shot],
+) -> Iterator[tuple[Shot, np.ndarray, list[F64]]]:
+    """Each shot with its ideal render and the targets' ``world_from_target`` at its stamp
+    (mid-exposure); cameras at one instant share one pose update."""
+    outlines = [outline_in_target(t) for t in targets]
+    last_t: float | None = None
+    poses: list[F64] = []
+    for shot in shots:
+        camera = cameras[shot.camera_index]
+        if camera.exposure_s > 0:
+            rendered = render_exposure(renderer, shot.camera_index, camera,
+                                       trajectories=trajectories, outlines=outlines,
+                                       t_s=shot.t_s)
+            poses = [trajectory.at(shot.t_s) for trajectory in trajectories]
+            last_t = None
+        else:
+            if shot.t_s != last_t:
+                poses = [trajectory.at(shot.t_s) for trajectory in trajectories]
+                renderer.set_poses(poses)
+                last_t = shot.t_s
+            rendered = renderer.render(shot.camera_index)
+        yield shot, rendered, poses
