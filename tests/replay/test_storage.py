@@ -77,6 +77,17 @@ def test_other_formats_are_downloaded_with_a_note(chunked_log: Path, tmp_path: P
         assert reader.format_name == "ros1"
         assert reader.message_count == 5
         assert any("temporary download" in w for w in reader.warnings)
+    folder = tmp_path / "run1"  # a rosbag2 folder: a prefix with several objects below it
+    write_log(folder, numbered_images(4), fmt="rosbag2")
+    memory.put(str(folder), "/bucket/bags/run1", recursive=True)
+    uri = "memory://bucket/bags/run1"
+    with open_reader(uri) as reader:
+        assert reader.format_name.startswith("rosbag2")
+        assert [r.log_time_ns for r in reader.messages()] == \
+            [t for _, t, _ in numbered_images(4)]
+        assert any("temporary download" in w for w in reader.warnings)
+    local = storage.identity(folder)
+    assert storage.identity(uri)["bytes"] == local["bytes"]
 
 
 def test_locations_and_their_errors(tmp_path: Path) -> None:
