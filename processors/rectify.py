@@ -5,7 +5,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from replay.camera import DISTORTION_MODELS
+from replay.camera import CAMERA_MODELS, CameraModel, canonical_model
 from replay.messages import F64, CameraInfo, Image
 
 from .base import Output
@@ -20,11 +20,11 @@ class Remap:
 
     def __init__(self, info: CameraInfo, *, rotation: F64, new_k: F64, processor: str,
                  output: str) -> None:
-        model = info.distortion_model or "plumb_bob"
+        model = canonical_model(info.distortion_model)
         problem = None
-        if model not in DISTORTION_MODELS:
+        if model not in CAMERA_MODELS:
             problem = (f"cannot resample distortion model {model!r} (use "
-                       f"{' or '.join(DISTORTION_MODELS)})")
+                       f"{', '.join(CAMERA_MODELS)})")
         elif info.binning_x > 1 or info.binning_y > 1 or any(info.roi[:4]):
             problem = "binned or ROI camera models are not supported"
         elif info.width <= 0 or info.height <= 0:
@@ -33,10 +33,10 @@ class Remap:
             raise OptionValueError(processor, ("camera_info",), problem)
         self.output = output
         self.width, self.height = info.width, info.height
-        # fixed-point maps: remap is faster and they are computed once
-        self.map1, self.map2 = cv2.initUndistortRectifyMap(
-            info.k, info.d, rotation, new_k, (info.width, info.height), cv2.CV_16SC2
-        )
+        # fixed-point maps: remap is faster and they are computed once (OpenCV's fisheye
+        # maps for an equidistant lens)
+        self.map1, self.map2 = CameraModel.from_camera_info(info).rectify_maps(
+            rotation, new_k, cv2.CV_16SC2)
 
     def __call__(self, image: Image) -> list[Output]:
         """The resampled image under this remap's output name."""

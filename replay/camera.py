@@ -26,6 +26,8 @@ DISTORTION_MODELS = {"plumb_bob": 5, "rational_polynomial": 8}
 FISHEYE_MODELS = {"equidistant": 4}
 #: every model :class:`CameraModel` understands (ROS ``distortion_model`` names)
 CAMERA_MODELS = DISTORTION_MODELS | FISHEYE_MODELS
+#: other names of the models (OpenCV and Kalibr call the equidistant model "fisheye")
+MODEL_ALIASES = {"fisheye": "equidistant"}
 _FISHEYE_NEWTON_STEPS = 30
 _UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-14)
 
@@ -33,6 +35,13 @@ _UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-
 def focal_from_hfov(width: int, hfov_rad: float) -> float:
     """Focal length in pixels: ``fx = (W / 2) / tan(hfov / 2)``."""
     return (width / 2.0) / math.tan(hfov_rad / 2.0)
+
+
+def canonical_model(name: str) -> str:
+    """The ROS name of a distortion model (``fisheye`` -> ``equidistant``); an empty name is
+    plumb_bob, as camera_info_manager reads it."""
+    name = (name or "plumb_bob").strip()
+    return MODEL_ALIASES.get(name, name)
 
 
 @dataclass(frozen=True)
@@ -69,9 +78,9 @@ class CameraModel:
 
     @classmethod
     def from_camera_info(cls, info: CameraInfo) -> CameraModel:
-        """The intrinsic model a CameraInfo describes (plumb_bob when it names none)."""
-        model = info.distortion_model or "plumb_bob"
-        return cls(info.width, info.height, info.k, model, info.d)
+        """The model of a CameraInfo (``fisheye`` read as ``equidistant``)."""
+        return cls(info.width, info.height, info.k, canonical_model(info.distortion_model),
+                   info.d)
 
     @property
     def fx(self) -> float:
@@ -191,3 +200,31 @@ class CameraModel:
         else:
             xy = cv2.undistortPoints(uv, self.k, self.d, criteria=_UNDISTORT_CRITERIA)
         return np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+
+    def rectify_points(self, uv: F64, r: F64, p: F64) -> F64:
+        """Pixels ``(N, 2)`` in the rectified image of rotation ``r`` (3, 3) and projection
+        ``p`` (3, 3) or (3, 4) of observed pixels ``uv`` (N, 2)."""
+        xy = self.undistort_pixels(uv)
+        rays = np.column_stack([xy, np.ones(len(xy))]) @ np.asarray(r, dtype=np.float64).T
+        projected = rays @ np.asarray(p, dtype=np.float64)[:, :3].T
+        return np.asarray(projected[:, :2] / projected[:, 2:], dtype=np.float64)
+
+    def rectify_maps(self, r: F64, new_k: F64, map_type: int = cv2.CV_16SC2
+                     ) -> tuple[np.ndarray, np.ndarray]:
+        """``cv2.remap`` maps (image_proc's rectification): output pixel ``(u, v)`` of the
+        pinhole camera ``new_k`` (3, 3) turned by ``r`` samples the raw image where this
+        model images that ray (OpenCV's fisheye maps for an equidistant lens)."""
+        size = (self.width, self.height)
+        r = np.asarray(r, dtype=np.float64)
+        new_k = np.asarray(new_k, dtype=np.float64)[:, :3]
+        init = cv2.fisheye.initUndistortRectifyMap if self.is_fisheye \
+            else cv2.initUndistortRectifyMap
+        map1, map2 = init(self.k, self.d, r, new_k, size, map_type)
+        return map1, map2
+
+
+def rectify_maps(info: CameraInfo, map_type: int = cv2.CV_16SC2
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """Rectification maps of a CameraInfo: ``R`` and ``P[:, :3]`` (``K`` when P is empty)."""
+    new_k = info.p[:, :3] if np.any(info.p[:, :3]) else info.k
+    return CameraModel.from_camera_info(info).rectify_maps(info.r, new_k, map_type)

@@ -62,5 +62,22 @@ def test_wrong_size_and_models_are_rejected() -> None:
     info = CameraInfo(0, "cam", W, H, "plumb_bob", D, K)
     with pytest.raises(FrameError, match="160x120"):
         Rectifier(camera_info=info)(Image(0, "", "mono8", np.zeros((H, W + 2), np.uint8)))
-    with pytest.raises(ConfigError, match="equidistant"):
-        Rectifier(camera_info=CameraInfo(0, "", W, H, "equidistant", np.zeros(4), K))
+    with pytest.raises(ConfigError, match="kannala_brandt8"):
+        Rectifier(camera_info=CameraInfo(0, "", W, H, "kannala_brandt8", np.zeros(8), K))
+
+
+def test_equidistant_dots_move_to_their_pinhole_positions() -> None:
+    """A fisheye model (ROS ``equidistant``) rectifies through OpenCV's fisheye maps."""
+    k_fisheye = np.array([[70.0, 0, 80.5], [0, 70.0, 59.0], [0, 0, 1]])
+    d_fisheye = np.array([0.03, -0.01, 0.002, 0.0])
+    new_k = np.array([[60.0, 0, 79.5], [0, 60.0, 59.5], [0, 0, 1]])
+    info = CameraInfo(0, "cam", W, H, "equidistant", d_fisheye, k_fisheye, np.eye(3),
+                      np.hstack([new_k, np.zeros((3, 1))]))
+    model = CameraModel.from_camera_info(info)
+    ideal_uv = np.array([[20.0, 15.0], [140.0, 20.0], [79.5, 59.5], [25.0, 100.0]])
+    rays = np.column_stack([ideal_uv, np.ones(len(ideal_uv))]) @ np.linalg.inv(new_k).T
+    raw_uv = model.project(rays)
+    assert np.max(np.linalg.norm(raw_uv - ideal_uv, axis=1)) > 4
+    (_, out), = Rectifier(camera_info=info)(Image(0, "cam", "mono8", blobs(raw_uv)))
+    assert isinstance(out, Image)
+    np.testing.assert_allclose(dot_centres(out.pixels, ideal_uv), ideal_uv, atol=0.2)

@@ -8,8 +8,14 @@ import cv2
 import numpy as np
 import pytest
 
-from replay.camera import CAMERA_MODELS, DISTORTION_MODELS, CameraModel
-from replay.messages import F64
+from replay.camera import (
+    CAMERA_MODELS,
+    DISTORTION_MODELS,
+    CameraModel,
+    canonical_model,
+    rectify_maps,
+)
+from replay.messages import F64, CameraInfo
 
 K = np.array([[214.7, 0.0, 322.3], [0.0, 214.9, 237.6], [0.0, 0.0, 1.0]])
 D = np.array([-0.0063, 0.0414, -0.0389, 0.0070])
@@ -84,3 +90,42 @@ def test_pinhole_rays_are_unit_undistorted_directions() -> None:
     rays = model.pixel_rays(pixels)
     np.testing.assert_allclose(np.linalg.norm(rays, axis=1), 1.0)
     np.testing.assert_allclose(model.project(rays), pixels, atol=1e-6)
+
+
+def test_rectified_points_match_opencv() -> None:
+    k = np.array([[800.0, 0.0, 326.0], [0.0, 806.0, 233.0], [0.0, 0.0, 1.0]])
+    d = np.array([-0.2, 0.05, 0.0008, -0.0005, 0.01])
+    model = CameraModel(640, 480, k, "plumb_bob", d)
+    r = cv2.Rodrigues(np.array([0.01, -0.02, 0.005]))[0]
+    p = np.array([[700.0, 0, 310, -14.0], [0, 700, 240, 0], [0, 0, 1, 0]])
+    uv = np.random.default_rng(4).uniform([20, 20], [620, 460], (40, 2))
+    expected = cv2.undistortPoints(uv.reshape(-1, 1, 2), k, d, R=r, P=p,
+                                   criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS,
+                                             100, 1e-14))
+    np.testing.assert_allclose(model.rectify_points(uv, r, p), expected.reshape(-1, 2),
+                               atol=1e-6)
+
+
+@pytest.mark.parametrize("distortion_model", ["equidistant", "fisheye"])
+def test_fisheye_rectification_maps_sample_where_the_lens_images_the_ray(
+        distortion_model: str) -> None:
+    new_k = np.array([[150.0, 0, 319.5], [0, 150.0, 239.5], [0, 0, 1]])
+    r = cv2.Rodrigues(np.array([0.0, 0.1, 0.0]))[0]
+    info = CameraInfo(0, "cam", 640, 480, distortion_model, D, K, r,
+                      np.hstack([new_k, np.zeros((3, 1))]))
+    map_x, map_y = rectify_maps(info, cv2.CV_32FC1)
+    out_uv = np.array([[100, 50], [319, 239], [600, 400], [20, 460]])
+    rays = np.column_stack([out_uv, np.ones(len(out_uv))]) @ np.linalg.inv(new_k).T @ r
+    expected = fisheye().project(rays)
+    sampled = np.column_stack([map_x[out_uv[:, 1], out_uv[:, 0]],
+                               map_y[out_uv[:, 1], out_uv[:, 0]]])
+    np.testing.assert_allclose(sampled, expected, atol=1e-3)
+
+
+def test_model_names() -> None:
+    assert canonical_model("fisheye") == "equidistant"
+    assert canonical_model("") == "plumb_bob"
+    info = CameraInfo(0, "", 640, 480, "fisheye", D, K)
+    assert CameraModel.from_camera_info(info).distortion_model == "equidistant"
+    with pytest.raises(ValueError, match="unknown distortion model"):
+        CameraModel(640, 480, K, "kannala_brandt_8")
