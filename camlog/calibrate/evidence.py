@@ -101,9 +101,11 @@ def write_evidence(reader: LogReader, path: Path, cameras: list[CalibratedCamera
                 writer.write(topics.view_error, PointStamped(
                     stamp, image.frame_id, np.array([rms, 0.0, 0.0], dtype=np.float64)),
                     log_time_ns=log_time)
+                inliers = result.inliers.get(frame.index)
+                outliers = np.flatnonzero(~inliers).tolist() if inliers is not None else []
                 writer.write(topics.residuals, ViewResiduals(
                     stamp, image.frame_id, rms, np.round(corners, 4),
-                    np.round(result.residuals_px[frame.index], 5)).to_message(),
+                    np.round(result.residuals_px[frame.index], 5), outliers).to_message(),
                     log_time_ns=log_time)
         writer.write(CALIBRATION_SUMMARY, summary.to_message(indent=1),
                      log_time_ns=reader.end_ns or 0)

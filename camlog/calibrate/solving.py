@@ -98,7 +98,9 @@ def _by_frame(result: MonoResult, frames: list[int]) -> MonoResult:
         std=result.std,
         camera_from_board={at[i]: p for i, p in result.camera_from_board.items()},
         residuals_px={at[i]: r for i, r in result.residuals_px.items()},
+        inliers={at[i]: m for i, m in result.inliers.items()},
         options=result.options, tangential_test=result.tangential_test,
+        sigma_px=result.sigma_px, joint=result.joint,
     )
 
 

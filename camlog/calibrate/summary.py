@@ -128,7 +128,7 @@ def build_summary(cameras: list[CalibratedCamera], stereo: StereoSolution | None
     return CalibrationSummary(
         board=BoardSummary(board.pattern, board.cols, board.rows, board.square_m),
         options=OptionsSummary(options.fix_principal_point, options.fix_aspect_ratio,
-                               options.tangential, options.k_coefficients,
+                               options.tangential, options.radial_count,
                                options.distortion_model),
         cameras=[_camera(c) for c in cameras],
         ground_truth=ground_truth,

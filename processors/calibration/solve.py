@@ -1,19 +1,13 @@
-"""Intrinsic calibration of one camera: OpenCV's solver, outlier rejection, uncertainty.
+"""Intrinsic calibration of one camera: every view in one least-squares problem.
 
-Options keep camera_calibration's meaning: ``fix_principal_point`` holds (cx, cy) at the
-image centre, ``fix_aspect_ratio`` forces fx = fy, and ``k_coefficients`` radial terms are
-estimated (<= 3: plumb_bob, > 3: rational_polynomial, up to 6). Tangential distortion
-(p1, p2) is held at zero (``"zero"``, camera_calibration's --zero-tangent-dist), always
-estimated (``"estimate"``, camera_calibration's default) or, by default (``"auto"``),
-estimated only when the views show it: a likelihood-ratio test of the two fits. At a narrow
-field of view p1, p2 trade almost freely against the principal point and a small turn of
-the camera, so estimating them when the lens has none costs principal point accuracy.
+A thin layer over :func:`~.joint.calibrate_cameras` with one camera: outlier corners are
+left out one by one (views that are not the board whole), tangential distortion is
+estimated when the views show it (see :mod:`.options`), and every parameter comes with its
+standard deviation. Also projection differences between two models, and cross-validation.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import math
 from dataclasses import dataclass, field
 
 import cv2
@@ -22,103 +16,31 @@ import numpy as np
 from replay.camera import CameraModel
 from replay.messages import F64
 
-from ..errors import ProcessorError
+from .bundle import cross
+from .joint import MIN_VIEWS, BoardView, JointResult, calibrate_cameras
+from .lens import INTRINSIC_NAMES, intrinsics_of, project
+from .options import (
+    TANGENTIAL_P_VALUE,
+    CalibrationOptions,
+    TangentialTest,
+    tangential_mode,
+)
+from .rotation import matrices
+from .stereo import OUTLIER_FACTOR, OUTLIER_FLOOR_PX
 
-#: order of OpenCV's stdDeviationsIntrinsics
-STD_NAMES = ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6")
-#: a view whose RMS exceeds max(OUTLIER_FACTOR * median, OUTLIER_FLOOR_PX) is rejected
-OUTLIER_FACTOR = 3.0
-OUTLIER_FLOOR_PX = 0.3
-MIN_VIEWS = 5
-#: rounds of removing views far above the rest, each followed by a fresh solve
-REJECTION_ROUNDS = 3
-TANGENTIAL_MODES = ("auto", "estimate", "zero")
-#: "auto" keeps p1, p2 when holding them at zero raises the residual more than noise would
-#: with this probability (the residual is not quite independent noise: views share small
-#: biases, so the test is strict)
-TANGENTIAL_P_VALUE = 1e-3
-CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-12)
-
-
-def tangential_mode(zero_tangent_dist: bool, tangent_dist: bool) -> str:
-    """The tangential mode of camera_calibration-style flags: --zero-tangent-dist holds
-    p1 = p2 = 0, --tangent-dist always estimates them, neither lets the views decide."""
-    if zero_tangent_dist and tangent_dist:
-        raise ProcessorError("--zero-tangent-dist and --tangent-dist contradict each other")
-    return "zero" if zero_tangent_dist else "estimate" if tangent_dist else "auto"
-
-
-@dataclass(frozen=True)
-class CalibrationOptions:
-    """Solver options, with camera_calibration's meaning (see the module docstring)."""
-    fix_principal_point: bool = False
-    fix_aspect_ratio: bool = False
-    tangential: str = "auto"
-    k_coefficients: int = 2
-
-    def __post_init__(self) -> None:
-        if not 0 <= self.k_coefficients <= 6:
-            raise ProcessorError(f"--k-coefficients must be 0..6, got {self.k_coefficients}")
-        if self.tangential not in TANGENTIAL_MODES:
-            raise ProcessorError(f"tangential distortion must be one of "
-                                 f"{', '.join(TANGENTIAL_MODES)}, got {self.tangential!r}")
-
-    def with_tangential(self, mode: str) -> CalibrationOptions:
-        """The same options with another tangential mode."""
-        return dataclasses.replace(self, tangential=mode)
-
-    @property
-    def free_intrinsics(self) -> int:
-        """How many intrinsic parameters the solver estimates."""
-        focal = 1 if self.fix_aspect_ratio else 2
-        centre = 0 if self.fix_principal_point else 2
-        return focal + centre + self.k_coefficients + (0 if self.tangential == "zero" else 2)
-
-    @property
-    def distortion_model(self) -> str:
-        """``rational_polynomial`` above 3 radial coefficients, else ``plumb_bob``."""
-        return "rational_polynomial" if self.k_coefficients > 3 else "plumb_bob"
-
-    @property
-    def flags(self) -> int:
-        """OpenCV's calibrateCamera flags for these options."""
-        flags = 0
-        if self.fix_principal_point:
-            flags |= cv2.CALIB_FIX_PRINCIPAL_POINT
-        if self.fix_aspect_ratio:
-            flags |= cv2.CALIB_FIX_ASPECT_RATIO
-        if self.tangential == "zero":
-            flags |= cv2.CALIB_ZERO_TANGENT_DIST
-        if self.k_coefficients > 3:
-            flags |= cv2.CALIB_RATIONAL_MODEL
-        for n, flag in enumerate((cv2.CALIB_FIX_K1, cv2.CALIB_FIX_K2, cv2.CALIB_FIX_K3,
-                                  cv2.CALIB_FIX_K4, cv2.CALIB_FIX_K5, cv2.CALIB_FIX_K6), 1):
-            if self.k_coefficients < n:
-                flags |= flag
-        return flags
-
-
-@dataclass(frozen=True)
-class TangentialTest:
-    """Does the fit need p1, p2? ``chi2`` is the rise in the residual sum of squares when
-    they are held at zero, in units of the free fit's residual variance; under "no
-    tangential distortion" it follows a chi-square law with 2 degrees of freedom."""
-
-    chi2: float
-    estimated: bool  # the outcome: p1, p2 kept
-
-    @property
-    def p_value(self) -> float:
-        """Probability of a rise this large without tangential distortion."""
-        return math.exp(-max(self.chi2, 0.0) / 2.0)
-
-    def describe(self) -> str:
-        """The outcome in one sentence, with the statistic."""
-        verdict = ("estimated" if self.estimated
-                   else "held at zero (the views do not show any)")
-        return (f"tangential distortion {verdict}: holding p1 = p2 = 0 raises the residual by "
-                f"chi2(2) = {self.chi2:.1f}, p = {self.p_value:.2g} "
-                f"(kept when p < {TANGENTIAL_P_VALUE:g})")
+__all__ = [
+    "MIN_VIEWS",
+    "OUTLIER_FACTOR",
+    "OUTLIER_FLOOR_PX",
+    "TANGENTIAL_P_VALUE",
+    "CalibrationOptions",
+    "MonoResult",
+    "TangentialTest",
+    "calibrate_mono",
+    "cross_validate",
+    "max_projection_difference",
+    "tangential_mode",
+]
 
 
 @dataclass
@@ -126,135 +48,55 @@ class MonoResult:
     """A calibrated camera and the evidence for it."""
 
     model: CameraModel
-    rms_px: float
+    rms_px: float  # over the inlier corners
     view_ids: list[int]  # indices (into the views given) that were used
-    view_rms_px: dict[int, float]  # per used view
+    view_rms_px: dict[int, float]  # per used view, over its inlier corners
     rejected: dict[int, str]  # view index -> why it was left out
-    std: dict[str, float]  # standard deviation of every estimated parameter
+    std: dict[str, float]  # standard deviation of every parameter (0 when held)
     camera_from_board: dict[int, F64]  # (4, 4) per used view
     residuals_px: dict[int, F64] = field(default_factory=dict)  # (N, 2) per used view
+    inliers: dict[int, np.ndarray] = field(default_factory=dict)  # (N,) bool per used view
     #: the options solved with: "auto" tangential distortion resolved to what was chosen
     options: CalibrationOptions = field(default_factory=CalibrationOptions)
     tangential_test: TangentialTest | None = None
+    sigma_px: float = 0.0  # corner noise per coordinate, from the residuals
+    joint: JointResult | None = None
 
     def parameters(self) -> dict[str, float]:
-        """Estimated fx, fy, cx, cy and distortion coefficients by OpenCV name."""
+        """Every intrinsic by name (fx, fy, cx, cy, then the distortion coefficients)."""
         m = self.model
-        names = ["fx", "fy", "cx", "cy", *_distortion_names(m.distortion_model)]
+        names = ["fx", "fy", "cx", "cy", *INTRINSIC_NAMES[m.distortion_model][4:]]
         values = [m.fx, m.fy, m.cx, m.cy, *m.d.tolist()]
         return dict(zip(names, values, strict=True))
 
-
-def _distortion_names(model: str) -> list[str]:
-    return (["k1", "k2", "p1", "p2", "k3"] if model == "plumb_bob"
-            else ["k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"])
-
-
-def _pose(rvec: np.ndarray, tvec: np.ndarray) -> F64:
-    pose = np.eye(4)
-    pose[:3, :3] = cv2.Rodrigues(rvec)[0]
-    pose[:3, 3] = np.asarray(tvec).reshape(3)
-    return pose
-
-
-@dataclass(frozen=True)
-class Solution:
-    """One run of OpenCV's solver over some views (positions in the list it was given)."""
-
-    rms_px: float
-    model: CameraModel
-    camera_from_board: list[F64]  # (4, 4) per view
-    std: F64  # OpenCV's stdDeviationsIntrinsics, in STD_NAMES order
-    view_rms_px: F64  # (V,) per view
-    residuals_px: list[F64]  # (N, 2) per view: observed - projected
-
-
-def solve_views(points_in_board: F64, corners: list[F64], size: tuple[int, int],
-                options: CalibrationOptions) -> Solution:
-    """Calibrate once from every view given (no outlier rejection, no model choice)."""
-    object_points = [points_in_board.astype(np.float32)] * len(corners)
-    image_points = [c.reshape(-1, 1, 2).astype(np.float32) for c in corners]
-    n_d = 8 if options.k_coefficients > 3 else 5
-    k0 = np.eye(3)
-    try:
-        rms, k, d, rvecs, tvecs, std_in, _std_ex, per_view = cv2.calibrateCameraExtended(
-            object_points, image_points, size, k0, np.zeros(n_d), flags=options.flags,
-            criteria=CRITERIA,
-        )
-    except cv2.error as err:
-        raise ProcessorError(f"calibration failed: {str(err).strip().splitlines()[-1]}") from None
-    d = np.asarray(d, dtype=np.float64).reshape(-1)[:n_d]
-    model = CameraModel(size[0], size[1], np.asarray(k, dtype=np.float64),
-                        options.distortion_model, d)
-    poses = [_pose(r, t) for r, t in zip(rvecs, tvecs, strict=True)]
-    residuals = []
-    for pose, c in zip(poses, corners, strict=True):
-        projected = model.project(points_in_board @ pose[:3, :3].T + pose[:3, 3])
-        residuals.append(c - projected)
-    return Solution(float(rms), model, poses, np.asarray(std_in, dtype=np.float64).reshape(-1),
-                    np.asarray(per_view, dtype=np.float64).reshape(-1), residuals)
-
-
-def far_above_the_rest(view_ids: list[int], view_rms_px: F64, what: str) -> dict[int, str]:
-    """Views whose RMS error exceeds max(OUTLIER_FACTOR x the median, OUTLIER_FLOOR_PX),
-    with why; none when removing them would leave fewer than MIN_VIEWS."""
-    median = float(np.median(view_rms_px))
-    limit = max(OUTLIER_FACTOR * median, OUTLIER_FLOOR_PX)
-    bad = {i: (f"{what} RMS {e:.3f} px > {limit:.3f} px "
-               f"({OUTLIER_FACTOR:g}x the median {median:.3f} px)")
-           for i, e in zip(view_ids, view_rms_px, strict=True) if e > limit}
-    return bad if len(view_ids) - len(bad) >= MIN_VIEWS else {}
+    @property
+    def outlier_corners(self) -> int:
+        """Corners of used views left out as outliers."""
+        return sum(int((~m).sum()) for m in self.inliers.values())
 
 
 def calibrate_mono(points_in_board: F64, corners: list[F64], size: tuple[int, int],
-                   options: CalibrationOptions, *, reject_outliers: bool = True) -> MonoResult:
-    """Calibrate from views ``corners[i]`` ``(N, 2)`` of the board points ``(N, 3)``.
-
-    Views whose RMS error lies far above the rest are removed and the camera re-solved,
-    up to three rounds. With ``tangential="auto"`` this is done with p1, p2 free; then the
-    kept views are solved again with p1 = p2 = 0 and the better-supported model is returned.
-    """
-    if len(corners) < MIN_VIEWS:
-        raise ProcessorError(
-            f"too few good views to calibrate: {len(corners)} (need at least {MIN_VIEWS}); "
-            "record more board poses"
-        )
-    solve_options = options.with_tangential("estimate") if options.tangential == "auto" \
-        else options
-    active = list(range(len(corners)))
-    rejected: dict[int, str] = {}
-    for round_ in range(REJECTION_ROUNDS + 1):
-        solution = solve_views(points_in_board, [corners[i] for i in active], size,
-                               solve_options)
-        bad = far_above_the_rest(active, solution.view_rms_px, "reprojection") \
-            if reject_outliers and round_ < REJECTION_ROUNDS else {}
-        if not bad:
-            break
-        rejected |= bad
-        active = [i for i in active if i not in rejected]
-    test = None
-    if options.tangential == "auto":
-        zero_options = options.with_tangential("zero")
-        without = solve_views(points_in_board, [corners[i] for i in active], size,
-                              zero_options)
-        observed = 2 * sum(len(corners[i]) for i in active)
-        dof = observed - solve_options.free_intrinsics - 6 * len(active)
-        chi2 = (without.rms_px ** 2 - solution.rms_px ** 2) / max(solution.rms_px ** 2, 1e-300) \
-            * dof
-        test = TangentialTest(chi2, estimated=False)
-        test = dataclasses.replace(test, estimated=test.p_value < TANGENTIAL_P_VALUE)
-        if not test.estimated:
-            solution, solve_options = without, zero_options
-    names = ["fx", "fy", "cx", "cy", *_distortion_names(solution.model.distortion_model)]
-    sigma = {n: float(solution.std[STD_NAMES.index(n)]) for n in names}
+                   options: CalibrationOptions, *, reject_outliers: bool = True,
+                   point_ids: list[np.ndarray] | None = None,
+                   weights: list[float] | None = None) -> MonoResult:
+    """Calibrate from views ``corners[i]`` ``(M_i, 2)`` of the board points ``(N, 3)``
+    (all of them in order, or ``point_ids[i]``), each weighted by ``weights[i]``."""
+    ids = point_ids or [np.arange(len(points_in_board))] * len(corners)
+    weight = weights or [1.0] * len(corners)
+    views = [BoardView(0, i, np.asarray(ids[i], dtype=np.int64), c, weight[i])
+             for i, c in enumerate(corners)]
+    joint = calibrate_cameras(points_in_board, views, [size], options,
+                              reject_outliers=reject_outliers)
+    used = [i for i in range(len(corners)) if i not in joint.rejected]
     return MonoResult(
-        model=solution.model, rms_px=solution.rms_px, view_ids=active,
-        view_rms_px={i: float(e) for i, e in zip(active, solution.view_rms_px, strict=True)},
-        rejected=rejected, std=sigma,
-        camera_from_board=dict(zip(active, solution.camera_from_board, strict=True)),
-        residuals_px=dict(zip(active, solution.residuals_px, strict=True)),
-        options=solve_options, tangential_test=test,
-    )
+        model=joint.models[0], rms_px=joint.rms_px, view_ids=used,
+        view_rms_px={i: joint.view_rms_px(i) for i in used},
+        rejected=dict(joint.rejected), std=dict(joint.std[0]),
+        camera_from_board={i: joint.reference_from_board[i] for i in used},
+        residuals_px={i: joint.residuals_px[i] for i in used},
+        inliers={i: joint.inliers[i] for i in used},
+        options=joint.options[0], tangential_test=joint.tangential_tests[0],
+        sigma_px=joint.sigma_px, joint=joint)
 
 
 def max_projection_difference(a: CameraModel, b: CameraModel, step_px: int = 8,
@@ -279,24 +121,29 @@ def max_projection_difference(a: CameraModel, b: CameraModel, step_px: int = 8,
         inside = [cv2.pointPolygonTest(hull, (float(u), float(v)), False) >= 0
                   for u, v in pixels]
         pixels = pixels[np.asarray(inside, dtype=bool)]
-    rays_in_a = np.column_stack([a.undistort_pixels(pixels), np.ones(len(pixels))])
-    rvec_b_from_a = _best_rotation(rays_in_a, pixels, b) if align_rotation else np.zeros(3)
-    uv, _ = cv2.projectPoints(rays_in_a, rvec_b_from_a, np.zeros(3), b.k, b.d)
-    return float(np.linalg.norm(uv.reshape(-1, 2) - pixels, axis=1).max())
+    rays_in_a = a.pixel_rays(pixels)
+    keep = np.isfinite(rays_in_a).all(axis=1)
+    rays_in_a, pixels = rays_in_a[keep], pixels[keep]
+    b_from_a = best_rotation(rays_in_a, pixels, b) if align_rotation else np.eye(3)
+    uv = b.project(rays_in_a @ b_from_a.T)
+    return float(np.linalg.norm(uv - pixels, axis=1).max())
 
 
-def _best_rotation(rays: F64, pixels: F64, model: CameraModel, iterations: int = 20) -> F64:
-    """Rotation vector ``r`` minimising the pixel error of ``model`` imaging ``R(r) rays``
-    at ``pixels`` (Gauss-Newton; the rotation is small, so it starts from zero)."""
-    rvec = np.zeros(3)
+def best_rotation(rays: F64, pixels: F64, model: CameraModel, iterations: int = 20) -> F64:
+    """Rotation ``R`` (3, 3) minimising the pixel error of ``model`` imaging ``R rays``
+    ``(N, 3)`` at ``pixels`` ``(N, 2)`` (Gauss-Newton on ``R <- exp([d]x) R`` from the
+    identity: the rotation is small)."""
+    turn = np.eye(3)
+    intrinsics = intrinsics_of(model)
     for _ in range(iterations):
-        uv, jacobian = cv2.projectPoints(rays, rvec, np.zeros(3), model.k, model.d)
-        error = (uv.reshape(-1, 2) - pixels).reshape(-1)
-        step = np.linalg.lstsq(jacobian[:, :3], -error, rcond=None)[0]
-        rvec = rvec + step
+        turned = rays @ turn.T
+        uv, d_point, _ = project(model.distortion_model, intrinsics, turned)
+        jacobian = cross(turned[:, None, :], d_point).reshape(-1, 3)
+        step = np.linalg.lstsq(jacobian, -(uv - pixels).reshape(-1), rcond=None)[0]
+        turn = matrices(np.asarray(step, dtype=np.float64)[None])[0] @ turn
         if np.abs(step).max() < 1e-12:
             break
-    return rvec
+    return turn
 
 
 def cross_validate(points_in_board: F64, corners: list[F64], size: tuple[int, int],

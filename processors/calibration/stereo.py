@@ -18,8 +18,14 @@ from replay.camera import CameraModel
 from replay.messages import F64
 
 from ..errors import ProcessorError
-from .solve import CRITERIA, MIN_VIEWS, REJECTION_ROUNDS, far_above_the_rest
+from .joint import MIN_VIEWS
 
+CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-12)
+#: a joint view whose RMS exceeds max(OUTLIER_FACTOR * median, OUTLIER_FLOOR_PX) is rejected
+OUTLIER_FACTOR = 3.0
+OUTLIER_FLOOR_PX = 0.3
+#: rounds of removing joint views far above the rest, each followed by a fresh solve
+REJECTION_ROUNDS = 3
 #: stereo re-solves for the baseline's standard deviation, each on this many views at most
 BOOTSTRAP_RESAMPLES = 30
 BOOTSTRAP_VIEWS = 40
@@ -50,6 +56,17 @@ class StereoResult:
         """Angle of the rig rotation ``right_from_left``, in degrees."""
         angle = math.acos(max(-1.0, min(1.0, (np.trace(self.right_from_left[:3, :3]) - 1) / 2)))
         return math.degrees(angle)
+
+
+def far_above_the_rest(view_ids: list[int], view_rms_px: F64, what: str) -> dict[int, str]:
+    """Views whose RMS error exceeds max(OUTLIER_FACTOR x the median, OUTLIER_FLOOR_PX),
+    with why; none when removing them would leave fewer than MIN_VIEWS."""
+    median = float(np.median(view_rms_px))
+    limit = max(OUTLIER_FACTOR * median, OUTLIER_FLOOR_PX)
+    bad = {i: (f"{what} RMS {e:.3f} px > {limit:.3f} px "
+               f"({OUTLIER_FACTOR:g}x the median {median:.3f} px)")
+           for i, e in zip(view_ids, view_rms_px, strict=True) if e > limit}
+    return bad if len(view_ids) - len(bad) >= MIN_VIEWS else {}
 
 
 def rectified_points(corners_px: F64, model: CameraModel, r: F64, p: F64) -> F64:

@@ -36,7 +36,8 @@ __all__ = [
 @dataclass(frozen=True)
 class ViewResiduals(JsonRecord):
     """One used calibration view: detected ``corners_px`` (N, 2) and ``residuals_px`` (N, 2),
-    observed minus reprojected, and the view's RMS."""
+    observed minus reprojected, the view's RMS over its inlier corners and the indices of
+    the corners left out as outliers."""
 
     what = "residuals record"
 
@@ -45,6 +46,7 @@ class ViewResiduals(JsonRecord):
     rms_px: float
     corners_px: F64
     residuals_px: F64
+    outliers: list[int] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         corners = np.asarray(self.corners_px, dtype=np.float64).reshape(-1, 2)

@@ -1,0 +1,51 @@
+"""Rotation vectors (Rodrigues, as OpenCV's ``rvec``) and matrices, vectorised."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from replay.messages import F64
+
+#: below this angle (rad) the first-order expansions are exact to double precision
+_SMALL = 1e-8
+
+
+def matrices(rvecs: F64) -> F64:
+    """Rotation matrices ``(K, 3, 3)`` of rotation vectors ``(K, 3)``.
+
+    ``R = I + sin(t) / t [r]x + (1 - cos t) / t^2 [r]x^2`` with ``t = |r|``.
+    """
+    rvecs = np.asarray(rvecs, dtype=np.float64).reshape(-1, 3)
+    angle = np.linalg.norm(rvecs, axis=1)
+    small = angle < _SMALL
+    safe = np.where(small, 1.0, angle)
+    a = np.where(small, 1.0, np.sin(safe) / safe)
+    b = np.where(small, 0.5, (1.0 - np.cos(safe)) / (safe * safe))
+    k = np.zeros((len(rvecs), 3, 3))  # cross-product matrices [r]x
+    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -rvecs[:, 2], rvecs[:, 1], -rvecs[:, 0]
+    k[:, 1, 0], k[:, 2, 0], k[:, 2, 1] = rvecs[:, 2], -rvecs[:, 1], rvecs[:, 0]
+    out: F64 = np.eye(3) + a[:, None, None] * k + b[:, None, None] * (k @ k)
+    return out
+
+
+def rotation_vectors(rotations: F64) -> F64:
+    """Rotation vectors ``(K, 3)`` of rotation matrices ``(K, 3, 3)`` (angles below pi)."""
+    rotations = np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3)
+    cos = np.clip((np.trace(rotations, axis1=1, axis2=2) - 1.0) / 2.0, -1.0, 1.0)
+    angle = np.arccos(cos)
+    axis = np.stack([rotations[:, 2, 1] - rotations[:, 1, 2],
+                     rotations[:, 0, 2] - rotations[:, 2, 0],
+                     rotations[:, 1, 0] - rotations[:, 0, 1]], axis=1)
+    sin = np.sin(angle)
+    scale = np.where(sin > 1e-12, angle / (2.0 * np.where(sin > 1e-12, sin, 1.0)), 0.5)
+    out: F64 = axis * scale[:, None]
+    near_pi = cos < -0.999
+    for i in np.flatnonzero(near_pi):  # rare: axis from the symmetric part
+        sym = (rotations[i] + np.eye(3)) / 2.0
+        column = int(np.argmax(np.diag(sym)))
+        unit = sym[:, column] / np.sqrt(max(sym[column, column], 1e-300))
+        out[i] = unit * angle[i]
+        if np.allclose(matrices(out[i:i + 1])[0], rotations[i], atol=1e-6):
+            continue
+        out[i] = -out[i]
+    return out

@@ -1,0 +1,170 @@
+"""Starting points for the joint refinement: OpenCV's calibration, board poses, rig transforms.
+
+OpenCV's solvers (``calibrateCamera``, ``fisheye.calibrate``, ``solvePnP``) give a solution
+close enough for Levenberg-Marquardt to converge from; the joint refinement then uses every
+view. OpenCV's calibration is dense in the views, so it sees an evenly spaced sample of them.
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+import numpy.typing as npt
+
+from replay.camera import CameraModel
+from replay.messages import F64
+
+from ..errors import ProcessorError
+from . import rotation
+from .options import CalibrationOptions
+
+I64 = npt.NDArray[np.int64]
+#: views OpenCV's solver sees when seeding a camera
+SEED_VIEWS = 40
+CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-10)
+#: rig transforms of two views agree when their rotations differ by less than this
+RIG_AGREEMENT_RAD = math.radians(2.0)
+#: a seed view whose RMS error exceeds max(factor x the median, floor) is left out of the seed
+SEED_OUTLIER_FACTOR = 5.0
+SEED_OUTLIER_FLOOR_PX = 0.5
+
+
+def spread(count: int, most: int) -> list[int]:
+    """Up to ``most`` indices evenly spread over ``range(count)``."""
+    if count <= most:
+        return list(range(count))
+    return sorted({round(i * (count - 1) / (most - 1)) for i in range(most)})
+
+
+def _pinhole_flags(options: CalibrationOptions) -> int:
+    flags = cv2.CALIB_FIX_PRINCIPAL_POINT if options.fix_principal_point else 0
+    if options.fix_aspect_ratio:
+        flags |= cv2.CALIB_FIX_ASPECT_RATIO
+    if options.tangential == "zero":
+        flags |= cv2.CALIB_ZERO_TANGENT_DIST
+    if options.distortion_model == "rational_polynomial":
+        flags |= cv2.CALIB_RATIONAL_MODEL
+    for n, flag in enumerate((cv2.CALIB_FIX_K1, cv2.CALIB_FIX_K2, cv2.CALIB_FIX_K3,
+                              cv2.CALIB_FIX_K4, cv2.CALIB_FIX_K5, cv2.CALIB_FIX_K6), 1):
+        if options.radial_count < n:
+            flags |= flag
+    return flags
+
+
+def _fisheye_flag(name: str) -> int:
+    """OpenCV 4's ``cv2.fisheye.CALIB_*`` flags are ``cv2.CALIB_*`` in OpenCV 5."""
+    flag = getattr(cv2.fisheye, f"CALIB_{name}", None)
+    return int(flag if flag is not None else getattr(cv2, f"CALIB_{name}"))
+
+
+def _fisheye_flags(options: CalibrationOptions) -> int:
+    flags = _fisheye_flag("RECOMPUTE_EXTRINSIC") | _fisheye_flag("FIX_SKEW") \
+        | _fisheye_flag("USE_INTRINSIC_GUESS")
+    if options.fix_principal_point:
+        flags |= _fisheye_flag("FIX_PRINCIPAL_POINT")
+    for n in range(options.radial_count + 1, 5):
+        flags |= _fisheye_flag(f"FIX_K{n}")
+    return flags
+
+
+def seed_model(points: list[F64], corners: list[F64], size: tuple[int, int],
+               options: CalibrationOptions) -> CameraModel:
+    """A camera from OpenCV's calibration of views ``corners[i]`` ``(M_i, 2)`` of the board
+    points ``points[i]`` ``(M_i, 3)`` (an even sample of at most :data:`SEED_VIEWS`).
+
+    A view that is not the board (a wrong detection) can pull OpenCV's solution far enough
+    for the refinement to start in the wrong place: views far above the rest are left out
+    and the seed solved again, twice at most.
+    """
+    pick = spread(len(corners), SEED_VIEWS)
+    model = _opencv_calibration([points[i] for i in pick], [corners[i] for i in pick], size,
+                                options)
+    for _round in range(2):
+        errors = np.array([view_rms_px(points[i], corners[i], model) for i in pick])
+        limit = max(SEED_OUTLIER_FACTOR * float(np.nanmedian(errors)), SEED_OUTLIER_FLOOR_PX)
+        keep = [i for i, e in zip(pick, errors, strict=True) if e <= limit]
+        if len(keep) == len(pick) or len(keep) < max(5, len(pick) // 2):
+            break
+        pick = keep
+        model = _opencv_calibration([points[i] for i in pick], [corners[i] for i in pick],
+                                    size, options)
+    return model
+
+
+def view_rms_px(points: F64, corners: F64, model: CameraModel) -> float:
+    """RMS reprojection error of one view with its pose fitted (inf when PnP fails)."""
+    pose = board_pose(points, corners, model)
+    if pose is None:
+        return float("inf")
+    projected = model.project(points @ pose[:3, :3].T + pose[:3, 3])
+    return float(np.sqrt(np.mean(np.sum((projected - corners) ** 2, axis=1))))
+
+
+def _opencv_calibration(points: list[F64], corners: list[F64], size: tuple[int, int],
+                        options: CalibrationOptions) -> CameraModel:
+    # (1, M, 3) as the fisheye solver needs; the pinhole one takes them too
+    objects = [p.astype(np.float64).reshape(1, -1, 3) for p in points]
+    images = [c.astype(np.float64).reshape(1, -1, 2) for c in corners]
+    width, height = size
+    model = options.distortion_model
+    try:
+        if model == "equidistant":
+            k0 = np.array([[max(size) / math.pi, 0, (width - 1) / 2],
+                           [0, max(size) / math.pi, (height - 1) / 2], [0, 0, 1]])
+            _rms, k, d, _r, _t = cv2.fisheye.calibrate(objects, images, size, k0, np.zeros(4),
+                                                      flags=_fisheye_flags(options),
+                                                      criteria=CRITERIA)
+        else:
+            n_d = 8 if model == "rational_polynomial" else 5
+            _rms, k, d, _r, _t = cv2.calibrateCamera(
+                [o.astype(np.float32) for o in objects], [i.astype(np.float32) for i in images],
+                size, np.eye(3), np.zeros(n_d), flags=_pinhole_flags(options), criteria=CRITERIA)
+    except cv2.error as err:
+        raise ProcessorError(f"calibration failed: {str(err).strip().splitlines()[-1]}") from None
+    d = np.asarray(d, dtype=np.float64).reshape(-1)
+    return CameraModel(width, height, np.asarray(k, dtype=np.float64), model,
+                       d[: 8 if model == "rational_polynomial" else 4 if model == "equidistant"
+                         else 5])
+
+
+def board_pose(points: F64, corners: F64, model: CameraModel) -> F64 | None:
+    """``camera_from_board`` (4, 4) of one view by PnP on the undistorted corners; None when
+    it fails."""
+    normalized = model.undistort_pixels(corners)
+    keep = np.isfinite(normalized).all(axis=1)
+    if keep.sum() < 4:
+        return None
+    ok, rvec, tvec = cv2.solvePnP(points[keep].astype(np.float64),
+                                  normalized[keep].astype(np.float64), np.eye(3), None,
+                                  flags=cv2.SOLVEPNP_IPPE)
+    if not ok:
+        return None
+    pose = np.eye(4)
+    pose[:3, :3] = cv2.Rodrigues(rvec)[0]
+    pose[:3, 3] = np.asarray(tvec).reshape(3)
+    return pose
+
+
+def rig_transform(camera_from_board: list[F64], reference_from_board: list[F64]) -> F64:
+    """``camera_from_reference`` (4, 4) most views agree on, from pairs of board poses seen by
+    both cameras at the same instants: rotations within :data:`RIG_AGREEMENT_RAD` of the
+    best-supported one are averaged, translations by their median."""
+    candidates = np.stack([c @ np.linalg.inv(r) for c, r in zip(camera_from_board,
+                                                                 reference_from_board,
+                                                                 strict=True)])
+    if not len(candidates):
+        raise ProcessorError("a camera never sees the board at the same time as the first one")
+    rvecs = rotation.rotation_vectors(candidates[:, :3, :3])
+    relative = np.einsum("aji,bjk->abik", candidates[:, :3, :3], candidates[:, :3, :3])
+    cos = np.clip((np.trace(relative, axis1=2, axis2=3) - 1) / 2, -1, 1)
+    support = np.arccos(cos) < RIG_AGREEMENT_RAD
+    best = int(np.argmax(support.sum(axis=1)))
+    agree = support[best]
+    u, _s, vt = np.linalg.svd(candidates[agree, :3, :3].sum(axis=0))
+    mean = u @ np.diag([1, 1, np.linalg.det(u @ vt)]) @ vt
+    out = np.eye(4)
+    out[:3, :3] = mean if np.all(np.isfinite(mean)) else rotation.matrices(rvecs[best:best + 1])[0]
+    out[:3, 3] = np.median(candidates[agree, :3, 3], axis=0)
+    return out

@@ -1,0 +1,116 @@
+"""The joint least-squares problem: Jacobian against finite differences, exact convergence."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from processors.calibration import bundle, rotation
+from processors.calibration.lens import INTRINSIC_NAMES, intrinsics_of
+from replay.camera import CameraModel
+
+from .synthetic import BOARD, H, W, pose, random_poses, true_model, views
+
+RIGHT_FROM_LEFT = pose(np.array([0.01, 0.03, -0.02]), np.array([-0.12, 0.004, 0.01]))
+FISHEYE = CameraModel(W, H, np.array([[260.0, 0, 318], [0, 262, 242], [0, 0, 1]]), "equidistant",
+                      np.array([0.03, -0.01, 0.004, -0.001]))
+
+
+def rig_problem(models: list[CameraModel], count: int, noise_px: float, seed: int
+                ) -> tuple[bundle.RigState, bundle.Layout, bundle.Observations]:
+    """Two cameras seeing ``count`` board poses; the true state and the observations."""
+    placements = [np.eye(4), RIGHT_FROM_LEFT]
+    poses = random_poses(np.random.default_rng(seed), count, models,
+                         camera_from_reference=placements)
+    observed = [views(m, [p @ b for b in poses], noise_px, seed + c)
+                for c, (m, p) in enumerate(zip(models, placements, strict=True))]
+    state = bundle.RigState(
+        [intrinsics_of(m) for m in models],
+        np.stack([p[:3, :3] for p in placements]), np.stack([p[:3, 3] for p in placements]),
+        np.stack([b[:3, :3] for b in poses]), np.stack([b[:3, 3] for b in poses]))
+    setups = [bundle.CameraSetup(m.distortion_model, (W, H),
+                                 tuple(n for n in INTRINSIC_NAMES[m.distortion_model]
+                                       if n != "k3"), tie_aspect=c == 1)
+              for c, m in enumerate(models)]
+    obs = bundle.Observations(
+        camera=np.repeat([0, 1], count), instant=np.tile(np.arange(count), 2),
+        observed=np.concatenate([np.stack(o) for o in observed]),
+        mask=np.ones((2 * count, BOARD.corner_count), bool), weight=np.full(2 * count, 1.5))
+    return state, bundle.Layout.of(setups, state), obs
+
+
+@pytest.mark.parametrize("second", ["plumb_bob", "equidistant"])
+def test_jacobian_matches_finite_differences(second: str) -> None:
+    models = [true_model(), true_model() if second == "plumb_bob" else FISHEYE]
+    state, layout, obs = rig_problem(models, 4, 0.1, seed=3)
+    obs.mask[1, 5] = False  # a masked corner has no residual and no derivative
+    points = BOARD.points_in_board()
+    lin = bundle.linearize(state, layout, obs, points)
+    assert np.all(lin.residuals[1, 5] == 0) and np.all(lin.pose[1, 10:12] == 0)
+    pose_count = len(state.board_rotation)
+    for column in range(layout.global_count + 6 * pose_count):
+        d_global = np.zeros(layout.global_count)
+        d_pose = np.zeros((pose_count, 6))
+        step = 1e-6
+        if column < layout.global_count:
+            d_global[column] = step
+        else:
+            d_pose.reshape(-1)[column - layout.global_count] = step
+        plus = bundle.linearize(layout.step(state, d_global, d_pose), layout, obs, points,
+                                jacobian=False).residuals
+        minus = bundle.linearize(layout.step(state, -d_global, -d_pose), layout, obs, points,
+                                 jacobian=False).residuals
+        numeric = ((plus - minus) / (2 * step)).reshape(obs.view_count, -1)
+        analytic = np.zeros_like(numeric)
+        if column < layout.global_count:
+            for camera, views_ in enumerate(obs.camera_slices):
+                columns = list(layout.global_columns(camera))
+                if column in columns:
+                    analytic[views_] = lin.global_blocks[camera][:, :, columns.index(column)]
+        else:
+            instant, k = divmod(column - layout.global_count, 6)
+            rows = obs.instant == instant
+            analytic[rows] = lin.pose[rows][:, :, k]
+        np.testing.assert_allclose(analytic, numeric, rtol=1e-4, atol=2e-4)
+
+
+def test_refine_converges_to_the_truth_without_noise() -> None:
+    truth, layout, obs = rig_problem([true_model(), true_model()], 12, 0.0, seed=4)
+    seed = truth.copy()
+    seed.intrinsics[0] = seed.intrinsics[0] * np.array([1.01, 1.01, 1, 1, 0.9, 1.1, 1, 1, 1]) \
+        + np.array([0, 0, 2.0, -1.5, 0, 0, 0, 0, 0])
+    seed.rig_rotation[1] = rotation.matrices(np.array([[0.002, -0.003, 0.001]]))[0] \
+        @ seed.rig_rotation[1]
+    seed.rig_translation[1] += [0.002, -0.001, 0.0]
+    seed.board_translation += 0.003
+    refined = bundle.refine(seed, layout, obs, BOARD.points_in_board())
+    assert refined.costs[0] > 1.0 and refined.linearization.cost < 1e-16
+    np.testing.assert_allclose(refined.state.intrinsics[0], truth.intrinsics[0], rtol=1e-9)
+    np.testing.assert_allclose(refined.state.rig_translation, truth.rig_translation, atol=1e-11)
+    np.testing.assert_allclose(refined.state.board_rotation, truth.board_rotation, atol=1e-10)
+
+
+def test_normal_equations_are_the_jacobian_products() -> None:
+    state, layout, obs = rig_problem([true_model(), FISHEYE], 5, 0.2, seed=5)
+    lin = bundle.linearize(state, layout, obs, BOARD.points_in_board())
+    normal = bundle.normal_equations(lin, layout, obs, 5)
+    # the dense Jacobian, assembled from the blocks
+    rows = lin.residuals.size
+    dense = np.zeros((rows, layout.global_count + 30))
+    per_view = 2 * BOARD.corner_count
+    for camera, views_ in enumerate(obs.camera_slices):
+        for v in range(views_.start, views_.stop):
+            dense[v * per_view:(v + 1) * per_view, layout.global_columns(camera)] = \
+                lin.global_blocks[camera][v - views_.start]
+            at = layout.global_count + 6 * int(obs.instant[v])
+            dense[v * per_view:(v + 1) * per_view, at:at + 6] = lin.pose[v]
+    jtj = dense.T @ dense
+    g = layout.global_count
+    np.testing.assert_allclose(normal.a, jtj[:g, :g], rtol=1e-10)
+    np.testing.assert_allclose(normal.b[2], jtj[g + 12:g + 18, g + 12:g + 18], rtol=1e-10)
+    np.testing.assert_allclose(normal.global_covariance(), np.linalg.inv(jtj)[:g, :g],
+                               rtol=1e-6)
+    rhs = np.random.default_rng(0).normal(size=(jtj.shape[0], 3))
+    x_global, x_pose = normal.solve(rhs[:g], rhs[g:].reshape(5, 6, 3))
+    np.testing.assert_allclose(np.vstack([x_global, x_pose.reshape(30, 3)]),
+                               np.linalg.solve(jtj, rhs), rtol=1e-6, atol=1e-12)
