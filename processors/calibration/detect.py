@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+import numpy.typing as npt
 
 from replay.messages import F64
 
@@ -28,11 +29,20 @@ MIN_CONTRAST = 12.0
 
 @dataclass(frozen=True)
 class Detection:
-    """A board found in one image. ``corners_px`` is ``(N, 2)`` in board order."""
+    """A board found in one image: ``corners_px`` ``(M, 2)`` of the board points
+    ``point_ids`` ``(M,)`` (None: every point, in board order)."""
 
     corners_px: F64
     accepted: bool
     reason: str = ""  # why a found board was rejected
+    point_ids: npt.NDArray[np.int64] | None = None
+
+    @property
+    def ids(self) -> npt.NDArray[np.int64]:
+        """The board points seen, ``(M,)``."""
+        if self.point_ids is None:
+            return np.arange(len(self.corners_px), dtype=np.int64)
+        return self.point_ids
 
 
 def find_chessboard(gray: np.ndarray, board: Board) -> Detection | None:

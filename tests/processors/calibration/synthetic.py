@@ -112,3 +112,39 @@ def render_board(board: Board, origin_px: tuple[float, float], square_px: float,
     corners = np.column_stack([origin_px[0] + cols.ravel() * square_px,
                                origin_px[1] + rows.ravel() * square_px])
     return image, corners
+
+
+def warp_texture(texture: np.ndarray, px_per_m: float, origin_px: tuple[float, float],
+                 k: F64, camera_from_board: F64, *, size: tuple[int, int] = (W, H),
+                 supersample: int = 4) -> np.ndarray:
+    """A flat board texture ``(h, w)`` uint8 seen by the pinhole camera ``k`` (3, 3) at
+    ``camera_from_board``: texture pixel centre ``p`` shows the board point
+    ``((p - origin_px) / px_per_m, 0)``. Rendered ``supersample`` times larger and
+    area-averaged down; the background is mid grey."""
+    s = supersample
+    # board metres -> texture pixel centres, and board metres -> big output pixel centres
+    board_from_texture = np.array([[1 / px_per_m, 0, -origin_px[0] / px_per_m],
+                                   [0, 1 / px_per_m, -origin_px[1] / px_per_m], [0, 0, 1]])
+    plane = k @ np.column_stack([camera_from_board[:3, 0], camera_from_board[:3, 1],
+                                 camera_from_board[:3, 3]])
+    big_from_small = np.array([[s, 0, (s - 1) / 2], [0, s, (s - 1) / 2], [0, 0, 1]])
+    homography = big_from_small @ plane @ board_from_texture
+    big = cv2.warpPerspective(texture, homography, (size[0] * s, size[1] * s),
+                              flags=cv2.INTER_AREA, borderValue=128)
+    return np.asarray(cv2.resize(big, size, interpolation=cv2.INTER_AREA))
+
+
+def circle_texture(board: Board, px_per_m: float, radius_m: float) -> tuple[np.ndarray,
+                                                                          tuple[float, float]]:
+    """A white card with black circles at the board's points, and the texture pixel of the
+    first point."""
+    points = board.points_in_board()[:, :2]
+    margin = 2 * radius_m
+    extent = points.max(axis=0) + 2 * margin
+    texture = np.full((int(extent[1] * px_per_m), int(extent[0] * px_per_m)), 245, np.uint8)
+    origin = (margin * px_per_m - 0.5, margin * px_per_m - 0.5)
+    for x, y in points:
+        centre = ((x * px_per_m + origin[0]) * 16, (y * px_per_m + origin[1]) * 16)
+        cv2.circle(texture, (round(centre[0]), round(centre[1])), round(radius_m * px_per_m * 16),
+                   15, -1, cv2.LINE_AA, shift=4)
+    return texture, origin

@@ -47,5 +47,45 @@ def test_make_board_checks_its_inputs() -> None:
         make_board("7x6", 0.0)
     with pytest.raises(ProcessorError, match="--square"):
         make_board("7x6", -0.01)
-    with pytest.raises(ProcessorError, match="unsupported pattern 'circles'"):
-        make_board("7x6", 0.01, "circles")
+    with pytest.raises(ProcessorError, match="unsupported pattern 'hexagons'"):
+        make_board("7x6", 0.01, "hexagons")
+    with pytest.raises(ProcessorError, match="--marker"):
+        make_board("7x6", 0.01, marker_m=0.005)
+
+
+def test_charuco_counts_squares() -> None:
+    board = make_board("12x9", 0.02, "charuco", marker_m=0.015)
+    assert (board.cols, board.rows, board.dictionary) == (11, 8, "DICT_5X5_100")
+    opencv = board.charuco()
+    assert opencv.getChessboardSize() == (12, 9)
+    # OpenCV's corners, moved so that the first inner corner is the origin
+    corners = np.asarray(opencv.getChessboardCorners(), dtype=np.float64)
+    np.testing.assert_allclose(board.points_in_board(), corners - corners[0], atol=1e-7)
+    assert board.partial_views and not board.symmetric
+    assert "12x9 squares ChArUco" in board.describe()
+
+
+def test_charuco_checks_markers_and_dictionary() -> None:
+    with pytest.raises(ProcessorError, match="--marker"):
+        make_board("6x5", 0.02, "charuco")
+    with pytest.raises(ProcessorError, match="--marker"):
+        make_board("6x5", 0.02, "charuco", marker_m=0.02)
+    with pytest.raises(ProcessorError, match="unknown ArUco dictionary 'DICT_9X9_1'"):
+        make_board("6x5", 0.02, "charuco", marker_m=0.015, dictionary="DICT_9X9_1")
+    with pytest.raises(ProcessorError, match="needs 60 markers, DICT_4X4_50 has 50"):
+        make_board("12x10", 0.02, "charuco", marker_m=0.015, dictionary="DICT_4X4_50")
+    with pytest.raises(ProcessorError, match="3x3 squares"):
+        make_board("2x5", 0.02, "charuco", marker_m=0.015)
+
+
+def test_circle_grids_count_circles() -> None:
+    symmetric = make_board("4x3", 0.02, "circles")
+    np.testing.assert_allclose(symmetric.points_in_board()[:5, :2],
+                               [[0, 0], [0.02, 0], [0.04, 0], [0.06, 0], [0, 0.02]])
+    assert symmetric.symmetric
+    # every other row half a step along: OpenCV's asymmetric grid
+    asymmetric = make_board("4x3", 0.02, "acircles")
+    np.testing.assert_allclose(asymmetric.points_in_board()[:6, :2],
+                               [[0, 0], [0.04, 0], [0.08, 0], [0.12, 0], [0.02, 0.02],
+                                [0.06, 0.02]])
+    assert not asymmetric.symmetric and "asymmetric circle grid" in asymmetric.describe()

@@ -1,0 +1,86 @@
+"""Detection of every target kind with OpenCV's detectors: one entry point, :func:`find_board`.
+
+Chessboards go through :func:`~.detect.find_chessboard` (with its square-by-square checks).
+ChArUco boards through ``cv2.aruco.CharucoDetector``: every inner corner is identified by the
+markers around it, so a board cut by the image border still gives the corners it shows —
+the views near the border, where distortion is learnt. Circle grids through
+``cv2.findCirclesGrid`` (symmetric or asymmetric), which needs every circle.
+"""
+
+from __future__ import annotations
+
+import threading
+
+import cv2
+import numpy as np
+
+from .board import Board
+from .detect import BORDER_PX, Detection, canonical_order, find_chessboard
+
+#: fewest ChArUco corners worth a view (a board pose has 6 unknowns)
+MIN_CHARUCO_CORNERS = 6
+_LOCAL = threading.local()
+
+
+def find_board(gray: np.ndarray, board: Board) -> Detection | None:
+    """Detect ``board`` in a ``(H, W)`` uint8 image; None when no board is found."""
+    if board.pattern == "charuco":
+        return find_charuco(gray, board)
+    if board.pattern in ("circles", "acircles"):
+        return find_circles(gray, board)
+    return find_chessboard(gray, board)
+
+
+def _charuco_detector(board: Board) -> cv2.aruco.CharucoDetector:
+    """One detector per thread and board (OpenCV's detectors keep state between calls)."""
+    cache: dict[Board, cv2.aruco.CharucoDetector] = getattr(_LOCAL, "charuco", {})
+    _LOCAL.charuco = cache
+    if board not in cache:
+        cache[board] = cv2.aruco.CharucoDetector(board.charuco())
+    return cache[board]
+
+
+def find_charuco(gray: np.ndarray, board: Board) -> Detection | None:
+    """The ChArUco corners seen, identified by their markers; corners within
+    :data:`~.detect.BORDER_PX` of the image border are left out."""
+    corners, ids, _markers, _marker_ids = _charuco_detector(board).detectBoard(gray)
+    if corners is None or ids is None or len(ids) == 0:
+        return None
+    point_ids = np.asarray(ids, dtype=np.int64).reshape(-1)
+    corners_px = np.asarray(corners, dtype=np.float64).reshape(-1, 2)
+    h, w = gray.shape
+    inside = ((corners_px >= BORDER_PX) & (corners_px <= [w - 1 - BORDER_PX, h - 1 - BORDER_PX])
+              ).all(axis=1)
+    corners_px, point_ids = corners_px[inside], point_ids[inside]
+    order = np.argsort(point_ids)
+    corners_px, point_ids = corners_px[order], point_ids[order]
+    if len(point_ids) < MIN_CHARUCO_CORNERS:
+        return Detection(corners_px, False, f"only {len(point_ids)} ChArUco corners "
+                         f"(need {MIN_CHARUCO_CORNERS})", point_ids)
+    if board.charuco().checkCharucoCornersCollinear(point_ids.reshape(-1, 1).astype(np.int32)):
+        return Detection(corners_px, False, "the ChArUco corners seen lie on one line",
+                         point_ids)
+    return Detection(corners_px, True, "", point_ids)
+
+
+def find_circles(gray: np.ndarray, board: Board) -> Detection | None:
+    """The circle centres of a symmetric or asymmetric grid, all of them or none."""
+    flags = cv2.CALIB_CB_ASYMMETRIC_GRID if board.pattern == "acircles" \
+        else cv2.CALIB_CB_SYMMETRIC_GRID
+    params = cv2.SimpleBlobDetector.Params()
+    params.minArea = 8.0
+    params.maxArea = float(gray.size) / 4.0
+    params.minDistBetweenBlobs = 2.0
+    detector = cv2.SimpleBlobDetector.create(params)
+    found, centres = cv2.findCirclesGrid(gray, board.pattern_size, flags=flags,
+                                         blobDetector=detector)
+    if not found or centres is None or len(centres) != board.corner_count:
+        return None
+    centres_px = np.asarray(centres, dtype=np.float64).reshape(-1, 2)
+    if board.symmetric:
+        centres_px = canonical_order(centres_px, board)
+    h, w = gray.shape
+    if (centres_px < BORDER_PX).any() or (centres_px[:, 0] > w - 1 - BORDER_PX).any() \
+            or (centres_px[:, 1] > h - 1 - BORDER_PX).any():
+        return Detection(centres_px, False, "touches the image border")
+    return Detection(centres_px, True)
