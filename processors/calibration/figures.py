@@ -143,3 +143,50 @@ def annotate_detection(bgr: np.ndarray, corners_px: F64 | None, board_size: tupl
     cv2.rectangle(out, (0, 0), (out.shape[1] - 1, 22), (255, 255, 255), -1)
     _text(out, status, (5, 16), 0.5, color)
     return out
+
+
+#: contour levels (px) drawn on the uncertainty map, where they fall inside its range
+UNCERTAINTY_LEVELS = (0.005, 0.01, 0.02, 0.05, 0.1, 0.2, 0.5, 1.0, 2.0)
+
+
+def uncertainty_figure(size: tuple[int, int], grid_px: F64, sigma_px: F64, title: str,
+                       seen_px: F64 | None = None) -> np.ndarray:
+    """The projection uncertainty ``sigma_px`` ``(rows, cols)`` given at the grid pixels
+    ``grid_px`` ``(rows, cols, 2)`` spread over the image, with contours at round values, a
+    colour bar and, when given, the corners the views put on the image ``(N, 2)`` (grey)."""
+    w, h = size
+    rows, cols = sigma_px.shape
+    # bilinear over the grid: image pixel (u, v) sits at grid position (u / du, v / dv)
+    u, v = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
+    du = float(grid_px[0, -1, 0] - grid_px[0, 0, 0]) / max(cols - 1, 1)
+    dv = float(grid_px[-1, 0, 1] - grid_px[0, 0, 1]) / max(rows - 1, 1)
+    field = cv2.remap(np.nan_to_num(sigma_px, nan=float(np.nanmax(sigma_px))).astype(np.float32),
+                      u / du, v / dv, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    top = float(np.nanmax(sigma_px)) or 1e-9
+    colours = cv2.applyColorMap(np.clip(field / top * 255, 0, 255).astype(np.uint8),
+                                cv2.COLORMAP_VIRIDIS)
+    if seen_px is not None:
+        for p in np.rint(seen_px[::max(1, len(seen_px) // 4000)]).astype(int):
+            cv2.circle(colours, (int(p[0]), int(p[1])), 1, GREY, -1)
+    for level in UNCERTAINTY_LEVELS:
+        if not float(field.min()) < level < top:
+            continue
+        contours, _ = cv2.findContours((field >= level).astype(np.uint8), cv2.RETR_LIST,
+                                       cv2.CHAIN_APPROX_SIMPLE)
+        cv2.drawContours(colours, contours, -1, (255, 255, 255), 1, cv2.LINE_AA)
+        if contours:
+            longest = max(contours, key=len)
+            x, y = longest[len(longest) // 2, 0]
+            _text(colours, f"{level:g}", (int(x) + 3, int(y) - 3), 0.4, (255, 255, 255))
+    img, m = _canvas(w + 90, h)
+    img[m:m + h, m:m + w] = colours
+    bar_x = m + w + 20
+    for y in range(h):
+        value = (1.0 - y / max(h - 1, 1)) * 255
+        img[m + y, bar_x:bar_x + 16] = cv2.applyColorMap(np.array([[value]], np.uint8),
+                                                         cv2.COLORMAP_VIRIDIS)[0, 0]
+    for frac in (0.0, 0.5, 1.0):
+        _text(img, f"{frac * top:.3g}", (bar_x + 20, m + int((1 - frac) * (h - 1)) + 4), 0.4)
+    _text(img, "px", (bar_x, m - 8), 0.45)
+    _text(img, title, (m, 25), 0.55)
+    return img
