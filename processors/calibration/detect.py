@@ -61,6 +61,26 @@ def find_chessboard(gray: np.ndarray, board: Board) -> Detection | None:
     return check_detection(gray, refined, board)
 
 
+def track_chessboard(gray: np.ndarray, predicted_px: F64, board: Board) -> Detection | None:
+    """The board near where it is expected: ``cornerSubPix`` from ``predicted_px``
+    ``(N, 2)`` (e.g. the previous frame's corners moved on by the board's velocity), kept
+    only if every corner stayed within a third of a square of its prediction (so none slid
+    to a neighbouring corner) and the result passes the same checks as a detection. None
+    otherwise: detect the board afresh."""
+    spacing = _min_spacing(predicted_px, board)
+    if not spacing > 4.0:
+        return None
+    radius = max(2, min(11, math.ceil(spacing * 0.5)))
+    criteria = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 60, 0.001)
+    start = predicted_px.astype(np.float32).reshape(-1, 1, 2)
+    refined = cv2.cornerSubPix(gray, start.copy(), (radius, radius), (-1, -1),
+                               criteria).reshape(-1, 2).astype(np.float64)
+    if float(np.linalg.norm(refined - predicted_px, axis=1).max()) > spacing / 3.0:
+        return None
+    found = check_detection(gray, canonical_order(refined, board), board)
+    return found if found.accepted else None
+
+
 def _min_spacing(corners: np.ndarray, board: Board) -> float:
     grid = corners.reshape(board.rows, board.cols, 2)
     along = np.linalg.norm(np.diff(grid, axis=1), axis=2)

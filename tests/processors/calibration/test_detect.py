@@ -6,7 +6,12 @@ import numpy as np
 import pytest
 
 from processors.calibration.board import Board
-from processors.calibration.detect import canonical_order, check_detection, find_chessboard
+from processors.calibration.detect import (
+    canonical_order,
+    check_detection,
+    find_chessboard,
+    track_chessboard,
+)
 
 from .synthetic import render_board
 
@@ -77,3 +82,20 @@ def test_canonical_order_undoes_a_reversed_detection(
     np.testing.assert_array_equal(forward, tilted)  # already starts at the top
     np.testing.assert_array_equal(canonical_order(tilted[::-1].copy(), BOARD), forward)
     assert forward[0, 1] <= forward[-1, 1]
+
+
+def test_tracking_refines_a_nearby_prediction(rendered: tuple[np.ndarray, np.ndarray]) -> None:
+    image, truth = rendered
+    tracked = track_chessboard(image, truth + np.array([2.5, -1.5]), BOARD)
+    assert tracked is not None and tracked.accepted
+    assert np.abs(canonical_order(tracked.corners_px, BOARD) - canonical_order(truth, BOARD)
+                  ).max() < 0.05
+
+
+def test_tracking_gives_up_rather_than_slide_a_square(
+    rendered: tuple[np.ndarray, np.ndarray]
+) -> None:
+    image, truth = rendered
+    # predicted 0.6 squares off: the nearest saddle is the neighbouring corner
+    assert track_chessboard(image, truth + np.array([0.6 * SQUARE_PX, 0.0]), BOARD) is None
+    assert track_chessboard(np.full((480, 640), 128, np.uint8), truth, BOARD) is None
