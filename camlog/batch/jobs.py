@@ -15,6 +15,7 @@ a temporary download (the status says so).
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import socket
@@ -103,10 +104,14 @@ def run_job(job: Job) -> dict[str, Any]:
         return previous | where | {"status": "skipped", "seconds": 0.0, "out_dir": job.key}
     status: dict[str, Any] = {"log": str(job.log), "out_dir": job.key, "steps": []}
     marker = storage.join(job.out_dir, STATUS_FILE)
-    with tempfile.TemporaryDirectory(prefix="camlog-batch-") as scratch_name:
+    # a scratch folder only for remote inputs or outputs: a worker killed mid-log leaves
+    # nothing behind in the system's temp folder when everything is local
+    remote = storage.is_remote(job.log) or storage.is_remote(job.out_dir)
+    scratch_dir = tempfile.TemporaryDirectory(prefix="camlog-batch-") if remote else None
+    with scratch_dir or contextlib.nullcontext() as scratch_name:
         try:
             storage.remove(marker)  # from now on the folder is not complete
-            _run_steps(job, status, Path(scratch_name))
+            _run_steps(job, status, Path(scratch_name) if scratch_name else None)
             status["status"] = "ok"
         except KNOWN_ERRORS as err:
             status |= {"status": "failed", "error": _one_line(err)}
@@ -122,10 +127,10 @@ def run_job(job: Job) -> dict[str, Any]:
     return status
 
 
-def _run_steps(job: Job, status: dict[str, Any], scratch: Path) -> None:
+def _run_steps(job: Job, status: dict[str, Any], scratch: Path | None) -> None:
     """The steps, into the output folder (local) or a scratch folder then uploaded."""
     remote_out = storage.is_remote(job.out_dir)
-    out = scratch / "out" if remote_out else storage.local_path(job.out_dir)
+    out = scratch / "out" if remote_out and scratch else storage.local_path(job.out_dir)
     if not storage.exists(job.log):
         raise InputError(f"{job.log} does not exist")
     status["input"] = storage.identity(job.log)
@@ -152,12 +157,12 @@ def _run_steps(job: Job, status: dict[str, Any], scratch: Path) -> None:
         storage.upload(out, str(job.out_dir))
 
 
-def _stage_input(log: Location, scratch: Path, status: dict[str, Any]) -> Location:
+def _stage_input(log: Location, scratch: Path | None, status: dict[str, Any]) -> Location:
     """The log itself, unless it is remote and not one MCAP file: then a local copy (made
     once here rather than by every step that reads it)."""
     from replay.formats.mcap import MAGIC as MCAP_MAGIC
 
-    if not storage.is_remote(log):
+    if not storage.is_remote(log) or scratch is None:
         return log
     uri = str(log)
     if not storage.is_dir(uri):
