@@ -11,6 +11,7 @@ from replay.geometry import invert, rotation_about
 from replay.messages import F64
 
 from .cameras import CameraSpec
+from .coverage import anchor_order, image_pose, view_angles
 from .errors import ScenarioError
 from .target_spec import TargetSpec
 from .targets import center_in_target, outline_in_target
@@ -116,6 +117,33 @@ def _smooth_parameters(parameters: F64) -> F64:
     return np.column_stack([parameters[:, :3], yaw, tilt])
 
 
+def _image_poses(target: TargetSpec, cameras: tuple[CameraSpec, ...], count: int,
+                 rng: np.random.Generator) -> F64:
+    """Held poses that cover the image (:mod:`recorder.coverage`), each fully in view (or
+    deliberately partly) of every camera, or of the camera it is aimed at (``visible_in``)."""
+    motion = target.motion
+    outline = outline_in_target(target)
+    poses = []
+    for index, anchor in enumerate(anchor_order(count, rng)):
+        camera = cameras[index % len(cameras)] if motion.visible_in == "any" else cameras[0]
+        judged = (camera,) if motion.visible_in == "any" else cameras
+        partial = rng.uniform() < motion.partial_view_probability
+        for _try in range(MAX_TRIES):
+            pose = image_pose(target, camera, anchor, partial=partial, rng=rng)
+            if pose is None or view_angles(camera, pose, outline).max() > motion.max_view_angle_rad:
+                continue
+            seen = visible_fraction(pose, outline, judged)
+            if (0.25 <= seen < 1.0) if partial else seen == 1.0:
+                poses.append(pose)
+                break
+        else:
+            raise ScenarioError(
+                f"target {target.name!r}: no {'partly' if partial else 'fully'} visible pose "
+                f"aimed at the image found in {MAX_TRIES} tries; change distance_m or "
+                "max_tilt_rad")
+    return np.stack(poses)
+
+
 def plan_trajectory(
     target: TargetSpec, cameras: tuple[CameraSpec, ...], duration_s: float,
     rng: np.random.Generator,
@@ -129,6 +157,8 @@ def plan_trajectory(
     outline = outline_in_target(target)
     step_s = motion.segment_s if motion.kind == "smooth" else motion.hold_s
     count = math.ceil(duration_s / step_s) + (2 if motion.kind == "smooth" else 1)
+    if motion.aim == "image":
+        return Trajectory(motion.hold_s, _image_poses(target, cameras, count, rng))
     chosen = []
     for _ in range(count):
         partial = rng.uniform() < motion.partial_view_probability

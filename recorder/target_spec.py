@@ -28,6 +28,14 @@ class MotionSpec:
     max_tilt_rad: float
     partial_view_probability: float
     world_from_target: F64  # (4, 4), for static
+    #: "world": poses within center_m +- xy_range_m, z_range_m, facing up; "image": poses
+    #: facing a camera at distance_m, pushed in turn into each image corner, edge and the middle
+    aim: str = "world"
+    distance_m: tuple[float, float] = (0.12, 0.22)
+    #: "all": fully visible in every camera; "any": in the camera it is aimed at (in turn)
+    visible_in: str = "all"
+    #: aim = image: no point of the target further than this from the camera's axis
+    max_view_angle_rad: float = 1.5
 
 
 @dataclass(frozen=True)
@@ -126,8 +134,10 @@ def parse_motion(table: Any, where: str, source: str, cameras: list[CameraSpec])
                 raise f.fail("relative_to", f"no camera named {frame!r} (or use 'world')")
             world_from_target = parents[0].world_from_camera @ target_pose
     z_range = f.vector("z_range_m", 2, [0.15, 0.27])
-    if z_range[0] > z_range[1]:
-        raise f.fail("z_range_m", "lower bound above upper bound")
+    distance = f.vector("distance_m", 2, [0.12, 0.22])
+    for key, bounds in (("z_range_m", z_range), ("distance_m", distance)):
+        if bounds[0] > bounds[1]:
+            raise f.fail(key, "lower bound above upper bound")
     spec = MotionSpec(
         kind=kind,
         hold_s=f.number("hold_s", 0.5, positive=True),
@@ -138,6 +148,12 @@ def parse_motion(table: Any, where: str, source: str, cameras: list[CameraSpec])
         max_tilt_rad=f.number("max_tilt_rad", 0.6, low=0.0, high=1.4),
         partial_view_probability=f.number("partial_view_probability", 0.0, low=0.0, high=1.0),
         world_from_target=world_from_target,
+        aim=f.text("aim", "world", choices=("world", "image")),
+        distance_m=(float(distance[0]), float(distance[1])),
+        visible_in=f.text("visible_in", "all", choices=("all", "any")),
+        max_view_angle_rad=f.number("max_view_angle_rad", 1.5, low=0.1, high=3.0),
     )
     f.check_unknown()
+    if spec.aim == "image" and kind != "random_hold":
+        raise f.fail("aim", f"aim = 'image' plans held poses (kind = 'random_hold'), not {kind!r}")
     return spec
