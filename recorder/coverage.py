@@ -4,8 +4,9 @@ corner, each edge and the middle (``aim = "image"``).
 camera_calibration rates coverage by where boards sit in the image (its X, Y, size and skew
 parameters); random poses around a point in the world leave the image corners empty. Here
 each pose picks an anchor (the 9 regions are visited in a random order, every 9 poses), an
-orientation facing the camera (rows within 23 degrees of the image's rows or columns, tilted
-up to ``max_tilt_rad``) and a distance,
+orientation facing the camera along the ray to the board (rows within 23 degrees of the
+image's rows or columns, tilted up to ``max_tilt_rad``; a fisheye sees boards far off its
+axis face on, not edge on) and a distance,
 then slides the board across the image until its outline touches the anchor's borders (a
 margin plus a little random room) or, for a deliberately partial view, hangs 25-60 % of its
 size over them.
@@ -49,6 +50,15 @@ def view_angles(camera: CameraSpec, world_from_target: F64, points_in_target: F6
     return np.asarray(np.arccos(np.clip(points[:, 2] / np.linalg.norm(points, axis=1), -1, 1)))
 
 
+def _towards(ray: F64) -> F64:
+    """The smallest rotation taking the optical axis (0, 0, 1) to the unit ``ray``."""
+    axis = np.array([-ray[1], ray[0], 0.0])  # (0, 0, 1) x ray
+    sine = float(np.linalg.norm(axis))
+    if sine < 1e-12:
+        return np.eye(3) if ray[2] > 0 else np.diag([1.0, -1.0, -1.0])
+    return rotation_about(axis, math.atan2(sine, float(ray[2])))
+
+
 def image_pose(target: TargetSpec, camera: CameraSpec, anchor: int, *, partial: bool,
                rng: np.random.Generator) -> F64 | None:
     """``world_from_target`` of a board facing ``camera``, its outline pushed to the anchor's
@@ -63,7 +73,7 @@ def image_pose(target: TargetSpec, camera: CameraSpec, anchor: int, *, partial: 
     axis_angle = rng.uniform(0, 2 * math.pi)
     tilt = rotation_about(np.array([math.cos(axis_angle), math.sin(axis_angle), 0.0]),
                           motion.max_tilt_rad * math.sqrt(rng.uniform(0, 1)))
-    rotation = tilt @ roll  # board z (into the board) along the camera's view
+    facing = tilt @ roll  # in the frame of the ray to the board: its z along the ray
     distance = rng.uniform(*motion.distance_m)
     free = rng.uniform(0, 1, 2)  # where a free axis puts the board between the borders
     overhang = rng.uniform(0.25, 0.6, 2) if partial else -rng.uniform(0, 0.03, 2)
@@ -74,9 +84,10 @@ def image_pose(target: TargetSpec, camera: CameraSpec, anchor: int, *, partial: 
     middle = center_in_target(target)
     pixel = np.array([model.cx, model.cy])
     camera_from_target = np.eye(4)
-    camera_from_target[:3, :3] = rotation
     for slide in range(SLIDES + 1):
         ray = model.pixel_rays(pixel[None])[0]
+        rotation = _towards(ray) @ facing  # the board faces the camera along its ray
+        camera_from_target[:3, :3] = rotation
         camera_from_target[:3, 3] = ray * distance - rotation @ middle
         points = outline @ rotation.T + camera_from_target[:3, 3]
         if np.any(points[:, 2] <= 0.01):
