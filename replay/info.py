@@ -1,8 +1,9 @@
 """What a log holds, like ``ros2 bag info``: format, size, time span, topics and rates.
 
-:func:`summarize` streams the raw messages once (rates need each topic's first and last log
-time) and decodes only the first message of image and camera-info topics to report their
-encoding and size. :func:`format_summary` renders the result as text.
+:func:`summarize` takes counts and each topic's first and last log time (for its rate) from
+the log's index where it has them (an indexed MCAP file, a ROS1 bag), else streams the raw
+messages once, and decodes only the first message of image and camera-info topics to report
+their encoding and size. :func:`format_summary` renders the result as text.
 """
 
 from __future__ import annotations
@@ -68,20 +69,32 @@ class LogSummary:
         return (self.end_ns - self.start_ns) / 1e9
 
 
-def summarize(reader: LogReader) -> LogSummary:
-    """Summary of an open log; reads every raw message once, decodes few."""
+def summarize(reader: LogReader, *, verify: bool = False) -> LogSummary:
+    """Summary of an open log; reads the index, or (``verify``, or a log without one) every
+    raw message once, which finds damage anywhere in the log; decodes few."""
     counts: dict[str, int] = {}
     first_ns: dict[str, int] = {}
     last_ns: dict[str, int] = {}
     details: dict[str, str] = {}
-    for raw in reader.raw_messages():
-        topic = raw.topic
-        counts[topic] = counts.get(topic, 0) + 1
-        if topic not in first_ns:
-            first_ns[topic] = raw.log_time_ns
-            if raw.msgtype in DESCRIBED_TYPES:
-                details[topic] = describe(raw)
-        last_ns[topic] = raw.log_time_ns
+    spans = None if verify else reader.topic_spans()
+    if spans is not None:
+        counts = {name: info.count for name, info in reader.topics.items() if name in spans}
+        first_ns = {name: first for name, (first, _last) in spans.items()}
+        last_ns = {name: last for name, (_first, last) in spans.items()}
+        for name, info in reader.topics.items():
+            if info.msgtype in DESCRIBED_TYPES and name in spans:
+                raw = next(iter(reader.raw_messages([name])), None)
+                if raw is not None:
+                    details[name] = describe(raw)
+    else:
+        for raw in reader.raw_messages():
+            topic = raw.topic
+            counts[topic] = counts.get(topic, 0) + 1
+            if topic not in first_ns:
+                first_ns[topic] = raw.log_time_ns
+                if raw.msgtype in DESCRIBED_TYPES:
+                    details[topic] = describe(raw)
+            last_ns[topic] = raw.log_time_ns
     msgtypes = {name: info.msgtype for name, info in reader.topics.items()}
     topics = tuple(
         TopicSummary(

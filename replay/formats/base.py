@@ -73,6 +73,11 @@ class LogReader:
         """Serialized messages in log-time order, filtered by topic and time."""
         raise NotImplementedError
 
+    def topic_spans(self) -> dict[str, tuple[int, int]] | None:
+        """Topic -> (first, last) log time in ns, when the log's index tells them without
+        reading the messages (None: it does not)."""
+        return None
+
     def decode(self, raw: RawMessage) -> Message:
         """Typed record of a raw message; errors name the log and topic."""
         try:

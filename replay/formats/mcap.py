@@ -25,6 +25,7 @@ from .._version import VERSION
 from ..codec import CDR, ROS1, ros2_typestore
 from ..errors import LogReadError, LogWriteError
 from .base import LogReader, LogWriter, RawMessage, TopicInfo
+from .mcap_index import channel_spans
 
 MAGIC = b"\x89MCAP0\r\n"
 ENCODINGS = {"cdr": CDR, "ros1": ROS1}
@@ -270,6 +271,24 @@ class McapLogReader(LogReader):
             if end_ns is not None and message.log_time >= end_ns:
                 continue
             yield RawMessage(topic, msgtype, message.log_time, message.data, encoding)
+
+    def topic_spans(self) -> dict[str, tuple[int, int]] | None:
+        """From the message indexes of an MCAP file with a summary (see
+        :mod:`replay.formats.mcap_index`)."""
+        if self._summary is None:
+            return None
+        try:
+            by_channel = channel_spans(self._file, self._summary)
+        except (*_DAMAGE, OSError):
+            return None
+        if by_channel is None:
+            return None
+        spans: dict[str, tuple[int, int]] = {}
+        for channel_id, (first, last) in by_channel.items():
+            topic = self._channels[channel_id][0]
+            known = spans.get(topic, (first, last))
+            spans[topic] = (min(known[0], first), max(known[1], last))
+        return spans
 
     @staticmethod
     def _merge_in_time(messages: Iterator[Message], window: int = 64) -> Iterator[Message]:

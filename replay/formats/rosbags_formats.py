@@ -126,6 +126,16 @@ class Ros1LogReader(_RosbagsReader):
         if note:
             self.warnings.append(note)
 
+    def topic_spans(self) -> dict[str, tuple[int, int]] | None:
+        """From the bag's index, which holds every message's time, sorted per connection."""
+        spans: dict[str, tuple[int, int]] = {}
+        for topic, conns in self._by_topic.items():
+            ends = [entry.time for c in conns if (index := self._reader.indexes[c.id])
+                    for entry in (index[0], index[-1])]
+            if ends:
+                spans[topic] = (min(ends), max(ends))
+        return spans
+
     def close(self) -> None:
         try:
             super().close()

@@ -55,12 +55,14 @@ def camera_entries(frames: int = 5) -> list[Entry]:
     return entries
 
 
+@pytest.mark.parametrize("verify", [False, True], ids=["index", "verify"])
 @pytest.mark.parametrize("fmt", WRITE_FORMATS)
-def test_summary_of_every_format(fmt: str, log_path: Callable[[str], Path]) -> None:
+def test_summary_of_every_format(fmt: str, verify: bool,
+                                 log_path: Callable[[str], Path]) -> None:
     path = log_path(fmt)
     write_log(path, camera_entries(), fmt=fmt)
     with open_reader(path) as reader:
-        summary = summarize(reader)
+        summary = summarize(reader, verify=verify)
         assert summary.format_name == reader.format_name
     assert summary.path == path
     assert summary.size_bytes == size_on_disk(path) > 0
@@ -82,6 +84,19 @@ def test_summary_of_every_format(fmt: str, log_path: Callable[[str], Path]) -> N
     assert topics["/cam/image_raw"].rate_hz == pytest.approx(10.0)
     assert topics["/rig/pose"].rate_hz == pytest.approx(20.0)
     assert topics["/notes"].rate_hz is None
+
+
+def test_index_spans_equal_the_streamed_ones_over_many_chunks(tmp_path: Path) -> None:
+    # small chunks interleave the topics over many chunks, out of order across them
+    path = tmp_path / "many_chunks.mcap"
+    entries = camera_entries(frames=12)
+    write_log(path, entries[::2] + entries[1::2], chunk_size=2_000)
+    with open_reader(path) as reader:
+        assert reader.topic_spans() is not None
+        indexed, streamed = summarize(reader), summarize(reader, verify=True)
+    assert indexed == streamed
+    assert {t.name: (t.first_ns, t.last_ns) for t in indexed.topics}["/rig/pose"] == (
+        T0_NS, T0_NS + 22 * PERIOD_NS // 2)
 
 
 def test_only_the_first_image_of_a_topic_is_decoded(

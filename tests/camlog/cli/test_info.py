@@ -66,7 +66,7 @@ def test_corrupt_log_fails_and_recover_reads_the_rest(
     path = tmp_path / "bad.mcap"
     write_camera_log(path, frames=20, chunk_size=8_000)
     _corrupt(path)
-    assert main(["info", str(path)]) == 1
+    assert main(["info", "--verify", str(path)]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1
     assert err.startswith(f"camlog info: error: {path} is corrupt")
