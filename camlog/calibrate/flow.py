@@ -76,12 +76,15 @@ def calibrate_log(
     workers: int | None = None,
     progress: bool | None = None,
     recover: bool = False,
+    report: bool = True,
 ) -> CalibrationRun:
-    """Calibrate one camera (``cameras=[ns]``) or a stereo pair (``[left_ns, right_ns]``)."""
+    """Calibrate one camera (``cameras=[ns]``) or a stereo pair (``[left_ns, right_ns]``);
+    without ``report`` only the calibration files and calibration.json are written (no
+    second pass over the log, no figures)."""
     started = time.perf_counter()
     stereo_mode = len(cameras) == 2
-    with AtomicFolder(output_dir, output_names(stereo_mode), overwrite=overwrite,
-                      inputs=local_paths(log)) as staged, \
+    with AtomicFolder(output_dir, output_names(stereo_mode, report=report),
+                      overwrite=overwrite, inputs=local_paths(log)) as staged, \
             open_reader(log, recover=recover) as reader:
         if reader.message_count == 0:
             raise InputError(f"{log} is empty (no messages)")
@@ -107,7 +110,7 @@ def calibrate_log(
                                 ground_truth=scenario is not None)
         evidence = write_evidence(reader, staged.path / "calibration.mcap", calibrated,
                                   board=board, stereo=stereo, summary=summary,
-                                  progress=progress)
+                                  progress=progress) if report else None
         write_files(staged.path, calibrated, stereo=stereo, summary=summary,
                     evidence=evidence, camera_name=camera_name)
     return CalibrationRun(calibrated, stereo, output_dir, staged.files,

@@ -26,12 +26,16 @@ __all__ = ["FIGURES", "output_names", "write_files"]
 FIGURES = ("coverage.png", "view_errors.png", "residuals.png")
 
 
-def output_names(stereo: bool) -> list[str]:
-    """Every file a calibration writes into its output folder."""
+def output_names(stereo: bool, *, report: bool = True) -> list[str]:
+    """Every file a calibration writes into its output folder (``report``: with the
+    annotated log, figures and Markdown report)."""
+    calibrations = ["left.yaml", "right.yaml"] if stereo else ["ost.yaml"]
+    if not report:
+        return [*calibrations, "ost.txt", "calibration.json"]
     per_camera = [f"{side}_{f}" for side in ("left", "right") for f in FIGURES] if stereo \
         else list(FIGURES)
-    calibrations = ["left.yaml", "right.yaml", "rectified.png"] if stereo else ["ost.yaml"]
-    return [*calibrations, *per_camera, "ost.txt", "calibration.mcap", "report.md",
+    pair = ["rectified.png"] if stereo else []
+    return [*calibrations, *pair, *per_camera, "ost.txt", "calibration.mcap", "report.md",
             "calibration.json"]
 
 
@@ -61,8 +65,9 @@ def _figures(folder: Path, camera: CalibratedCamera, prefix: str) -> list[str]:
 
 def write_files(folder: Path, cameras: list[CalibratedCamera], *,
                 stereo: StereoSolution | None, summary: CalibrationSummary,
-                evidence: Evidence, camera_name: str | None) -> None:
-    """Calibration files, JSON summary, figures and the Markdown report into ``folder``."""
+                evidence: Evidence | None, camera_name: str | None) -> None:
+    """Calibration files and the JSON summary into ``folder``, and with the ``evidence``
+    pass's results the figures and the Markdown report."""
     figures: list[str] = []
     for index, camera in enumerate(cameras):
         side = "left" if index == 0 else "right"
@@ -72,12 +77,13 @@ def write_files(folder: Path, cameras: list[CalibratedCamera], *,
         yaml_name = "ost.yaml" if stereo is None else f"{side}.yaml"
         (folder / yaml_name).write_text(calibration_to_yaml(camera.camera_info,
                                                             camera_name=name))
-        figures += _figures(folder, camera, "" if stereo is None else f"{side}_")
+        if evidence is not None:
+            figures += _figures(folder, camera, "" if stereo is None else f"{side}_")
     if stereo is not None:
         left, right = cameras
         (folder / "ost.txt").write_text(ost_text(left=left.camera_info,
                                                  right=right.camera_info))
-        if evidence.rectified_pair is not None:
+        if evidence is not None and evidence.rectified_pair is not None:
             cv2.imwrite(str(folder / "rectified.png"), rectified_pair_figure(
                 *evidence.rectified_pair,
                 f"rectified pair: epipolar RMS {stereo.result.epipolar_rms_px:.3f} px"))
@@ -85,4 +91,5 @@ def write_files(folder: Path, cameras: list[CalibratedCamera], *,
     else:
         (folder / "ost.txt").write_text(ost_text(cameras[0].camera_info))
     (folder / "calibration.json").write_text(summary.to_json_text(indent=1) + "\n")
-    (folder / "report.md").write_text(markdown_report(summary, figures))
+    if evidence is not None:
+        (folder / "report.md").write_text(markdown_report(summary, figures))

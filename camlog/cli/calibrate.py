@@ -57,6 +57,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="with --check: calibration file (twice for stereo: left, right)")
     p.add_argument("--overwrite", action="store_true", help="replace existing output files")
     p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
+    p.add_argument("--no-report", action="store_true",
+                   help="write only the calibration files and calibration.json: no "
+                        "calibration.mcap, figures or report.md (for scripts)")
     p.add_argument("--no-progress", action="store_true", help="hide progress bars")
 
 
@@ -109,7 +112,8 @@ def run(args: argparse.Namespace) -> int:
         args.log, board=board, cameras=cameras, output_dir=output, options=options,
         approximate_s=args.approximate, camera_name=args.camera_name,
         max_speed_px=args.max_chessboard_speed, max_views=args.max_views,
-        overwrite=args.overwrite, progress=progress, recover=args.recover)
+        overwrite=args.overwrite, progress=progress, recover=args.recover,
+        report=not args.no_report)
     for camera in run_.summary.cameras:
         p = camera.parameters
         print(f"{camera.namespace}: {camera.used_views} views "

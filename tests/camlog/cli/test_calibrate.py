@@ -235,6 +235,22 @@ def test_yaml_matches_the_summary(mono: Path) -> None:
     assert "[image]" in text and "[narrow_stereo]" in text
 
 
+def test_no_report_writes_the_same_calibration_alone(mono: Path, rig_log: Path,
+                                                     out_dir: Path) -> None:
+    bare = calibrate(rig_log, out_dir / "mono_no_report", "--camera", LEFT, "--no-report")
+    assert sorted(f.name for f in bare.iterdir()) == ["calibration.json", "ost.txt", "ost.yaml"]
+    # the same solve (equal up to the last bits: OpenCV's threads add in any order)
+    np.testing.assert_allclose(load_calibration(bare / "ost.yaml").camera_info.k,
+                               load_calibration(mono / "ost.yaml").camera_info.k, rtol=1e-9)
+    assert summary(bare).keys() == summary(mono).keys()
+    full, alone = camera_summary(mono, LEFT), camera_summary(bare, LEFT)
+    assert alone.keys() == full.keys()
+    assert alone["used_views"] == full["used_views"]
+    for name, parameter in full["parameters"].items():
+        assert alone["parameters"][name]["value"] == pytest.approx(parameter["value"],
+                                                                   rel=1e-9, abs=1e-12)
+
+
 def digests(log: Path, topics: list[str]) -> dict[str, list[tuple[int, str]]]:
     out: dict[str, list[tuple[int, str]]] = {t: [] for t in topics}
     with open_reader(log) as reader:
