@@ -241,14 +241,14 @@ def test_no_report_writes_the_same_calibration_alone(mono: Path, rig_log: Path,
     assert sorted(f.name for f in bare.iterdir()) == ["calibration.json", "ost.txt", "ost.yaml"]
     # the same solve (equal up to the last bits: OpenCV's threads add in any order)
     np.testing.assert_allclose(load_calibration(bare / "ost.yaml").camera_info.k,
-                               load_calibration(mono / "ost.yaml").camera_info.k, rtol=1e-9)
+                               load_calibration(mono / "ost.yaml").camera_info.k, rtol=1e-6)
     assert summary(bare).keys() == summary(mono).keys()
     full, alone = camera_summary(mono, LEFT), camera_summary(bare, LEFT)
     assert alone.keys() == full.keys()
     assert alone["used_views"] == full["used_views"]
     for name, parameter in full["parameters"].items():
         assert alone["parameters"][name]["value"] == pytest.approx(parameter["value"],
-                                                                   rel=1e-9, abs=1e-12)
+                                                                   rel=1e-6, abs=1e-9)
 
 
 def digests(log: Path, topics: list[str]) -> dict[str, list[tuple[int, str]]]:
