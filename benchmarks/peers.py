@@ -154,15 +154,16 @@ def make_inputs(tmp: Path, duration_s: float) -> dict[str, Path]:
     camlog = tool("camlog")
     paths = {"mcap": tmp / "stereo.mcap", "ros1": tmp / "stereo.bag", "rosbag2": tmp / "stereo_r2"}
     run_once([*camlog, "record", "stereo_checkerboard", "--duration", str(duration_s),
-              "-o", str(paths["mcap"]), "--no-progress"])
+              "-o", str(paths["mcap"]), "--no-progress", "--overwrite"])
     for fmt in ("ros1", "rosbag2"):
-        run_once([*camlog, "convert", str(paths["mcap"]), str(paths[fmt]), "--no-progress"])
+        run_once([*camlog, "convert", str(paths["mcap"]), str(paths[fmt]), "--no-progress",
+                  "--overwrite"])
     wide = realdata_dir() / "ros_wide_stereo"
     if (wide / "left0003.pgm").is_file():
         paths["wide"] = tmp / "wide.mcap"
         paths["wide_folder"] = wide
         run_once([*camlog, "import", str(wide), "--stereo", "-o", str(paths["wide"]),
-                  "--no-progress"])
+                  "--no-progress", "--overwrite"])
     else:
         print(f"real stereo sample not found at {wide} (set CAMLOG_REALDATA): no calibrate row")
     return paths
@@ -216,7 +217,7 @@ def growth_cases(tmp: Path, seconds: Sequence[int]) -> Iterator[tuple[int, list[
     camlog, rosbags, rerun = tool("camlog"), tool("rosbags-convert"), tool("rerun")
     short = tmp / "growth_4s.mcap"
     run_once([*camlog, "record", "stereo_checkerboard", "--duration", "4", "--resolution",
-              "320x240", "--encoding", "mono8", "-o", str(short), "--no-progress"])
+              "320x240", "--encoding", "mono8", "-o", str(short), "--no-progress", "--overwrite"])
     for length_s in seconds:
         log = tmp / f"growth_{length_s}s.mcap"
         if length_s != 4:
