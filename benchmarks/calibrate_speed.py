@@ -43,7 +43,7 @@ CASES: list[tuple[str, str, dict[str, object], list[str], CalibrationOptions]] =
 def decode_only_s(path: Path, topics: list[str]) -> float:
     started = time.perf_counter()
     with open_reader(path) as reader:
-        for _ in reader.images(topics):
+        for _ in reader.frames(topics):
             pass
     return time.perf_counter() - started
 

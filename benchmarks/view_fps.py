@@ -26,7 +26,7 @@ from pathlib import Path
 import numpy as np
 import rerun as rr
 
-from replay import Image, open_reader
+from replay import open_reader
 from replay.export import LoggerOptions, view_logs
 from replay.export.images import COLOR_MODELS
 
@@ -50,12 +50,10 @@ def baseline_s(log: Path, out: Path) -> tuple[float, int]:
     rec.save(out)
     images = 0
     with open_reader(log) as reader:
-        for record in reader.images():
+        for record in reader.frames():
             rec.set_time("log_time", timestamp=np.datetime64(record.log_time_ns, "ns"))
-            image = record.message
-            assert isinstance(image, Image)
-            rec.log(record.topic, rr.Image(image.pixels,
-                                           color_model=COLOR_MODELS[image.encoding]))
+            frame = record.message
+            rec.log(record.topic, rr.Image(frame.pixels, color_model=COLOR_MODELS[frame.color]))
             images += 1
     rec.flush()
     rec.disconnect()

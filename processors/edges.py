@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import cv2
 
-from replay.codec import to_mono8
+from replay.frames import Frame
 from replay.messages import Image
 
 from .base import Output
@@ -21,6 +21,6 @@ class Edges:
                                    f"Canny thresholds need 0 <= low <= high, got {low}, {high}")
         self.low, self.high = low, high
 
-    def __call__(self, image: Image) -> list[Output]:
-        edges = cv2.Canny(to_mono8(image), self.low, self.high)
-        return [("edges", Image(image.stamp_ns, image.frame_id, "mono8", edges))]
+    def __call__(self, frame: Frame) -> list[Output]:
+        edges = cv2.Canny(frame.mono8(), self.low, self.high)
+        return [("edges", Image(frame.stamp_ns, frame.frame_id, "mono8", edges))]

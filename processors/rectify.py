@@ -6,7 +6,8 @@ import cv2
 import numpy as np
 
 from replay.camera import CAMERA_MODELS, CameraModel, canonical_model
-from replay.messages import F64, CameraInfo, Image
+from replay.frames import Frame, encode_image
+from replay.messages import F64, CameraInfo
 
 from .base import Output
 from .errors import FrameError, OptionValueError
@@ -38,16 +39,16 @@ class Remap:
         self.map1, self.map2 = CameraModel.from_camera_info(info).rectify_maps(
             rotation, new_k, cv2.CV_16SC2)
 
-    def __call__(self, image: Image) -> list[Output]:
-        """The resampled image under this remap's output name."""
-        if (image.width, image.height) != (self.width, self.height):
+    def __call__(self, frame: Frame) -> list[Output]:
+        """The resampled image (same colour order and bit depth) under this remap's output
+        name."""
+        if (frame.width, frame.height) != (self.width, self.height):
             raise FrameError(
-                f"image is {image.width}x{image.height} but the calibration is for "
+                f"image is {frame.width}x{frame.height} but the calibration is for "
                 f"{self.width}x{self.height}"
             )
-        pixels: np.ndarray = image.pixels
-        out = cv2.remap(pixels, self.map1, self.map2, cv2.INTER_LINEAR)
-        return [(self.output, Image(image.stamp_ns, image.frame_id, image.encoding, out))]
+        out = cv2.remap(frame.pixels, self.map1, self.map2, cv2.INTER_LINEAR)
+        return [(self.output, encode_image(frame.with_pixels(out)))]
 
 
 class Rectifier(Remap):

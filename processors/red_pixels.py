@@ -10,7 +10,7 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from replay.codec import to_rgb8
+from replay.frames import Frame
 from replay.messages import Image, PointStamped
 
 from .base import Output
@@ -77,14 +77,14 @@ class RedPixels:
             raise OptionValueError("red_pixels", ("ratio",), f"must be >= 0, got {ratio}")
         self.ratio = ratio
 
-    def __call__(self, image: Image) -> list[Output]:
-        mask = red_mask(to_rgb8(image), self.ratio)
+    def __call__(self, frame: Frame) -> list[Output]:
+        mask = red_mask(frame.rgb8(), self.ratio)
         u, v, count = mask_centroid(mask)
-        stamp, frame = image.stamp_ns, image.frame_id
+        stamp, frame_id = frame.stamp_ns, frame.frame_id
         out: list[Output] = [
-            (OUTPUT_VIDEO, Image(stamp, frame, "rgb8", draw_marker(mask, u, v))),
+            (OUTPUT_VIDEO, Image(stamp, frame_id, "rgb8", draw_marker(mask, u, v))),
         ]
         if count:
-            out.append((CENTROID, PointStamped(stamp, frame, np.array([u, v, 0.0]))))
-        out.append((COUNT, PointStamped(stamp, frame, np.array([float(count), 0.0, 0.0]))))
+            out.append((CENTROID, PointStamped(stamp, frame_id, np.array([u, v, 0.0]))))
+        out.append((COUNT, PointStamped(stamp, frame_id, np.array([float(count), 0.0, 0.0]))))
         return out

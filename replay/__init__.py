@@ -26,6 +26,7 @@ from .errors import (
 if TYPE_CHECKING:
     from .formats import (
         FORMATS,
+        FrameRecord,
         LogReader,
         LogWriter,
         RawMessage,
@@ -34,10 +35,11 @@ if TYPE_CHECKING:
         open_reader,
         open_writer,
     )
+    from .frames import IMAGE_ENCODINGS, Frame
     from .messages import (
-        IMAGE_ENCODINGS,
         CameraInfo,
         CompressedImage,
+        CompressedVideo,
         Image,
         Message,
         PointStamped,
@@ -47,9 +49,10 @@ if TYPE_CHECKING:
 
 #: public name -> the module that defines it
 _MODULES = {
-    **dict.fromkeys(("FORMATS", "LogReader", "LogWriter", "RawMessage", "Record", "TopicInfo",
-                     "open_reader", "open_writer"), ".formats"),
-    **dict.fromkeys(("IMAGE_ENCODINGS", "CameraInfo", "CompressedImage", "Image", "Message",
+    **dict.fromkeys(("FORMATS", "FrameRecord", "LogReader", "LogWriter", "RawMessage",
+                     "Record", "TopicInfo", "open_reader", "open_writer"), ".formats"),
+    **dict.fromkeys(("IMAGE_ENCODINGS", "Frame"), ".frames"),
+    **dict.fromkeys(("CameraInfo", "CompressedImage", "CompressedVideo", "Image", "Message",
                      "PointStamped", "PoseStamped", "Text"), ".messages"),
 }
 
@@ -73,7 +76,10 @@ __all__ = [
     "IMAGE_ENCODINGS",
     "CameraInfo",
     "CompressedImage",
+    "CompressedVideo",
     "EncodingError",
+    "Frame",
+    "FrameRecord",
     "Image",
     "ImageFolderError",
     "LogFormatError",

@@ -1,9 +1,12 @@
 """``camlog convert``: copy a log into another format, filtered, images optionally re-encoded.
 
 Messages are copied raw (``write_raw``): between formats with the same serialization the
-bytes are unchanged, and between CDR (MCAP, rosbag2) and ROS1 they are re-serialized by
-rosbags. Only with ``compress`` or ``decompress`` are images decoded, and their topics
-renamed as image_transport names them: ``T`` (Image) <-> ``T/compressed`` (CompressedImage).
+bytes are unchanged, between CDR (MCAP, rosbag2) and ROS1 they are re-serialized by
+rosbags, and channels of other serializations (Foxglove protobuf or JSON, any schema) are
+copied untouched into MCAP. Only with ``compress`` or ``decompress`` are images decoded,
+and their topics renamed as image_transport names them: ``T`` (Image) <-> ``T/compressed``
+(CompressedImage), or ``T/video`` (CompressedVideo). See :mod:`replay.reencode` for what
+each topic becomes.
 """
 
 from __future__ import annotations
@@ -16,23 +19,30 @@ from pathlib import Path
 from tqdm import tqdm
 
 from .atomic import check_not_input
-from .codec import decode_compressed, encode_compressed, ros2_typestore, serialize
-from .errors import EncodingError, LogReadError, OptionError, TopicError
-from .formats import open_reader, open_writer
-from .formats.base import LogReader, RawMessage
-from .messages import MSGTYPES, CompressedImage, Image
+from .errors import LogReadError, OptionError, ReplayError, TopicError
+from .formats import format_for_output, open_reader, open_writer
+from .formats.base import LogReader
+from .frames.video import VIDEO_CODECS
+from .messages import MSGTYPES, CameraInfo, CompressedImage, CompressedVideo, Image, Message
+from .reencode import STILLS, TopicReencoder
 from .selection import select_topics, window_ns
+from .wire import record_msgtype, ros2_typestore
+
+#: camera types stored in Foxglove's schemas under ``--profile foxglove``
+FOXGLOVE_CAMERA_TYPES = frozenset(MSGTYPES[kind] for kind in (Image, CompressedImage, CameraInfo))
 
 __all__ = ["COMPRESSIONS", "ConvertResult", "convert_log", "renamed_topics"]
 
-COMPRESSIONS = ("jpeg", "png")
+COMPRESSIONS = (*STILLS, *VIDEO_CODECS)
 IMAGE = MSGTYPES[Image]
 COMPRESSED = MSGTYPES[CompressedImage]
+VIDEO = MSGTYPES[CompressedVideo]
 
 
 @dataclass(frozen=True)
 class ConvertResult:
-    """What :func:`convert_log` wrote: message counts, renamed topics, warnings."""
+    """What :func:`convert_log` wrote: message counts, renamed topics, warnings, and the
+    PSNR (dB) of every topic re-encoded as video."""
 
     output: Path
     format_name: str
@@ -41,12 +51,15 @@ class ConvertResult:
     renamed: dict[str, str] = field(default_factory=dict)
     warnings: list[str] = field(default_factory=list)
     wall_s: float = 0.0
+    psnr_db: dict[str, float] = field(default_factory=dict)
 
 
 def renamed_topics(
     msgtypes: dict[str, str], *, compress: str | None, decompress: bool
 ) -> dict[str, str]:
-    """Input image topic -> output topic for the images that are re-encoded.
+    """Input image topic -> output topic for the images that are re-encoded (raw images,
+    ROS or Foxglove, to ``T/compressed``, or ``T/video`` for video; back with
+    ``decompress``).
 
     >>> renamed_topics({"/c/image_raw": IMAGE}, compress="jpeg", decompress=False)
     {'/c/image_raw': '/c/image_raw/compressed'}
@@ -56,13 +69,15 @@ def renamed_topics(
     if compress is not None and decompress:
         raise OptionError("--compress and --decompress exclude each other")
     if compress is not None and compress not in COMPRESSIONS:
-        raise OptionError(f"unknown compression {compress!r} (use {' or '.join(COMPRESSIONS)})")
+        raise OptionError(f"unknown compression {compress!r} (use {', '.join(COMPRESSIONS)})")
+    suffix = "/video" if compress in VIDEO_CODECS else "/compressed"
     renamed: dict[str, str] = {}
     for topic, msgtype in msgtypes.items():
-        if compress is not None and msgtype == IMAGE:
-            renamed[topic] = f"{topic}/compressed"
-        elif decompress and msgtype == COMPRESSED:
-            renamed[topic] = topic.removesuffix("/compressed") or topic
+        kind = record_msgtype(msgtype)
+        if compress is not None and kind == IMAGE:
+            renamed[topic] = f"{topic}{suffix}"
+        elif decompress and kind in (COMPRESSED, VIDEO):
+            renamed[topic] = topic.removesuffix("/compressed").removesuffix("/video") or topic
     kept = set(msgtypes) - set(renamed)
     clashes = sorted(out for out in renamed.values() if out in kept)
     if clashes:
@@ -78,24 +93,6 @@ def _msgdef(reader: LogReader, topic: str) -> str:
     return "" if info.msgtype in ros2_typestore().types else info.msgdef
 
 
-def _reencode(reader: LogReader, raw: RawMessage, topic: str, *, compress: str | None,
-              serialization: str) -> RawMessage:
-    message = reader.decode(raw)
-    try:
-        if isinstance(message, Image) and compress is not None:
-            out: Image | CompressedImage = encode_compressed(message, compress)
-        elif isinstance(message, CompressedImage):
-            out = decode_compressed(message)
-        else:
-            raise EncodingError(f"unexpected {type(message).__name__}")
-    except EncodingError as err:
-        raise EncodingError(f"{reader.path}: topic {raw.topic} at log time "
-                            f"{raw.log_time_ns}: {err}") from None
-    msgtype = MSGTYPES[type(out)]
-    return RawMessage(topic, msgtype, raw.log_time_ns, serialize(out, serialization),
-                      serialization)
-
-
 def convert_log(
     input_path: Path,
     output: Path,
@@ -106,6 +103,7 @@ def convert_log(
     end_s: float | None = None,
     compress: str | None = None,
     decompress: bool = False,
+    profile: str = "ros2",
     overwrite: bool = False,
     recover: bool = False,
     progress: bool | None = None,
@@ -113,9 +111,15 @@ def convert_log(
     """Write the chosen topics and time window of ``input_path`` to ``output`` atomically.
 
     ``fmt`` defaults from the output name (``.mcap``, ``.bag``, a directory for rosbag2).
+    ``profile="foxglove"`` (MCAP only) stores images, camera models and video in
+    Foxglove's schemas, so that Foxglove shows them in its own panels.
     """
     started = time.perf_counter()
     check_not_input(Path(output), [Path(input_path)])
+    fmt = format_for_output(Path(output), fmt)
+    if fmt != "mcap" and (profile != "ros2" or compress in VIDEO_CODECS):
+        what = f"--compress {compress}" if compress in VIDEO_CODECS else f"--profile {profile}"
+        raise OptionError(f"{what} writes Foxglove schemas, which only MCAP holds")
     with open_reader(input_path, recover=recover) as reader:
         if reader.message_count == 0:
             raise LogReadError(f"{reader.path} is empty (no messages)")
@@ -125,24 +129,44 @@ def convert_log(
                                  compress=compress, decompress=decompress)
         start_ns, end_ns = window_ns(reader.start_ns, start_s, end_s)
         total = sum(reader.topics[t].count for t in names)
+        options = {"profile": profile} if fmt == "mcap" else {}
+        codecs = {t: TopicReencoder(t, compress) for t in renamed}
         written = reencoded = 0
-        with open_writer(output, fmt=fmt, overwrite=overwrite,
-                         inputs=[input_path]) as writer, \
+        with open_writer(output, fmt=fmt, overwrite=overwrite, inputs=[input_path],
+                         **options) as writer, \
                 tqdm(total=total, unit="msg", desc="convert", leave=False,
                      disable=None if progress is None else not progress) as bar:
             for name, values in reader.metadata.items():
                 writer.set_metadata(name, values)
             for raw in reader.raw_messages(chosen, start_ns, end_ns):
-                if raw.topic in renamed:
-                    writer.write_raw(_reencode(reader, raw, renamed[raw.topic],
-                                               compress=compress,
-                                               serialization=writer.serialization))
-                    reencoded += 1
-                else:
-                    writer.write_raw(raw, msgdef=_msgdef(reader, raw.topic))
-                written += 1
                 bar.update()
+                codec = codecs.get(raw.topic)
+                out: Message | bool | None = False
+                if codec is not None:
+                    try:
+                        out = codec(reader.decode(raw))
+                    except ReplayError:  # e.g. an encoding the wire layer cannot cut
+                        codec.undecodable += 1
+                        out = None
+                if out is None:
+                    continue
+                if out is False and profile == "foxglove" and \
+                        record_msgtype(raw.msgtype) in FOXGLOVE_CAMERA_TYPES:
+                    out = reader.decode(raw)
+                if out is False:
+                    writer.write_raw(raw, msgdef=_msgdef(reader, raw.topic))
+                else:
+                    assert not isinstance(out, bool)
+                    topic = renamed.get(raw.topic, raw.topic)
+                    writer.write(topic, out, log_time_ns=raw.log_time_ns)
+                    reencoded += topic != raw.topic
+                written += 1
             format_name = writer.format_name
-        warnings = list(reader.warnings)
-    return ConvertResult(output, format_name, written, reencoded, renamed, warnings,
-                         time.perf_counter() - started)
+            warnings = list(reader.warnings) + writer.warnings
+        for codec in codecs.values():
+            warnings += codec.notes()
+    actual = {t: out for t, out in renamed.items() if codecs[t].chosen is not None}
+    psnr = {actual[t]: c.psnr_mean_db for t, c in codecs.items()
+            if t in actual and c.psnr_mean_db is not None}
+    return ConvertResult(output, format_name, written, reencoded, actual, warnings,
+                         time.perf_counter() - started, psnr)

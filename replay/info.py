@@ -13,15 +13,16 @@ from datetime import UTC, datetime
 from pathlib import Path
 
 from . import storage
-from .codec import decode_compressed, deserialize
 from .errors import ReplayError
-from .formats.base import LogReader, RawMessage
-from .messages import MSGTYPES, CameraInfo, CompressedImage, Image
+from .formats.base import ROS_SERIALIZATIONS, LogReader, RawMessage
+from .frames import FrameStream
+from .messages import CameraInfo, CompressedImage, CompressedVideo, Image
+from .wire import DECODABLE, FRAME_TYPES, RECORD_TYPES
 
 __all__ = ["LogSummary", "TopicSummary", "format_summary", "summarize"]
 
-#: topics whose first message is decoded to describe the stream
-DESCRIBED_TYPES = frozenset(MSGTYPES[kind] for kind in (Image, CompressedImage, CameraInfo))
+#: topics whose first message is decoded to describe the stream (ROS and Foxglove types)
+DESCRIBED_TYPES = FRAME_TYPES | {t for t, kind in RECORD_TYPES.items() if kind is CameraInfo}
 
 
 @dataclass(frozen=True, slots=True)
@@ -82,18 +83,23 @@ def summarize(reader: LogReader, *, verify: bool = False) -> LogSummary:
         first_ns = {name: first for name, (first, _last) in spans.items()}
         last_ns = {name: last for name, (_first, last) in spans.items()}
         for name, info in reader.topics.items():
-            if info.msgtype in DESCRIBED_TYPES and name in spans:
+            if name not in spans:
+                continue
+            if info.msgtype in DESCRIBED_TYPES:  # only these need their first message
                 raw = next(iter(reader.raw_messages([name])), None)
                 if raw is not None:
-                    details[name] = describe(raw)
+                    details[name] = describe(reader, raw)
+            elif info.serialization not in ROS_SERIALIZATIONS or info.msgtype not in DECODABLE:
+                details[name] = f"({info.serialization or 'no encoding'}; copied, not decoded)"
     else:
         for raw in reader.raw_messages():
             topic = raw.topic
             counts[topic] = counts.get(topic, 0) + 1
             if topic not in first_ns:
                 first_ns[topic] = raw.log_time_ns
-                if raw.msgtype in DESCRIBED_TYPES:
-                    details[topic] = describe(raw)
+                detail = _detail(reader, raw)
+                if detail is not None:
+                    details[topic] = detail
             last_ns[topic] = raw.log_time_ns
     msgtypes = {name: info.msgtype for name, info in reader.topics.items()}
     topics = tuple(
@@ -119,18 +125,34 @@ def summarize(reader: LogReader, *, verify: bool = False) -> LogSummary:
     )
 
 
-def describe(raw: RawMessage) -> str:
-    """Encoding and size of an image / camera-info message, or why it cannot be decoded."""
+def _detail(reader: LogReader, raw: RawMessage) -> str | None:
+    """The detail column of a topic from its first message (None: nothing to say)."""
+    if raw.msgtype in DESCRIBED_TYPES:
+        return describe(reader, raw)
+    if raw.serialization not in ROS_SERIALIZATIONS or raw.msgtype not in DECODABLE:
+        return f"({raw.serialization or 'no encoding'}; copied, not decoded)"
+    return None
+
+
+def describe(reader: LogReader, raw: RawMessage) -> str:
+    """Encoding and size of an image / video / camera-info message, or why it cannot be
+    decoded (Foxglove channels name their message encoding too)."""
+    where = "" if raw.serialization in ROS_SERIALIZATIONS else f" ({raw.serialization})"
     try:
-        message = deserialize(raw.data, raw.msgtype, raw.serialization)
+        message = reader.decode(raw)
         match message:
             case Image():
-                return f"{message.encoding} {message.width}x{message.height}"
+                return f"{message.encoding} {message.width}x{message.height}{where}"
             case CompressedImage():
-                image = decode_compressed(message)
-                return f"{message.format} {image.width}x{image.height}"
+                frame = FrameStream().decode(message)
+                assert frame is not None
+                return f"{message.format} {frame.width}x{frame.height}{where}"
+            case CompressedVideo():
+                frame = FrameStream().decode(message)
+                size = "" if frame is None else f" {frame.width}x{frame.height}"
+                return f"{message.format}{size}{where}"
             case CameraInfo():
-                return f"{message.width}x{message.height} {message.distortion_model}"
+                return f"{message.width}x{message.height} {message.distortion_model}{where}"
     except ReplayError as err:
         return f"(cannot decode: {err})"
     return ""
@@ -180,7 +202,8 @@ def format_summary(summary: LogSummary) -> str:
     rows = [("topic", "type", "count", "rate_hz", "detail")]
     for topic in summary.topics:
         rate = "" if topic.rate_hz is None else f"{topic.rate_hz:.2f}"
-        rows.append((topic.name, topic.msgtype, str(topic.count), rate, topic.detail))
+        rows.append((topic.name, topic.msgtype or "(no schema)", str(topic.count), rate,
+                     topic.detail))
     widths = [max(len(row[i]) for row in rows) for i in range(4)]
     for row in rows:
         cells = [

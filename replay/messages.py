@@ -15,22 +15,8 @@ import numpy.typing as npt
 from .errors import EncodingError
 
 F64 = npt.NDArray[np.float64]
-#: image pixels: uint8 or uint16, (H, W) or (H, W, C)
+#: image pixels in the layout of their encoding: (H, W) or (H, W, C)
 Pixels = npt.NDArray[Any]
-
-#: encoding -> (numpy dtype, channels)
-IMAGE_ENCODINGS: dict[str, tuple[np.dtype[np.generic], int]] = {
-    "rgb8": (np.dtype(np.uint8), 3),
-    "bgr8": (np.dtype(np.uint8), 3),
-    "rgba8": (np.dtype(np.uint8), 4),
-    "bgra8": (np.dtype(np.uint8), 4),
-    "mono8": (np.dtype(np.uint8), 1),
-    "8UC1": (np.dtype(np.uint8), 1),
-    "8UC3": (np.dtype(np.uint8), 3),
-    "mono16": (np.dtype(np.uint16), 1),
-    "16UC1": (np.dtype(np.uint16), 1),
-}
-
 
 @dataclass(frozen=True, slots=True)
 class Image:
@@ -74,6 +60,17 @@ class Image:
 @dataclass(frozen=True, slots=True)
 class CompressedImage:
     """Compressed image (``sensor_msgs/msg/CompressedImage``); ``format`` is e.g. ``jpeg``."""
+
+    stamp_ns: int
+    frame_id: str
+    format: str
+    data: bytes
+
+
+@dataclass(frozen=True, slots=True)
+class CompressedVideo:
+    """One frame of a compressed video stream (``foxglove.CompressedVideo``): ``format`` is
+    ``h264`` or ``h265``, ``data`` Annex B NAL units decoding to exactly one picture."""
 
     stamp_ns: int
     frame_id: str
@@ -184,7 +181,8 @@ class Text:
     data: str
 
 
-Message = Image | CompressedImage | CameraInfo | PoseStamped | PointStamped | Text
+Message = (Image | CompressedImage | CompressedVideo | CameraInfo | PoseStamped | PointStamped
+           | Text)
 
 #: typed record -> ROS 2 type name
 MSGTYPES: dict[type, str] = {
@@ -194,22 +192,24 @@ MSGTYPES: dict[type, str] = {
     PoseStamped: "geometry_msgs/msg/PoseStamped",
     PointStamped: "geometry_msgs/msg/PointStamped",
     Text: "std_msgs/msg/String",
+    CompressedVideo: "foxglove.CompressedVideo",  # no ROS type: stored as Foxglove protobuf
 }
 
 
 def check_pixels(encoding: str, pixels: Pixels) -> None:
-    """Raise :class:`EncodingError` unless ``pixels`` has the dtype and channels of ``encoding``."""
-    if encoding not in IMAGE_ENCODINGS:
-        raise EncodingError(
-            f"unsupported image encoding {encoding!r} "
-            f"(supported: {', '.join(sorted(IMAGE_ENCODINGS))})"
-        )
-    dtype, channels = IMAGE_ENCODINGS[encoding]
-    shape_ok = pixels.ndim == 2 if channels == 1 else (
-        pixels.ndim == 3 and pixels.shape[2] == channels
+    """Raise :class:`EncodingError` unless ``pixels`` has the dtype and channels of ``encoding``
+    (the layouts are :data:`replay.frames.raw.RAW_ENCODINGS`)."""
+    from .frames.raw import RAW_ENCODINGS  # the table knows no message type
+
+    raw = RAW_ENCODINGS.get(encoding)
+    if raw is None:
+        raise EncodingError(f"unsupported image encoding {encoding!r} "
+                            f"(supported: {', '.join(sorted(RAW_ENCODINGS))})")
+    shape_ok = pixels.ndim == 2 if raw.channels == 1 else (
+        pixels.ndim == 3 and pixels.shape[2] == raw.channels
     )
-    if pixels.dtype != dtype or not shape_ok:
+    if pixels.dtype != raw.dtype or not shape_ok:
         raise EncodingError(
             f"pixels {pixels.dtype}{list(pixels.shape)} do not match encoding {encoding!r} "
-            f"({dtype}, {channels} channel(s))"
+            f"({raw.dtype}, {raw.channels} channel(s))"
         )

@@ -20,11 +20,12 @@ from tqdm import tqdm
 from processors.calibration.board import Board
 from processors.calibration.figures import annotate_detection
 from replay.formats import LogReader, open_writer
+from replay.frames import encode_image
 from replay.messages import CameraInfo, Image, PointStamped
 from replay.records import CalibrationSummary, ViewResiduals
 from replay.topics import CALIBRATION_SUMMARY, CameraTopics
 
-from .pixels import as_image, bgr
+from .pixels import as_frame
 from .solving import CalibratedCamera, StereoSolution
 
 __all__ = ["Evidence", "write_evidence"]
@@ -70,7 +71,7 @@ def write_evidence(reader: LogReader, path: Path, cameras: list[CalibratedCamera
                 continue
             frame = camera.views.frames[counters[raw.topic]]
             counters[raw.topic] += 1
-            image = as_image(reader.decode(raw), where=f"{reader.path}: {raw.topic}")
+            image = as_frame(reader.decode(raw), where=f"{reader.path}: {raw.topic}")
             ns, stamp, log_time = camera.views.source.namespace, image.stamp_ns, raw.log_time_ns
             topics = CameraTopics(ns)
             info = camera.camera_info
@@ -79,19 +80,18 @@ def write_evidence(reader: LogReader, path: Path, cameras: list[CalibratedCamera
                 info.d, info.k, info.r, info.p), log_time_ns=log_time)
             # a joint view's frame may repeat the previous one on one side: rectify it anyway
             if frame.index in joint.get(ns, ()):
-                rectified = cv2.remap(image.pixels, *maps[ns], cv2.INTER_LINEAR)
-                writer.write(topics.image_rect, Image(stamp, image.frame_id, image.encoding,
-                                                      rectified), log_time_ns=log_time)
+                rectified = image.with_pixels(cv2.remap(image.pixels, *maps[ns],
+                                                        cv2.INTER_LINEAR))
+                writer.write(topics.image_rect, encode_image(rectified), log_time_ns=log_time)
                 side = 0 if camera is cameras[0] else 1
                 if shown is not None and frame.index == shown[side]:
-                    rectified_shown[side] = bgr(Image(stamp, image.frame_id, image.encoding,
-                                                      rectified))
+                    rectified_shown[side] = rectified.bgr8()
             if frame.duplicate:
                 continue
             status, used = camera.solution.status(frame)
             corners = frame.detection.corners_px if frame.detection is not None else None
             annotated = cv2.cvtColor(
-                annotate_detection(bgr(image), corners, board.pattern_size, status, used),
+                annotate_detection(image.bgr8(), corners, board.pattern_size, status, used),
                 cv2.COLOR_BGR2RGB)
             writer.write(topics.detections, Image(stamp, image.frame_id, "rgb8", annotated),
                          log_time_ns=log_time)

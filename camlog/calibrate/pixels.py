@@ -1,41 +1,22 @@
-"""The pixels calibration needs from an image message: grey for detection, BGR for drawing."""
+"""The camera frame of an image message, for calibration (errors name the topic)."""
 
 from __future__ import annotations
 
-import cv2
-import numpy as np
-
-from replay.codec import decode_compressed, to_bgr_or_mono, to_mono8
 from replay.errors import ReplayError
+from replay.frames import Frame, decode_frame
 from replay.messages import CompressedImage, Image
 
 from ..errors import InputError
 
-__all__ = ["as_image", "bgr", "mono8"]
+__all__ = ["as_frame"]
 
 
-def as_image(message: object, *, where: str) -> Image:
-    """A raw image of an ``Image`` or ``CompressedImage`` message; ``where`` names the topic."""
-    if isinstance(message, CompressedImage):
-        try:
-            return decode_compressed(message)
-        except ReplayError as err:
-            raise InputError(f"{where}: {err}") from None
-    if not isinstance(message, Image):
+def as_frame(message: object, *, where: str) -> Frame:
+    """The frame of an image message in any encoding (grey for detection: ``mono8()``,
+    BGR for drawing: ``bgr8()``); ``where`` names the topic."""
+    if not isinstance(message, Image | CompressedImage):
         raise InputError(f"{where} does not hold images")
-    return message
-
-
-def mono8(image: Image) -> np.ndarray:
-    """``(H, W)`` uint8 grey levels."""
-    return to_mono8(image)
-
-
-def bgr(image: Image) -> np.ndarray:
-    """``(H, W, 3)`` uint8 BGR for drawing (16-bit images keep their high byte)."""
-    array = to_bgr_or_mono(image)
-    if array.ndim == 2:
-        if array.dtype != np.uint8:
-            array = (array >> 8).astype(np.uint8)
-        return cv2.cvtColor(array, cv2.COLOR_GRAY2BGR)
-    return array
+    try:
+        return decode_frame(message)
+    except ReplayError as err:
+        raise InputError(f"{where}: {err}") from None

@@ -28,7 +28,8 @@ from replay.records import Scenario
 from replay.topics import SCENARIO, CameraTopics
 
 from ..errors import InputError
-from .pixels import as_image, mono8
+from ..processing.checks import IMAGE_SUFFIXES, IMAGE_TYPES, camera_info_topic
+from .pixels import as_frame
 
 #: mean absolute difference (8-bit levels) of 80x60 thumbnails below which a frame repeats
 #: the previous one; sensor noise averages out over the 64 pixels of a thumbnail cell
@@ -58,21 +59,18 @@ def resolve_camera(reader: LogReader, namespace: str) -> CameraSource:
     """The image and camera_info topics of a camera namespace."""
     ns = namespace.rstrip("/") or "/"
     topics = CameraTopics(ns)
-    for topic in (topics.image_raw, f"{topics.image_raw}/compressed", topics.image_rect,
-                  f"{ns}/image"):
+    for topic in (f"{ns}/{suffix}" for suffix in IMAGE_SUFFIXES):
         info = reader.topics.get(topic)
-        if info is not None and info.count > 0:
+        if info is not None and info.count > 0 and info.msgtype in IMAGE_TYPES:
             break
     else:
         images = sorted(t for t, i in reader.topics.items()
-                        if i.msgtype.endswith(("/Image", "/CompressedImage")) and i.count)
+                        if i.msgtype in IMAGE_TYPES and i.count)
         raise InputError(
             f"{reader.path}: no images under camera {ns} (expected {topics.image_raw} or "
             f"{topics.image_raw}/compressed; image topics: {', '.join(images) or 'none'})"
         )
-    info_topic = topics.camera_info
-    has_info = info_topic in reader.topics and reader.topics[info_topic].count > 0
-    return CameraSource(ns, topic, info_topic if has_info else None)
+    return CameraSource(ns, topic, camera_info_topic(reader, ns))
 
 
 @dataclass(frozen=True)
@@ -204,8 +202,8 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
                     camera.log_info = message
                 continue
             camera = by_image[raw.topic]
-            image = as_image(message, where=f"{reader.path}: {raw.topic}")
-            gray = mono8(image)
+            image = as_frame(message, where=f"{reader.path}: {raw.topic}")
+            gray = image.mono8()
             index, duplicate = camera.add(gray, image.stamp_ns, f"{reader.path}: {raw.topic}")
             if not duplicate:
                 pending.append((camera, index, pool.submit(find_chessboard, gray, board)))

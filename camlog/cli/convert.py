@@ -15,9 +15,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     """Register the ``convert`` arguments."""
     p.epilog = (
         "Messages are copied as stored (byte for byte between CDR formats; ROS1 <-> CDR "
-        "re-serialized by rosbags, which drops ROS1's Header.seq). --compress stores Image "
-        "topics T as CompressedImage on T/compressed, --decompress the reverse, as "
-        "image_transport names them."
+        "re-serialized by rosbags, which drops ROS1's Header.seq; Foxglove protobuf/JSON "
+        "channels are copied into MCAP untouched). --compress stores Image topics T as "
+        "CompressedImage on T/compressed (jpeg, png) or as foxglove.CompressedVideo on "
+        "T/video (h264, h265; MCAP only), --decompress the reverse, as image_transport names "
+        "them; topics the format cannot hold losslessly (16-bit, depth) go to PNG or are "
+        "copied."
     )
     p.add_argument("input", metavar="IN", type=Path, help="MCAP file, rosbag2 directory or .bag")
     p.add_argument("output", metavar="OUT", type=Path,
@@ -29,6 +32,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                        help="store raw images compressed on TOPIC/compressed")
     codec.add_argument("--decompress", action="store_true",
                        help="store compressed images raw (TOPIC/compressed -> TOPIC)")
+    p.add_argument("--profile", choices=("ros2", "foxglove"), default="ros2",
+                   help="MCAP: store images, camera models and video in Foxglove's schemas "
+                        "(foxglove) or ROS 2 messages (ros2, default)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output")
     p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
@@ -39,12 +45,14 @@ def run(args: argparse.Namespace) -> int:
     result = convert_log(
         args.input, args.output, fmt=args.format, topics=args.topics, start_s=args.start,
         end_s=args.end, compress=args.compress, decompress=args.decompress,
-        overwrite=args.overwrite, recover=args.recover,
+        profile=args.profile, overwrite=args.overwrite, recover=args.recover,
         progress=False if args.no_progress else None)
     print(f"converted {result.messages} messages ({result.reencoded} images re-encoded) to "
           f"{result.format_name} in {result.wall_s:.2f} s")
     for before, after in sorted(result.renamed.items()):
         print(f"renamed {before} -> {after}")
+    for topic, psnr in sorted(result.psnr_db.items()):
+        print(f"{topic}: {args.compress} PSNR {psnr:.1f} dB (mean over its frames)")
     print_warnings(result.warnings)
     print(f"wrote {result.output}")
     return 0

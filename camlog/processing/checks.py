@@ -5,13 +5,33 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from replay.formats import LogReader
+from replay.messages import CameraInfo
+from replay.wire import FRAME_TYPES, RECORD_TYPES
 
 from ..errors import InputError
 
-IMAGE_TYPES = ("sensor_msgs/msg/Image", "sensor_msgs/msg/CompressedImage")
+#: types whose messages are camera frames (ROS and Foxglove images, Foxglove video)
+IMAGE_TYPES = tuple(sorted(FRAME_TYPES))
 #: types with a header stamp (what a throttle can thin)
 STAMPED_TYPES = (*IMAGE_TYPES, "sensor_msgs/msg/CameraInfo", "geometry_msgs/msg/PointStamped",
                  "geometry_msgs/msg/PoseStamped")
+#: types of camera models (ROS camera_info, Foxglove CameraCalibration)
+INFO_TYPES = tuple(sorted(t for t, kind in RECORD_TYPES.items() if kind is CameraInfo))
+#: a camera namespace's image topics, most preferred first: image_transport's names, then
+#: names Foxglove-style logs use
+IMAGE_SUFFIXES = ("image_raw", "image_raw/compressed", "image_rect", "image",
+                  "image/compressed", "compressed", "video")
+#: a camera namespace's camera model topic, most preferred first
+INFO_SUFFIXES = ("camera_info", "calibration", "camera_calibration")
+
+
+def camera_info_topic(reader: LogReader, namespace: str) -> str | None:
+    """The camera model topic of a camera namespace, if the log has one with messages."""
+    for suffix in INFO_SUFFIXES:
+        info = reader.topics.get(f"{namespace}/{suffix}")
+        if info is not None and info.count and info.msgtype in INFO_TYPES:
+            return info.name
+    return None
 
 
 def require_messages(reader: LogReader) -> None:

@@ -28,13 +28,14 @@ from processors.spec import Configured, OptionKind
 from processors.throttle import Throttle
 from replay._version import VERSION
 from replay.atomic import check_not_input
-from replay.codec import decode_compressed, encode_compressed, msgtype_of, serialize
 from replay.errors import ReplayError
 from replay.formats import LogReader, LogWriter, RawMessage, open_reader, open_writer
-from replay.messages import CompressedImage, Image, Message
+from replay.frames import Frame, FrameStream, decode_frame, encode_compressed
+from replay.messages import CompressedVideo, Image, Message
 from replay.records import ProcessedOutput, ProcessedOutputs
 from replay.storage import Location, local_paths
 from replay.topics import PROCESSED
+from replay.wire import msgtype_of, serialize
 
 from ..errors import ProcessingError, UsageError
 from .checks import (
@@ -73,17 +74,19 @@ class _Job:
     serialization: str
     where: str  # "LOG: TOPIC" for error messages
 
-    def __call__(self, frame: Message, log_time_ns: int) -> list[RawMessage]:
+    def __call__(self, frame: Message | Frame, log_time_ns: int) -> list[RawMessage]:
+        """The serialized outputs of one frame (a still image message is decoded here, on
+        the worker; video arrives decoded, in order)."""
         stamp = getattr(frame, "stamp_ns", "?")
         try:
-            image = decode_compressed(frame) if isinstance(frame, CompressedImage) else frame
-            assert isinstance(image, Image)
+            image = frame if isinstance(frame, Frame) else FrameStream().decode(frame)
+            assert image is not None  # still images always give a frame
             raws = []
             for processor, topics in self.stages:
                 for name, output in processor(image):
                     message: Message = output
                     if self.compress and isinstance(output, Image):
-                        message = encode_compressed(output, self.compress)
+                        message = encode_compressed(decode_frame(output), self.compress)
                     raws.append(RawMessage(topics[name], msgtype_of(message), log_time_ns,
                                            serialize(message, self.serialization),
                                            self.serialization))
@@ -100,6 +103,7 @@ class _Topic:
     job: _Job
     throttles: list[Throttle]
     read: int = 0
+    video: FrameStream = field(default_factory=FrameStream)  # pictures need their past
 
     def keep(self, stamp_ns: int) -> bool:
         """Whether every throttle passes the frame (each sees every frame)."""
@@ -199,7 +203,9 @@ def _warm_up(reader: LogReader, jobs: Mapping[str, _Topic]) -> None:
     """Run the first frame of each topic: fail before writing anything, warm serializers."""
     for topic, state in jobs.items():
         for first in reader.raw_messages([topic]):
-            state.job(reader.decode(first), first.log_time_ns)
+            message = reader.decode(first)
+            if not isinstance(message, CompressedVideo):  # video: decoded in stream order
+                state.job(message, first.log_time_ns)
             break
 
 
@@ -231,7 +237,13 @@ def _stream(reader: LogReader, writer: LogWriter, jobs: Mapping[str, _Topic], *,
                     continue  # this topic is done; others are not yet
                 state.read += 1
                 counts.read += 1
-                frame = reader.decode(raw)
+                frame: Message | Frame = reader.decode(raw)
+                if isinstance(frame, CompressedVideo):
+                    picture = state.video.decode(frame)  # on this thread: in stream order
+                    if picture is None:
+                        copy(raw)
+                        continue  # no picture before the first keyframe
+                    frame = picture
                 kept = state.keep(getattr(frame, "stamp_ns", raw.log_time_ns))
                 if kept or not thin:
                     copy(raw)

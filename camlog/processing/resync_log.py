@@ -26,9 +26,14 @@ from replay.storage import Location, local_paths
 from replay.topics import RESYNC_PREFIX, ResyncTopics
 
 from ..errors import InputError, SyncError
-from .checks import IMAGE_TYPES, require_free_topics, require_messages
+from .checks import (
+    IMAGE_SUFFIXES,
+    IMAGE_TYPES,
+    camera_info_topic,
+    require_free_topics,
+    require_messages,
+)
 
-INFO_TYPE = "sensor_msgs/msg/CameraInfo"
 SIDES = ("left", "right")
 
 
@@ -56,7 +61,7 @@ class _Side:
 
 def _side(reader: LogReader, name: str, namespace: str, prefix: str) -> _Side:
     namespace = namespace.rstrip("/")
-    candidates = [f"{namespace}/image_raw", f"{namespace}/image_raw/compressed"]
+    candidates = [f"{namespace}/{suffix}" for suffix in IMAGE_SUFFIXES]
     found = [t for t in candidates if t in reader.topics and reader.topics[t].count]
     if not found:
         listed = ", ".join(sorted(t for t, i in reader.topics.items() if i.count)) or "none"
@@ -66,10 +71,8 @@ def _side(reader: LogReader, name: str, namespace: str, prefix: str) -> _Side:
     if reader.topics[image_topic].msgtype not in IMAGE_TYPES:
         raise InputError(f"{reader.path}: {image_topic} is {reader.topics[image_topic].msgtype}"
                          ", not an image topic")
-    info = f"{namespace}/camera_info"
-    has_info = info in reader.topics and reader.topics[info].msgtype == INFO_TYPE
     suffix = image_topic.removeprefix(f"{namespace}/")
-    return _Side(name, image_topic, info if has_info else None,
+    return _Side(name, image_topic, camera_info_topic(reader, namespace),
                  f"{prefix}/{name}/{suffix}", f"{prefix}/{name}/camera_info")
 
 

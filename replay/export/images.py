@@ -1,8 +1,9 @@
 """Camera images as rerun archetypes: raw pixels, JPEG re-encoded, or compressed passed through.
 
 A ``CompressedImage`` (JPEG or PNG) goes into the recording as ``EncodedImage`` without being
-decoded. Raw 8-bit images become ``EncodedImage`` JPEGs when a quality is given (OpenCV
-encodes; 16-bit images stay raw since JPEG cannot hold them), ``Image`` otherwise.
+decoded. Raw frames become ``EncodedImage`` JPEGs when a quality is given and they have 8-bit
+channels (OpenCV encodes; 16-bit images stay raw since JPEG cannot hold them), ``Image`` in
+their own colour order otherwise, and depth frames ``DepthImage`` with their metre scale.
 """
 
 from __future__ import annotations
@@ -13,19 +14,20 @@ import cv2
 import numpy as np
 import rerun as rr
 
-from ..messages import CompressedImage, Image
+from ..errors import EncodingError
+from ..frames import Color, Frame, decode_frame
+from ..messages import CompressedImage, CompressedVideo, Image, Message
 
-__all__ = ["COLOR_MODELS", "encoded_image", "media_type", "rerun_image"]
+__all__ = ["COLOR_MODELS", "encoded_image", "is_keyframe", "media_type", "rerun_image",
+           "still_frame", "video_sample"]
 
-#: ROS encoding -> rerun colour model
-COLOR_MODELS: dict[str, Literal["RGB", "BGR", "RGBA", "BGRA", "L"]] = {
-    "rgb8": "RGB", "8UC3": "RGB", "bgr8": "BGR", "rgba8": "RGBA", "bgra8": "BGRA",
-    "mono8": "L", "8UC1": "L", "mono16": "L", "16UC1": "L",
-}
-#: ROS encoding -> OpenCV conversion to what ``cv2.imencode`` takes (BGR or mono)
-_TO_BGR = {
-    "rgb8": cv2.COLOR_RGB2BGR, "8UC3": cv2.COLOR_RGB2BGR, "rgba8": cv2.COLOR_RGBA2BGR,
-    "bgra8": cv2.COLOR_BGRA2BGR,
+#: CompressedVideo format -> rerun's codec
+VIDEO_CODECS = {"h264": rr.VideoCodec.H264, "h265": rr.VideoCodec.H265}
+
+#: colour order -> rerun colour model
+COLOR_MODELS: dict[Color, Literal["RGB", "BGR", "RGBA", "BGRA", "L"]] = {
+    Color.RGB: "RGB", Color.BGR: "BGR", Color.RGBA: "RGBA", Color.BGRA: "BGRA",
+    Color.MONO: "L",
 }
 
 
@@ -47,16 +49,51 @@ def encoded_image(message: CompressedImage, *, draw_order: float | None = None) 
 
 
 def rerun_image(
-    image: Image, *, jpeg_quality: int | None = None, draw_order: float | None = None
+    frame: Frame, *, jpeg_quality: int | None = None, draw_order: float | None = None
 ) -> Any:
-    """``rr.Image`` of the pixels, or a JPEG ``rr.EncodedImage`` when ``jpeg_quality`` is set
-    and the image has 8-bit channels."""
-    pixels = image.pixels
+    """``rr.Image`` of the pixels in their colour order, ``rr.DepthImage`` (with its metre
+    scale) for depth, or a JPEG ``rr.EncodedImage`` when ``jpeg_quality`` is set and the
+    image has 8-bit colour or grey channels."""
+    pixels = frame.pixels
+    if frame.color is Color.DEPTH:
+        assert frame.depth_unit_m is not None
+        return rr.DepthImage(pixels, meter=1.0 / frame.depth_unit_m, draw_order=draw_order)
     if jpeg_quality is not None and pixels.dtype == np.uint8:
-        conversion = _TO_BGR.get(image.encoding)
-        array = cv2.cvtColor(pixels, conversion) if conversion is not None else pixels
+        array = pixels if frame.color is Color.MONO else frame.bgr8()
         ok, buf = cv2.imencode(".jpg", array, [cv2.IMWRITE_JPEG_QUALITY, int(jpeg_quality)])
         if ok:
             return rr.EncodedImage(contents=buf.tobytes(), media_type="image/jpeg",
                                    draw_order=draw_order)
-    return rr.Image(pixels, color_model=COLOR_MODELS[image.encoding], draw_order=draw_order)
+    return rr.Image(pixels, color_model=COLOR_MODELS[frame.color], draw_order=draw_order)
+
+
+def still_frame(message: Message) -> Frame:
+    """The frame of a still image message (ValueError for any other message)."""
+    if not isinstance(message, Image | CompressedImage):
+        raise ValueError(f"expected an image, got {type(message).__name__}")
+    return decode_frame(message)
+
+
+def is_keyframe(message: CompressedVideo) -> bool:
+    """Whether an Annex B sample holds an IDR picture (H.264 NAL type 5, H.265 16-21)."""
+    data = message.data
+    start = data.find(b"\x00\x00\x01")
+    while start >= 0 and start + 3 < len(data):
+        header = data[start + 3]
+        if message.format == "h264" and header & 0x1F == 5:
+            return True
+        if message.format == "h265" and 16 <= (header >> 1) & 0x3F <= 21:
+            return True
+        start = data.find(b"\x00\x00\x01", start + 3)
+    return False
+
+
+def video_sample(message: Message) -> Any:
+    """``rr.VideoStream`` holding a compressed video sample as it is (rerun decodes); None
+    for any other message."""
+    if not isinstance(message, CompressedVideo):
+        return None
+    codec = VIDEO_CODECS.get(message.format)
+    if codec is None:
+        raise EncodingError(f"rerun cannot play {message.format!r} video")
+    return rr.VideoStream(codec=codec, sample=message.data, is_keyframe=is_keyframe(message))

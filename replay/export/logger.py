@@ -23,14 +23,14 @@ import numpy as np
 import rerun as rr
 
 from ..camera import CameraModel
-from ..codec import decode_compressed, to_mono8, to_rgb8
 from ..errors import ReplayError
 from ..formats.base import RawMessage
+from ..frames import decode_frame
 from ..messages import CameraInfo, CompressedImage, Image, Message, PointStamped, PoseStamped, Text
 from ..records import ViewResiduals
 from .emitter import Emitter
 from .frames import CameraFrames
-from .images import encoded_image, rerun_image
+from .images import encoded_image, rerun_image, still_frame, video_sample
 from .overlays import (
     CLASSES,
     edge_classes,
@@ -91,6 +91,7 @@ class SceneLogger:
         self.counts = self._out.counts  # entity -> logged rows
         self.warnings: list[str] = []
         self._warned: set[str] = set()
+        self._failed: dict[str, tuple[int, str]] = {}  # topic -> messages not shown, why
         self._guides: set[str] = set()
         self._styled: set[str] = set()  # point entities whose colour and size are logged
         self._truth: dict[str, tuple[bytes, CameraModel, Any]] = {}  # topic -> last pose
@@ -142,8 +143,9 @@ class SceneLogger:
         try:
             handler(raw, route)
         except (ReplayError, ValueError) as err:
-            self._warn(raw.topic, f"{raw.topic}: message at log time {raw.log_time_ns} not "
-                                  f"shown: {err}")
+            count, first = self._failed.get(raw.topic, (0, f"first at log time "
+                                                           f"{raw.log_time_ns}: {err}"))
+            self._failed[raw.topic] = (count + 1, first)
 
     # --- helpers ---------------------------------------------------------------------------
 
@@ -161,6 +163,8 @@ class SceneLogger:
     def close(self) -> None:
         """Send what is still pending and stop the encoding threads."""
         self._out.close()
+        for topic, (count, why) in sorted(self._failed.items()):
+            self.warnings.append(f"{topic}: {count} messages not shown ({why})")
 
     def _camera_of(self, route: Route, message: Any) -> _Camera | None:
         """The camera a message draws on: named by its route, or found by frame and stamp."""
@@ -187,14 +191,6 @@ class SceneLogger:
         if not dense:
             cam.frames.drawn(entity, stamp_ns)
 
-    @staticmethod
-    def _pixels(message: Message) -> Image:
-        if isinstance(message, CompressedImage):
-            return decode_compressed(message)
-        if not isinstance(message, Image):
-            raise ValueError(f"expected an image, got {type(message).__name__}")
-        return message
-
     # --- handlers --------------------------------------------------------------------------
 
     def _image(self, raw: RawMessage, route: Route) -> None:
@@ -202,6 +198,11 @@ class SceneLogger:
         if raw.topic != cam.plan.image_topic:
             return
         message = self._decode(raw)
+        sample = video_sample(message)  # rerun decodes video itself: every sample is kept
+        if sample is not None:
+            self._times(raw, getattr(message, "stamp_ns", None))
+            self._emit(f"{cam.plan.entity}/video", sample)
+            return
         assert isinstance(message, Image | CompressedImage)
         stamp = message.stamp_ns
         if not cam.frames.take(stamp):
@@ -218,12 +219,11 @@ class SceneLogger:
             archetype = encoded_image(message, draw_order=draw_order)
             if archetype is not None:
                 return archetype
-            message = decode_compressed(message)
-        if message.pixels.dtype == np.uint8:  # JPEG: encoded on a worker thread
-            return self._out.encode(rerun_image, message, draw_order=draw_order,
+        frame = decode_frame(message)
+        if frame.pixels.dtype == np.uint8:  # JPEG: encoded on a worker thread
+            return self._out.encode(rerun_image, frame, draw_order=draw_order,
                                     jpeg_quality=self.options.jpeg_quality)
-        return rerun_image(message, jpeg_quality=self.options.jpeg_quality,
-                           draw_order=draw_order)
+        return rerun_image(frame, jpeg_quality=self.options.jpeg_quality, draw_order=draw_order)
 
     def _camera_info(self, raw: RawMessage, route: Route) -> None:
         cam = self.cameras[route.namespace]
@@ -265,7 +265,7 @@ class SceneLogger:
 
     def _guide_rows(self, entity: str, message: Image | CompressedImage) -> None:
         """Horizontal lines every 1/12 of the height: matching rows of a rectified pair."""
-        image = self._pixels(message)
+        image = still_frame(message)
         width, height = image.width, image.height
         rows = [[[0.0, v], [float(width), v]] for v in np.linspace(0, height, 13)[1:-1]]
         self.rec.log(entity + "/rows", rr.LineStrips2D(rows, colors=[CYAN], radii=GUIDE_RADIUS),
@@ -283,7 +283,7 @@ class SceneLogger:
                       self._archetype(message, draw_order=ORDER_DETECTIONS))
         why = self.plan.rejected.get(cam.plan.namespace, {}).get(stamp)
         if why is not None:
-            image = self._pixels(message)
+            image = still_frame(message)
             self._overlay(raw, cam, f"{cam.plan.entity}/calibration/status", stamp, rr.Boxes2D(
                 mins=[[0, 0]], sizes=[[image.width, image.height]], colors=[RED],
                 labels=[f"rejected: {why}"]))
@@ -332,11 +332,11 @@ class SceneLogger:
         cam = self._camera_of(route, message)
         if cam is None or not self._shows(cam, message.stamp_ns):
             return
-        image = self._pixels(message)
+        image = still_frame(message)
         if route.kind is Kind.MASK:
-            classes, opacity, order = mask_classes(to_rgb8(image)), 0.5, ORDER_MASK
+            classes, opacity, order = mask_classes(image.rgb8()), 0.5, ORDER_MASK
         else:
-            classes, opacity, order = edge_classes(to_mono8(image)), 0.8, ORDER_EDGES
+            classes, opacity, order = edge_classes(image.mono8()), 0.8, ORDER_EDGES
         self._times(raw, message.stamp_ns)
         self._overlay(raw, cam, f"{cam.plan.entity}/{route.entity}", message.stamp_ns,
                       rr.SegmentationImage(classes, opacity=opacity, draw_order=order))

@@ -104,7 +104,7 @@ def header_stamp_ns(data: bytes | memoryview, serialization: str) -> int | None:
     """Header stamp of a serialized message whose first field is a std_msgs/Header, read
     without deserializing: little-endian CDR or ROS1 (None for big-endian CDR).
 
-    >>> from replay.codec import serialize
+    >>> from replay.wire import serialize
     >>> from replay.messages import PointStamped
     >>> header_stamp_ns(serialize(PointStamped(1_500_000_007, "f", np.zeros(3))), "cdr")
     1500000007

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 from .. import topics as names
 from ..display import Display
 from ..topics import ResyncTopics
+from ..wire import record_msgtype
 
 if TYPE_CHECKING:
     from ..records import ProcessedOutput
@@ -27,6 +28,7 @@ if TYPE_CHECKING:
 __all__ = ["Kind", "Route", "classify", "route_output"]
 
 IMAGE = "sensor_msgs/msg/Image"
+VIDEO = "foxglove.CompressedVideo"
 COMPRESSED = "sensor_msgs/msg/CompressedImage"
 CAMERA_INFO = "sensor_msgs/msg/CameraInfo"
 POINT = "geometry_msgs/msg/PointStamped"
@@ -96,9 +98,9 @@ BY_FRAME: dict[str, Route] = {
 #: type -> (suffix, kind) tried in order; the camera namespace is what precedes the suffix
 SUFFIXES: dict[str, tuple[tuple[str, Kind], ...]] = {
     IMAGE: ((f"/{names.DETECTIONS}", Kind.DETECTIONS), (f"/{names.IMAGE_RECT}", Kind.RECTIFIED),
-            (f"/{names.IMAGE_RAW}", Kind.IMAGE)),
+            (f"/{names.IMAGE_RAW}", Kind.IMAGE), ("/image", Kind.IMAGE)),
     CAMERA_INFO: ((f"/{names.CALIBRATED_INFO}", Kind.CALIBRATED_INFO),
-                  (f"/{names.CAMERA_INFO}", Kind.CAMERA_INFO)),
+                  (f"/{names.CAMERA_INFO}", Kind.CAMERA_INFO), ("/calibration", Kind.CAMERA_INFO)),
     POINT: ((f"/{names.VIEW_ERROR}", Kind.VIEW_ERROR),
             (ResyncTopics("").offset, Kind.STEREO_OFFSET)),
     STRING: ((f"/{names.RESIDUALS}", Kind.RESIDUALS),),
@@ -137,8 +139,11 @@ def classify(topic: str, msgtype: str,
 
 def _by_name(topic: str, msgtype: str) -> Route:
     name = topic
+    msgtype = record_msgtype(msgtype)  # Foxglove camera schemas show as their ROS kinds
     if msgtype == COMPRESSED:
         msgtype, name = IMAGE, topic.removesuffix("/compressed") or topic
+    elif msgtype == VIDEO:
+        msgtype, name = IMAGE, topic.removesuffix("/video") or topic
     if msgtype == POSE:
         truth = names.split_ground_truth(topic)
         return Route(Kind.GROUND_TRUTH, truth[0], detail=truth[1]) if truth \

@@ -12,12 +12,13 @@ from typing import Any
 from .. import storage
 from ..atomic import temp_output_of
 from ..errors import LogFormatError, LogReadError
-from .base import LogReader, LogWriter, RawMessage, Record, TopicInfo
+from .base import FrameRecord, LogReader, LogWriter, RawMessage, Record, TopicInfo
 from .mcap import MAGIC, McapLogReader, McapLogWriter, is_mcap
 from .rosbags_formats import Ros1LogReader, Ros1LogWriter, Rosbag2LogReader, Rosbag2LogWriter
 
 __all__ = [
     "FORMATS",
+    "FrameRecord",
     "LogReader",
     "LogWriter",
     "RawMessage",

@@ -8,12 +8,29 @@ from pathlib import Path
 from types import TracebackType
 from typing import Self
 
-from ..atomic import AtomicOutput
-from ..codec import decode_compressed, deserialize, msgtype_of, serialize
-from ..errors import LogWriteError, ReplayError, TopicError
-from ..messages import MSGTYPES, CompressedImage, Image, Message
+from mcap.records import Schema
 
-IMAGE_TYPES = frozenset({MSGTYPES[Image], MSGTYPES[CompressedImage]})
+from ..atomic import AtomicOutput
+from ..errors import LogWriteError, ReplayError, TopicError
+from ..frames import Frame, FrameStream
+from ..messages import CameraInfo, CompressedImage, CompressedVideo, Image, Message
+from ..wire import (
+    CDR,
+    FRAME_TYPES,
+    PROTOBUF,
+    ROS1,
+    Decoder,
+    convert_serialization,
+    decoder_for,
+    foxglove_schema,
+    msgtype_of,
+    ros_schema,
+    serialize,
+    to_foxglove,
+)
+
+#: serializations every format can hold (others, e.g. protobuf or JSON, only MCAP)
+ROS_SERIALIZATIONS = frozenset({CDR, ROS1})
 
 
 @dataclass(frozen=True, slots=True)
@@ -29,13 +46,16 @@ class TopicInfo:
 
 @dataclass(frozen=True, slots=True)
 class RawMessage:
-    """A serialized message as stored: bytes are CDR or ROS1 per ``serialization``."""
+    """A serialized message as stored: ``serialization`` is the channel's message encoding
+    (``cdr``, ``ros1``, ``protobuf``, ``json``...), ``schema`` its schema record where the
+    format keeps one (MCAP)."""
 
     topic: str
     msgtype: str
     log_time_ns: int
     data: bytes | memoryview
     serialization: str
+    schema: Schema | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -45,6 +65,15 @@ class Record:
     topic: str
     log_time_ns: int
     message: Message
+
+
+@dataclass(frozen=True, slots=True)
+class FrameRecord:
+    """A decoded camera frame with the topic and log time its message was stored under."""
+
+    topic: str
+    log_time_ns: int
+    message: Frame
 
 
 class LogReader:
@@ -63,6 +92,7 @@ class LogReader:
         self.message_count = 0
         self.metadata: dict[str, dict[str, str]] = {}
         self.warnings: list[str] = []
+        self._decoders: dict[tuple[str, str, str], Decoder] = {}
 
     def raw_messages(
         self,
@@ -78,10 +108,20 @@ class LogReader:
         reading the messages (None: it does not)."""
         return None
 
+    def schema(self, raw: RawMessage) -> Schema | None:
+        """The schema record a raw message's channel was written with (formats without
+        schema records: the ROS type's name, whose definition the typestore knows)."""
+        return raw.schema if raw.schema is not None else ros_schema(raw.msgtype,
+                                                                      raw.serialization)
+
     def decode(self, raw: RawMessage) -> Message:
         """Typed record of a raw message; errors name the log and topic."""
+        key = (raw.topic, raw.msgtype, raw.serialization)
         try:
-            return deserialize(raw.data, raw.msgtype, raw.serialization)
+            decoder = self._decoders.get(key)
+            if decoder is None:
+                decoder = self._decoders[key] = decoder_for(raw.serialization, self.schema(raw))
+            return decoder(raw.data)
         except ReplayError as err:
             raise type(err)(f"{self.path}: topic {raw.topic}: {err}") from None
 
@@ -95,25 +135,38 @@ class LogReader:
         for raw in self.raw_messages(topics, start_ns, end_ns):
             yield Record(raw.topic, raw.log_time_ns, self.decode(raw))
 
-    def images(
+    def frames(
         self,
         topics: Iterable[str] | None = None,
         start_ns: int | None = None,
         end_ns: int | None = None,
-    ) -> Iterator[Record]:
-        """Image records of ``topics`` (default: every image topic), JPEG/PNG decoded."""
+        *,
+        skipped: dict[str, int] | None = None,
+    ) -> Iterator[FrameRecord]:
+        """Decoded camera frames of ``topics`` (default: every image and video topic).
+
+        With ``skipped``, a frame that does not decode is counted there (topic -> count)
+        instead of raising."""
         if topics is None:
-            topics = [t.name for t in self.topics.values() if t.msgtype in IMAGE_TYPES]
+            topics = [t.name for t in self.topics.values() if t.msgtype in FRAME_TYPES]
+        streams: dict[str, FrameStream] = {}
         for raw in self.raw_messages(topics, start_ns, end_ns):
+            stream = streams.get(raw.topic)
+            if stream is None:
+                stream = streams[raw.topic] = FrameStream()
             message = self.decode(raw)
-            if isinstance(message, CompressedImage):
-                try:
-                    message = decode_compressed(message)
-                except ReplayError as err:
+            if not isinstance(message, Image | CompressedImage | CompressedVideo):
+                raise TopicError(f"{self.path}: topic {raw.topic} holds {raw.msgtype}, "
+                                 "not images")
+            try:
+                frame = stream.decode(message)
+            except ReplayError as err:
+                if skipped is None:
                     raise type(err)(f"{self.path}: topic {raw.topic}: {err}") from None
-            if not isinstance(message, Image):
-                raise TopicError(f"{self.path}: topic {raw.topic} holds {raw.msgtype}, not images")
-            yield Record(raw.topic, raw.log_time_ns, message)
+                skipped[raw.topic] = skipped.get(raw.topic, 0) + 1
+                continue
+            if frame is not None:
+                yield FrameRecord(raw.topic, raw.log_time_ns, frame)
 
     def close(self) -> None:
         """Release file handles."""
@@ -143,6 +196,10 @@ class LogWriter:
 
     format_name: str = ""
     serialization: str = ""
+    #: message encodings the format can store besides CDR and ROS1
+    other_serializations: frozenset[str] = frozenset()
+    #: ``ros2``, or ``foxglove``: camera records in Foxglove's schemas (MCAP)
+    profile: str = "ros2"
 
     def __init__(self, path: Path, *, overwrite: bool = False,
                  inputs: Iterable[Path] = ()) -> None:
@@ -154,6 +211,8 @@ class LogWriter:
                                     replaceable_dir=is_rosbag2_dir, what="a rosbag2 log")
         self._types: dict[str, str] = {}
         self.closed = False
+        self.warnings: list[str] = []  # channels the format cannot hold, left out
+        self._left_out: set[str] = set()
 
     @property
     def temp_path(self) -> Path:
@@ -167,20 +226,48 @@ class LogWriter:
             if stamp is None:
                 raise LogWriteError(f"{topic}: {type(message).__name__} needs log_time_ns")
             log_time_ns = stamp
+        if self.writes_foxglove(message):
+            proto = to_foxglove(message)
+            schema = foxglove_schema(proto)
+            self.write_raw(RawMessage(topic, schema.name, log_time_ns, proto.SerializeToString(),
+                                      PROTOBUF, schema))
+            return
         msgtype = msgtype_of(message)
         self._check_type(topic, msgtype)
-        self._write(topic, msgtype, log_time_ns, serialize(message, self.serialization), "")
+        self._write(RawMessage(topic, msgtype, log_time_ns,
+                               serialize(message, self.serialization), self.serialization), "")
+
+    def writes_foxglove(self, message: Message) -> bool:
+        """Whether a record is stored with its Foxglove schema: video (it has no ROS type),
+        and every camera record under the ``foxglove`` profile (MCAP)."""
+        if self.profile == "foxglove" and isinstance(
+                message, Image | CompressedImage | CompressedVideo | CameraInfo):
+            return True
+        return msgtype_of(message).startswith("foxglove.")
 
     def write_raw(self, raw: RawMessage, *, msgdef: str = "") -> None:
-        """Store a raw message, converting between CDR and ROS1 when the formats differ."""
-        from ..codec import convert_serialization
+        """Store a raw message, converting between CDR and ROS1 when the formats differ.
 
+        A channel in a serialization the format cannot hold (protobuf or JSON outside MCAP)
+        is left out, with one warning per topic."""
+        if raw.serialization not in ROS_SERIALIZATIONS:
+            if raw.serialization not in self.other_serializations:
+                if raw.topic not in self._left_out:
+                    self._left_out.add(raw.topic)
+                    self.warnings.append(f"{raw.topic} ({raw.msgtype or 'no schema'}, "
+                                         f"{raw.serialization}) left out: {self.format_name} "
+                                         "holds ROS messages only; write MCAP to keep it")
+                return
+            self._check_type(raw.topic, raw.msgtype)
+            self._write(raw, "")
+            return
         self._check_type(raw.topic, raw.msgtype)
-        data = raw.data
         if raw.serialization != self.serialization:
-            data = convert_serialization(data, raw.msgtype, raw.serialization, self.serialization)
+            data = convert_serialization(raw.data, raw.msgtype, raw.serialization,
+                                         self.serialization)
+            raw = RawMessage(raw.topic, raw.msgtype, raw.log_time_ns, data, self.serialization)
             msgdef = ""
-        self._write(raw.topic, raw.msgtype, raw.log_time_ns, data, msgdef)
+        self._write(raw, msgdef)
 
     def set_metadata(self, name: str, values: dict[str, str]) -> None:
         """Attach named string metadata where the format can hold it."""
@@ -190,9 +277,8 @@ class LogWriter:
         if known != msgtype:
             raise LogWriteError(f"{self.path}: topic {topic} has type {known}, not {msgtype}")
 
-    def _write(
-        self, topic: str, msgtype: str, log_time_ns: int, data: bytes | memoryview, msgdef: str
-    ) -> None:
+    def _write(self, raw: RawMessage, msgdef: str) -> None:
+        """Store one message of the writer's serialization (or one it holds besides)."""
         raise NotImplementedError
 
     def _finish(self) -> None:

@@ -22,8 +22,8 @@ from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import CompressionType, Writer
 
 from .._version import VERSION
-from ..codec import CDR, ROS1, ros2_typestore
 from ..errors import LogReadError, LogWriteError
+from ..wire import CDR, JSON, PROTOBUF, ROS1, normalize_msgtype, ros2_typestore
 from .base import LogReader, LogWriter, RawMessage, TopicInfo
 from .mcap_index import channel_spans
 
@@ -46,12 +46,6 @@ _DAMAGE = (
     IndexError,
     KeyError,
 )
-
-
-def normalize_msgtype(name: str) -> str:
-    """``sensor_msgs/Image`` (ROS1 spelling) -> ``sensor_msgs/msg/Image``."""
-    parts = name.split("/")
-    return f"{parts[0]}/msg/{parts[1]}" if len(parts) == 2 else name
 
 
 def is_mcap(path: Path) -> bool:
@@ -84,7 +78,8 @@ class McapLogReader(LogReader):
         self._recover = recover
         self._summary: Any = None
         self._valid_until: int | None = None  # streaming: stop before this byte offset
-        self._channels: dict[int, tuple[str, str, str]] = {}  # id -> topic, msgtype, encoding
+        # id -> topic, msgtype, encoding, schema
+        self._channels: dict[int, tuple[str, str, str, Schema | None]] = {}
         self._seeker: SeekingReader | None = None
         try:
             self._open()
@@ -129,7 +124,7 @@ class McapLogReader(LogReader):
         schema = schemas.get(channel.schema_id)
         msgtype = normalize_msgtype(schema.name) if schema else ""
         encoding = ENCODINGS.get(channel.message_encoding, channel.message_encoding)
-        self._channels[channel.id] = (channel.topic, msgtype, encoding)
+        self._channels[channel.id] = (channel.topic, msgtype, encoding, schema)
         msgdef = schema.data.decode(errors="replace") if schema else ""
         if channel.topic not in self.topics:
             self.topics[channel.topic] = TopicInfo(channel.topic, msgtype, 0, encoding, msgdef)
@@ -254,8 +249,9 @@ class McapLogReader(LogReader):
                     log_time_order=True,
                     **bounds,
                 ):
-                    topic, msgtype, encoding = self._channels[channel.id]
-                    yield RawMessage(topic, msgtype, message.log_time, message.data, encoding)
+                    topic, msgtype, encoding, schema = self._channels[channel.id]
+                    yield RawMessage(topic, msgtype, message.log_time, message.data, encoding,
+                                     schema)
             except _DAMAGE as err:
                 raise LogReadError(
                     f"{self.path} is corrupt ({_describe(err)}); "
@@ -263,14 +259,14 @@ class McapLogReader(LogReader):
                 ) from None
             return
         for message in self._merge_in_time(self._stream_messages()):
-            topic, msgtype, encoding = self._channels[message.channel_id]
+            topic, msgtype, encoding, schema = self._channels[message.channel_id]
             if wanted is not None and topic not in wanted:
                 continue
             if start_ns is not None and message.log_time < start_ns:
                 continue
             if end_ns is not None and message.log_time >= end_ns:
                 continue
-            yield RawMessage(topic, msgtype, message.log_time, message.data, encoding)
+            yield RawMessage(topic, msgtype, message.log_time, message.data, encoding, schema)
 
     def topic_spans(self) -> dict[str, tuple[int, int]] | None:
         """From the message indexes of an MCAP file with a summary (see
@@ -326,6 +322,7 @@ class McapLogWriter(LogWriter):
 
     format_name = "mcap"
     serialization = CDR
+    other_serializations = frozenset({PROTOBUF, JSON, "flatbuffer", "cbor", "msgpack"})
 
     def __init__(
         self,
@@ -335,6 +332,7 @@ class McapLogWriter(LogWriter):
         inputs: Iterable[Path] = (),
         compression: str = "zstd",
         chunk_size: int = 4 * 1024 * 1024,
+        profile: str = "ros2",
     ) -> None:
         super().__init__(path, overwrite=overwrite, inputs=inputs)
         if compression not in COMPRESSION:
@@ -348,35 +346,46 @@ class McapLogWriter(LogWriter):
             chunk_size=chunk_size,
             compression=COMPRESSION[compression],
         )
-        self._writer.start(profile="ros2", library=f"camlog {VERSION}")
+        if profile not in ("ros2", "foxglove"):
+            raise LogWriteError(f"unknown MCAP profile {profile!r} (use ros2 or foxglove)")
+        self.profile = profile
+        self._writer.start(profile="ros2" if profile == "ros2" else "",
+                           library=f"camlog {VERSION}")
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, int] = {}
         self._sequence: dict[int, int] = {}
 
-    def _channel(self, topic: str, msgtype: str, msgdef: str) -> int:
-        channel = self._channels.get(topic)
+    def _channel(self, raw: RawMessage, msgdef: str) -> int:
+        channel = self._channels.get(raw.topic)
         if channel is not None:
             return channel
-        schema = self._schemas.get(msgtype)
+        foreign = raw.serialization != CDR  # protobuf, JSON...: the schema as it came
+        key = f"{raw.serialization}:{raw.msgtype}" if foreign else raw.msgtype
+        schema = self._schemas.get(key)
         if schema is None:
-            if not msgdef:
-                try:
-                    msgdef, _ = ros2_typestore().generate_msgdef(msgtype, ros_version=2)
-                except Exception as err:  # rosbags raises several types for unknown names
-                    raise LogWriteError(f"{topic}: no message definition for {msgtype}") from err
-            schema = self._writer.register_schema(msgtype, "ros2msg", msgdef.encode())
-            self._schemas[msgtype] = schema
-        channel = self._writer.register_channel(topic, "cdr", schema)
-        self._channels[topic] = channel
+            if foreign:
+                source = raw.schema
+                schema = 0 if source is None else self._writer.register_schema(
+                    source.name, source.encoding, source.data)
+            else:
+                if not msgdef:
+                    try:
+                        msgdef, _ = ros2_typestore().generate_msgdef(raw.msgtype, ros_version=2)
+                    except Exception as err:  # rosbags raises several types for unknown names
+                        raise LogWriteError(f"{raw.topic}: no message definition for "
+                                            f"{raw.msgtype}") from err
+                schema = self._writer.register_schema(raw.msgtype, "ros2msg", msgdef.encode())
+            self._schemas[key] = schema
+        channel = self._writer.register_channel(raw.topic, raw.serialization, schema)
+        self._channels[raw.topic] = channel
         return channel
 
-    def _write(
-        self, topic: str, msgtype: str, log_time_ns: int, data: bytes | memoryview, msgdef: str
-    ) -> None:
-        channel = self._channel(topic, msgtype, msgdef)
+    def _write(self, raw: RawMessage, msgdef: str) -> None:
+        channel = self._channel(raw, msgdef)
         sequence = self._sequence.get(channel, 0)
         self._sequence[channel] = sequence + 1
-        self._writer.add_message(channel, log_time_ns, bytes(data), log_time_ns, sequence)
+        self._writer.add_message(channel, raw.log_time_ns, bytes(raw.data), raw.log_time_ns,
+                                 sequence)
 
     def set_metadata(self, name: str, values: dict[str, str]) -> None:
         self._writer.add_metadata(name, values)

@@ -15,8 +15,8 @@ from rosbags.rosbag2 import Reader as Reader2
 from rosbags.rosbag2 import Writer as Writer2
 from rosbags.rosbag2.enums import StoragePlugin
 
-from ..codec import CDR, ROS1, ros1_typestore, ros2_typestore
 from ..errors import LogReadError, LogWriteError
+from ..wire import CDR, ROS1, ros1_typestore, ros2_typestore
 from .base import LogReader, LogWriter, RawMessage, TopicInfo
 from .ros1_reindex import reindexed_copy
 
@@ -173,14 +173,13 @@ class _RosbagsWriter(LogWriter):
     def _typestore(self) -> Any:
         raise NotImplementedError
 
-    def _write(
-        self, topic: str, msgtype: str, log_time_ns: int, data: bytes | memoryview, msgdef: str
-    ) -> None:
-        conn = self._conns.get(topic)
+    def _write(self, raw: RawMessage, msgdef: str) -> None:
+        conn = self._conns.get(raw.topic)
         if conn is None:
-            conn = self._writer.add_connection(topic, msgtype, typestore=self._typestore())
-            self._conns[topic] = conn
-        self._writer.write(conn, log_time_ns, bytes(data))
+            conn = self._writer.add_connection(raw.topic, raw.msgtype,
+                                               typestore=self._typestore())
+            self._conns[raw.topic] = conn
+        self._writer.write(conn, raw.log_time_ns, bytes(raw.data))
 
     def _finish(self) -> None:
         self._writer.close()

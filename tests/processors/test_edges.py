@@ -7,13 +7,14 @@ import pytest
 
 from processors.edges import Edges
 from processors.errors import ConfigError
-from replay import Image
+from replay import Frame, Image
+from replay.frames import decode_frame
 
 
-def square_image(level: int) -> Image:
+def square_image(level: int) -> Frame:
     rgb = np.full((60, 80, 3), 100, np.uint8)
     rgb[20:40, 30:60] = level
-    return Image(7, "cam", "rgb8", rgb)
+    return decode_frame(Image(7, "cam", "rgb8", rgb))
 
 
 def test_edges_trace_the_square_outline() -> None:
@@ -42,7 +43,7 @@ def test_weak_steps_are_below_the_thresholds() -> None:
 def test_mono16_input_is_scaled_to_8_bit() -> None:
     px = np.full((30, 30), 1000, np.uint16)
     px[10:20, 10:20] = 60000
-    (_, out), = Edges()(Image(0, "", "mono16", px))
+    (_, out), = Edges()(decode_frame(Image(0, "", "mono16", px)))
     assert isinstance(out, Image) and out.pixels[10:20, 9:11].any()
 
 

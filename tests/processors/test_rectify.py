@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -9,10 +11,16 @@ from processors.errors import ConfigError, FrameError
 from processors.rectify import Rectifier
 from replay import CameraInfo, Image
 from replay.camera import CameraModel
+from replay.frames import Frame, decode_frame
 
 W, H = 160, 120
 K = np.array([[140.0, 0, 81.0], [0, 138.0, 58.5], [0, 0, 1]])
 D = np.array([-0.35, 0.12, 0.001, -0.002, 0.0])
+
+
+def frame_of(*fields: Any) -> Frame:
+    """The frame of an Image message built from ``fields``."""
+    return decode_frame(Image(*fields))
 
 
 def blobs(uv: np.ndarray, sigma: float = 1.2) -> np.ndarray:
@@ -43,7 +51,7 @@ def test_distorted_dots_move_to_their_ideal_positions() -> None:
     xy = (ideal_uv - K[:2, 2]) / np.diag(K)[:2]
     raw_uv = model.distort_normalized(xy)
     assert np.max(np.linalg.norm(raw_uv - ideal_uv, axis=1)) > 4  # distortion matters here
-    (topic, out), = Rectifier(camera_info=info)(Image(3, "cam", "mono8", blobs(raw_uv)))
+    (topic, out), = Rectifier(camera_info=info)(frame_of(3, "cam", "mono8", blobs(raw_uv)))
     assert topic == "image_rect" and isinstance(out, Image)
     assert (out.encoding, out.stamp_ns, out.pixels.shape) == ("mono8", 3, (H, W))
     found = dot_centres(out.pixels, ideal_uv)
@@ -53,7 +61,7 @@ def test_distorted_dots_move_to_their_ideal_positions() -> None:
 def test_colour_images_keep_their_encoding() -> None:
     info = CameraInfo(0, "cam", W, H, "plumb_bob", np.zeros(5), K)  # P all zero: use K
     rgb = np.random.default_rng(0).integers(0, 256, (H, W, 3), dtype=np.uint8)
-    (_, out), = Rectifier(camera_info=info)(Image(0, "", "rgb8", rgb))
+    (_, out), = Rectifier(camera_info=info)(frame_of(0, "", "rgb8", rgb))
     assert isinstance(out, Image) and out.encoding == "rgb8"
     np.testing.assert_array_equal(out.pixels, rgb)  # no distortion, same camera: identity
 
@@ -61,7 +69,7 @@ def test_colour_images_keep_their_encoding() -> None:
 def test_wrong_size_and_models_are_rejected() -> None:
     info = CameraInfo(0, "cam", W, H, "plumb_bob", D, K)
     with pytest.raises(FrameError, match="160x120"):
-        Rectifier(camera_info=info)(Image(0, "", "mono8", np.zeros((H, W + 2), np.uint8)))
+        Rectifier(camera_info=info)(frame_of(0, "", "mono8", np.zeros((H, W + 2), np.uint8)))
     with pytest.raises(ConfigError, match="kannala_brandt8"):
         Rectifier(camera_info=CameraInfo(0, "", W, H, "kannala_brandt8", np.zeros(8), K))
 
@@ -78,6 +86,6 @@ def test_equidistant_dots_move_to_their_pinhole_positions() -> None:
     rays = np.column_stack([ideal_uv, np.ones(len(ideal_uv))]) @ np.linalg.inv(new_k).T
     raw_uv = model.project(rays)
     assert np.max(np.linalg.norm(raw_uv - ideal_uv, axis=1)) > 4
-    (_, out), = Rectifier(camera_info=info)(Image(0, "cam", "mono8", blobs(raw_uv)))
+    (_, out), = Rectifier(camera_info=info)(frame_of(0, "cam", "mono8", blobs(raw_uv)))
     assert isinstance(out, Image)
     np.testing.assert_allclose(dot_centres(out.pixels, ideal_uv), ideal_uv, atol=0.2)

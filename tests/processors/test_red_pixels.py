@@ -18,6 +18,7 @@ from processors.red_pixels import (
     red_mask,
 )
 from replay import Image, PointStamped
+from replay.frames import decode_frame
 
 
 def reference_mask(rgb: np.ndarray, ratio: int) -> np.ndarray:
@@ -58,7 +59,7 @@ def test_outputs_mask_video_centroid_and_count() -> None:
     rgb = np.full((60, 80, 3), (120, 130, 140), np.uint8)
     rgb[20:31, 40:61] = (250, 3, 2)  # centre (50, 25)
     image = Image(123, "cam", "rgb8", rgb)
-    outputs = dict(RedPixels()(image))
+    outputs = dict(RedPixels()(decode_frame(image)))
     assert set(outputs) == {OUTPUT_VIDEO, CENTROID, COUNT}
     centroid, count, video = outputs[CENTROID], outputs[COUNT], outputs[OUTPUT_VIDEO]
     assert isinstance(centroid, PointStamped) and isinstance(count, PointStamped)
@@ -80,7 +81,7 @@ def test_outputs_mask_video_centroid_and_count() -> None:
 
 def test_no_red_publishes_count_zero_and_no_centroid() -> None:
     image = Image(5, "cam", "rgb8", np.full((8, 8, 3), 90, np.uint8))
-    outputs = RedPixels()(image)
+    outputs = RedPixels()(decode_frame(image))
     assert [t for t, _ in outputs] == [OUTPUT_VIDEO, COUNT]
     count = outputs[1][1]
     assert isinstance(count, PointStamped) and count.point[0] == 0
@@ -93,8 +94,8 @@ def test_every_colour_encoding_gives_the_same_mask(encoding: str) -> None:
     convert = {"bgr8": cv2.COLOR_RGB2BGR, "rgba8": cv2.COLOR_RGB2RGBA,
                "bgra8": cv2.COLOR_RGB2BGRA}[encoding]
     image = Image(0, "", encoding, cv2.cvtColor(rgb, convert))
-    reference = dict(RedPixels()(Image(0, "", "rgb8", rgb)))
-    outputs = dict(RedPixels()(image))
+    reference = dict(RedPixels()(decode_frame(Image(0, "", "rgb8", rgb))))
+    outputs = dict(RedPixels()(decode_frame(image)))
     assert outputs[CENTROID] == reference[CENTROID]
     assert outputs[OUTPUT_VIDEO] == reference[OUTPUT_VIDEO]
 

@@ -20,7 +20,8 @@ import processors.resync
 from processors import PROCESSORS, ConfigError, OptionValueError, configure, make_processor
 from processors.spec import Option, OptionKind, ProcessorSpec
 from replay import IMAGE_ENCODINGS, CameraInfo, Image
-from replay.codec import msgtype_of
+from replay.frames import Frame, decode_frame
+from replay.wire import msgtype_of
 
 W, H = 32, 24
 K = np.array([[50.0, 0, 15.5], [0, 50.0, 11.5], [0, 0, 1]])
@@ -42,10 +43,10 @@ def sample_options(spec: ProcessorSpec) -> dict[str, Any]:
     return {o.name: example(o) for o in spec.options if o.required}
 
 
-def red_square(encoding: str = "rgb8") -> Image:
+def red_square(encoding: str = "rgb8") -> Frame:
     rgb = np.zeros((H, W, 3), np.uint8)
     rgb[5:10, 5:10] = (255, 0, 0)
-    return Image(42, "cam", encoding, rgb)
+    return decode_frame(Image(42, "cam", encoding, rgb))
 
 
 @pytest.mark.parametrize("name", COMPUTING)
@@ -67,9 +68,10 @@ def test_every_processor_writes_what_it_declares(name: str) -> None:
 def test_every_encoding_the_log_layer_supports(name: str, encoding: str) -> None:
     dtype, channels = IMAGE_ENCODINGS[encoding]
     shape = (H, W) if channels == 1 else (H, W, channels)
-    pixels = np.random.default_rng(0).integers(0, np.iinfo(dtype).max, shape).astype(dtype)
+    top = 10.0 if dtype.kind == "f" else np.iinfo(dtype).max
+    pixels = (np.random.default_rng(0).uniform(0, 1, shape) * top).astype(dtype)
     processor = make_processor(name, **sample_options(PROCESSORS[name]))
-    outputs = processor(Image(1, "", encoding, pixels))
+    outputs = processor(decode_frame(Image(1, "", encoding, pixels)))
     assert outputs and all(isinstance(m, Image) or msgtype_of(m) for _, m in outputs)
 
 

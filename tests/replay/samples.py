@@ -20,7 +20,7 @@ from replay import (
     open_reader,
     open_writer,
 )
-from replay.codec import encode_compressed
+from replay.frames import decode_frame, encode_compressed
 
 #: writer format name -> output name it is written under
 OUTPUT_NAMES = {
@@ -42,8 +42,10 @@ def random_pixels(encoding: str, *, height: int = 6, width: int = 8, seed: int =
     """Pixels over the full value range of ``encoding``: ``(H, W)`` or ``(H, W, C)``."""
     dtype, channels = IMAGE_ENCODINGS[encoding]
     shape = (height, width) if channels == 1 else (height, width, channels)
-    info = np.iinfo(dtype)
     rng = np.random.default_rng(seed)
+    if dtype.kind == "f":
+        return rng.uniform(0.0, 10.0, size=shape).astype(dtype)
+    info = np.iinfo(dtype)
     return rng.integers(info.min, info.max, size=shape, dtype=dtype, endpoint=True)
 
 
@@ -56,7 +58,8 @@ def every_kind() -> list[Entry]:
     for index, encoding in enumerate(ROUND_TRIP_ENCODINGS):
         pixels = random_pixels(encoding, seed=index)
         messages.append((f"/cam/{encoding}", Image(T0_NS + index, "cam_optical", encoding, pixels)))
-    jpeg = encode_compressed(Image(T0_NS, "cam_optical", "rgb8", random_pixels("rgb8")))
+    rgb = Image(T0_NS, "cam_optical", "rgb8", random_pixels("rgb8"))
+    jpeg = encode_compressed(decode_frame(rgb))
     messages += [
         ("/cam/compressed", CompressedImage(T0_NS + 10, "cam_optical", jpeg.format, jpeg.data)),
         (

@@ -11,7 +11,6 @@ from rosbags.typesys import Stores, get_typestore
 
 from replay import (
     CompressedImage,
-    EncodingError,
     Image,
     LogFormatError,
     LogReadError,
@@ -126,9 +125,14 @@ def test_compress_jpeg_and_its_limits(tmp_path: Path) -> None:
     deep = tmp_path / "deep.mcap"
     write_log(deep, [("/d/image_raw", T0_NS, Image(T0_NS, "d", "mono16",
                                                    gray.astype(np.uint16) * 200))])
-    with pytest.raises(EncodingError, match=r"deep\.mcap: topic /d/image_raw .*JPEG"):
-        convert_log(deep, tmp_path / "deep_jpeg.mcap", compress="jpeg", progress=False)
-    assert not (tmp_path / "deep_jpeg.mcap").exists()
+    # JPEG cannot hold 16 bits: that topic goes to lossless PNG instead, with a warning
+    result = convert_log(deep, tmp_path / "deep_jpeg.mcap", compress="jpeg", progress=False)
+    assert result.warnings == ["/d/image_raw: jpeg cannot hold its images losslessly; "
+                               "stored as png"]
+    with open_reader(tmp_path / "deep_jpeg.mcap") as reader:
+        (record,) = reader.frames()
+    assert record.topic == "/d/image_raw/compressed" and record.message.source == "png"
+    assert np.array_equal(record.message.pixels, gray.astype(np.uint16) * 200)
     both = tmp_path / "both.mcap"
     convert_log(log, both, compress="png", progress=False)
     write_log(tmp_path / "two.mcap", [

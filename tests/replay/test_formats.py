@@ -22,8 +22,8 @@ from replay import (
     open_reader,
     open_writer,
 )
-from replay.codec import CDR, msgtype_of, ros2_typestore
 from replay.formats import detect_format, format_for_output
+from replay.wire import CDR, msgtype_of, ros2_typestore
 
 from .samples import T0_NS, WRITE_FORMATS, Entry, random_pixels, read_log, write_log
 
@@ -65,13 +65,13 @@ def test_unknown_output_format_or_suffix(tmp_path: Path) -> None:
         open_writer(tmp_path / "x.txt")
 
 
-def _yuv422_raw(topic: str) -> RawMessage:
+def _yuv411_raw(topic: str) -> RawMessage:
     types = ros2_typestore().types
     msg = types["sensor_msgs/msg/Image"](
         header=types["std_msgs/msg/Header"](
             stamp=types["builtin_interfaces/msg/Time"](sec=1, nanosec=0), frame_id="cam"
         ),
-        height=2, width=2, encoding="yuv422", is_bigendian=0, step=4,
+        height=2, width=2, encoding="yuv411", is_bigendian=0, step=4,
         data=np.arange(8, dtype=np.uint8),
     )
     data = bytes(ros2_typestore().serialize_cdr(msg, "sensor_msgs/msg/Image"))
@@ -84,10 +84,10 @@ def test_unsupported_encoding_names_log_and_topic(
 ) -> None:
     path = log_path(fmt)
     with open_writer(path, fmt=fmt) as writer:
-        writer.write_raw(_yuv422_raw("/cam/yuv"))
+        writer.write_raw(_yuv411_raw("/cam/yuv"))
     with open_reader(path) as reader:
         (raw,) = reader.raw_messages()
-        words = r"topic /cam/yuv: unsupported image encoding 'yuv422'"
+        words = r"topic /cam/yuv: unsupported image encoding 'yuv411'"
         with pytest.raises(EncodingError, match=words) as err:
             reader.decode(raw)
         assert str(path) in str(err.value)
@@ -342,8 +342,8 @@ def test_parent_that_is_a_file_is_named(tmp_path: Path) -> None:
 
 
 @pytest.mark.parametrize("fmt", ["jpeg", "png"])
-def test_images_decodes_compressed_topics_on_read(tmp_path: Path, fmt: str) -> None:
-    from replay.codec import encode_compressed
+def test_frames_decodes_compressed_topics_on_read(tmp_path: Path, fmt: str) -> None:
+    from replay.frames import decode_frame, encode_compressed
 
     ys, xs = np.mgrid[0:24, 0:32]
     flat = np.stack([xs * 7, ys * 9, 255 - xs * 5], axis=-1).astype(np.uint8)
@@ -351,15 +351,14 @@ def test_images_decodes_compressed_topics_on_read(tmp_path: Path, fmt: str) -> N
     path = tmp_path / "c.mcap"
     with open_writer(path) as writer:
         writer.write("/cam/image_raw", raw)
-        writer.write("/cam/image_raw/compressed", encode_compressed(raw, fmt))
+        writer.write("/cam/image_raw/compressed", encode_compressed(decode_frame(raw), fmt))
         writer.write("/cam/label", Text("not an image"), log_time_ns=T0_NS)
     with open_reader(path) as reader:
-        records = list(reader.images())
+        records = list(reader.frames())
         assert {r.topic for r in records} == {"/cam/image_raw", "/cam/image_raw/compressed"}
         decoded = next(r.message for r in records if r.topic.endswith("compressed"))
-        assert isinstance(decoded, Image) and decoded.encoding == "rgb8"
-        assert decoded.stamp_ns == T0_NS
-        error = np.abs(decoded.pixels.astype(int) - flat.astype(int))
+        assert decoded.source == fmt and decoded.stamp_ns == T0_NS
+        error = np.abs(decoded.rgb8().astype(int) - flat.astype(int))
         assert error.max() == 0 if fmt == "png" else error.mean() < 8
         with pytest.raises(TopicError, match="/cam/label"):
-            list(reader.images(["/cam/label"]))
+            list(reader.frames(["/cam/label"]))

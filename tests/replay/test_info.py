@@ -8,10 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import replay.info
 from replay import (
     CameraInfo,
     Image,
+    LogReader,
     Message,
     PoseStamped,
     RawMessage,
@@ -19,7 +19,7 @@ from replay import (
     open_reader,
     open_writer,
 )
-from replay.codec import CDR, encode_compressed, ros2_typestore
+from replay.frames import decode_frame, encode_compressed
 from replay.info import (
     LogSummary,
     TopicSummary,
@@ -29,6 +29,7 @@ from replay.info import (
     size_on_disk,
     summarize,
 )
+from replay.wire import CDR, ros2_typestore
 
 from .samples import T0_NS, WRITE_FORMATS, Entry, random_pixels, write_log
 
@@ -44,7 +45,7 @@ def camera_entries(frames: int = 5) -> list[Entry]:
         info = CameraInfo(stamp_ns, "cam", 64, 48, "rational_polynomial", np.zeros(8), np.eye(3))
         entries += [
             ("/cam/image_raw", stamp_ns, image),
-            ("/cam/image_raw/compressed", stamp_ns, encode_compressed(image, "png")),
+            ("/cam/image_raw/compressed", stamp_ns, encode_compressed(decode_frame(image), "png")),
             ("/cam/camera_info", stamp_ns, info),
         ]
     for i in range(2 * frames - 1):
@@ -105,13 +106,13 @@ def test_only_the_first_image_of_a_topic_is_decoded(
     path = tmp_path / "log.mcap"
     write_log(path, camera_entries(frames=6))
     decoded: list[str] = []
-    real = replay.info.deserialize
+    real = LogReader.decode
 
-    def counting(data: bytes | memoryview, msgtype: str, serialization: str) -> Message:
-        decoded.append(msgtype)
-        return real(data, msgtype, serialization)
+    def counting(self: LogReader, raw: RawMessage) -> Message:
+        decoded.append(raw.msgtype)
+        return real(self, raw)
 
-    monkeypatch.setattr(replay.info, "deserialize", counting)
+    monkeypatch.setattr(LogReader, "decode", counting)
     with open_reader(path) as reader:
         summary = summarize(reader)
     assert sorted(decoded) == ["sensor_msgs/msg/CameraInfo", "sensor_msgs/msg/CompressedImage",
@@ -125,7 +126,7 @@ def test_undecodable_image_is_described_not_fatal(tmp_path: Path) -> None:
         header=types["std_msgs/msg/Header"](
             stamp=types["builtin_interfaces/msg/Time"](sec=1, nanosec=0), frame_id="cam"
         ),
-        height=2, width=2, encoding="yuv422", is_bigendian=0, step=4,
+        height=2, width=2, encoding="yuv411", is_bigendian=0, step=4,
         data=np.zeros(8, np.uint8),
     )
     data = bytes(ros2_typestore().serialize_cdr(msg, "sensor_msgs/msg/Image"))
@@ -139,7 +140,7 @@ def test_undecodable_image_is_described_not_fatal(tmp_path: Path) -> None:
     assert topic.count == 3
     assert topic.rate_hz == pytest.approx(20.0)
     assert topic.detail.startswith("(cannot decode:")
-    assert "'yuv422'" in topic.detail
+    assert "'yuv411'" in topic.detail
 
 
 def test_truncated_log_summary_carries_the_warning(tmp_path: Path) -> None:

@@ -39,8 +39,8 @@ def test_image_rejects_pixels_that_do_not_match(encoding: str, pixels: np.ndarra
 
 
 def test_image_rejects_unknown_encoding_and_lists_supported() -> None:
-    with pytest.raises(EncodingError, match=r"'yuv422'.*supported: .*rgb8"):
-        Image(0, "cam", "yuv422", np.zeros((2, 2), np.uint8))
+    with pytest.raises(EncodingError, match=r"'yuv411'.*supported: .*rgb8"):
+        Image(0, "cam", "yuv411", np.zeros((2, 2), np.uint8))
 
 
 def test_image_equality_compares_pixels_and_metadata() -> None:

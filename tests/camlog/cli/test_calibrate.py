@@ -221,6 +221,27 @@ def test_stereo_rig(stereo: Path) -> None:
 
 # --- what calibrate writes ----------------------------------------------------------------------
 
+def test_foxglove_camera_calibrates_like_the_ros_one(mono: Path, rig_log: Path,
+                                                    out_dir: Path) -> None:
+    """The left camera stored as foxglove.RawImage + foxglove.CameraCalibration (protobuf)
+    gives the same calibration as its sensor_msgs form."""
+    fox = out_dir / "fox.mcap"
+    with open_reader(rig_log) as reader:
+        topics = [t for t in reader.topics if t.startswith(LEFT) or t == "/camlog/scenario"]
+    assert main(["convert", str(rig_log), str(fox), "--profile", "foxglove",
+                 "--topics", *topics]) == 0
+    with open_reader(fox) as reader:
+        assert reader.topics[f"{LEFT}/image_raw"].msgtype == "foxglove.RawImage"
+        assert reader.topics[f"{LEFT}/camera_info"].msgtype == "foxglove.CameraCalibration"
+    folder = calibrate(fox, out_dir / "fox", "--camera", LEFT)
+    ros = load_calibration(mono / "ost.yaml").camera_info
+    fox_info = load_calibration(folder / "ost.yaml").camera_info
+    assert fox_info.distortion_model == ros.distortion_model
+    for name in ("k", "d", "r", "p"):  # equal up to floating-point summation order
+        np.testing.assert_allclose(getattr(fox_info, name), getattr(ros, name), rtol=1e-9,
+                                   atol=1e-9)
+
+
 def test_yaml_matches_the_summary(mono: Path) -> None:
     info = load_calibration(mono / "ost.yaml").camera_info
     p = camera_summary(mono, LEFT)["parameters"]
@@ -268,7 +289,7 @@ def distinct_stamps(log: Path, topic: str) -> tuple[list[int], int]:
     """Image stamps, and how many images differ from the one before (a held board repeats)."""
     stamps, distinct, previous = [], 0, None
     with open_reader(log) as reader:
-        for record in reader.images([topic]):
+        for record in reader.frames([topic]):
             stamps.append(record.message.stamp_ns)
             if previous is None or not np.array_equal(previous, record.message.pixels):
                 distinct += 1

@@ -14,7 +14,7 @@ from camlog.cli import main
 from replay import CameraInfo, CompressedImage, Image, PointStamped, PoseStamped, open_reader
 from replay.calibration_yaml import save_calibration
 from replay.camera import CameraModel
-from replay.codec import decode_compressed, encode_compressed
+from replay.frames import decode_frame, decompress, encode_compressed
 from replay.geometry import rotation_from_quat_xyzw
 from replay.topics import PROCESSED
 from tests.outputs import temp_outputs
@@ -195,7 +195,7 @@ def test_compressed_input_and_output(red_block: Path, tmp_path: Path) -> None:
     with open_writer(log) as writer:
         for image in read(red_block, IMAGE)[IMAGE]:
             assert isinstance(image, Image)
-            writer.write(f"{IMAGE}/compressed", encode_compressed(image, "png"))
+            writer.write(f"{IMAGE}/compressed", encode_compressed(decode_frame(image), "png"))
     out = tmp_path / "out.mcap"
     assert main(["process", str(log), "--topic", f"{IMAGE}/compressed", "--red-pixels",
                  "--edges", "--compress", "png", "-o", str(out)]) == 0
@@ -209,7 +209,7 @@ def test_compressed_input_and_output(red_block: Path, tmp_path: Path) -> None:
         assert len(mine) == len(theirs) == 3
         for compressed, image in zip(mine, theirs, strict=True):
             assert isinstance(compressed, CompressedImage) and "png" in compressed.format
-            assert decode_compressed(compressed) == image  # png is lossless
+            assert decompress(compressed, decode_frame(compressed)) == image  # png is lossless
     assert len(got[f"{LEFT}/red_centroid"]) == 3
 
 
@@ -239,7 +239,7 @@ def test_rectify_with_a_calibration_file(red_block: Path, tmp_path: Path) -> Non
     rectifier = Rectifier(camera_info=calibrated)
     for rect, image in zip(got[f"{LEFT}/image_rect"], got[IMAGE], strict=True):
         assert isinstance(rect, Image) and isinstance(image, Image)
-        (_, expected), = rectifier(image)
+        (_, expected), = rectifier(decode_frame(image))
         assert rect == expected and not np.array_equal(rect.pixels, image.pixels)
 
 
@@ -276,12 +276,12 @@ def test_non_image_topic(red_block: Path, tmp_path: Path,
 
 def test_unsupported_encoding(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     from replay import RawMessage, open_writer
-    from replay.codec import ros2_typestore
+    from replay.wire import ros2_typestore
 
     types = ros2_typestore().types
     header = types["std_msgs/msg/Header"](
         stamp=types["builtin_interfaces/msg/Time"](sec=1, nanosec=0), frame_id="cam")
-    msg = types["sensor_msgs/msg/Image"](header=header, height=2, width=2, encoding="yuv422",
+    msg = types["sensor_msgs/msg/Image"](header=header, height=2, width=2, encoding="yuv411",
                                          is_bigendian=0, step=4, data=np.zeros(8, np.uint8))
     data = bytes(ros2_typestore().serialize_cdr(msg, "sensor_msgs/msg/Image"))
     log = tmp_path / "yuv.mcap"
@@ -289,7 +289,7 @@ def test_unsupported_encoding(tmp_path: Path, capsys: pytest.CaptureFixture[str]
         writer.write_raw(RawMessage("/cam/image_raw", "sensor_msgs/msg/Image", 1, data, "cdr"))
     out = tmp_path / "out.mcap"
     code = main(["process", str(log), "--topic", "/cam/image_raw", "--edges", "-o", str(out)])
-    assert_failed_cleanly(capsys, out, code, "yuv422", "/cam/image_raw", str(log))
+    assert_failed_cleanly(capsys, out, code, "yuv411", "/cam/image_raw", str(log))
 
 
 def test_empty_log(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

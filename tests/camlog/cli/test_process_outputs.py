@@ -20,6 +20,7 @@ from camlog.cli import main
 from processors.registry import make_processor
 from replay import Image, open_reader
 from replay.export import view_logs
+from replay.frames import decode_frame
 from replay.topics import PROCESSED
 from tests.rrd import load_rrd
 
@@ -53,7 +54,7 @@ def test_both_cameras_into_one_log(red_log: Path, tmp_path: Path) -> None:
     for ns in (LEFT, RIGHT):
         image = images[f"{ns}/image_raw"]
         assert isinstance(image, Image)
-        ((_, expected),) = edges(image)
+        ((_, expected),) = edges(decode_frame(image))
         assert isinstance(expected, Image)
         last = got[f"{ns}/edges"][-1]
         np.testing.assert_array_equal(np.frombuffer(bytes(last.data), np.uint8)  # type: ignore[attr-defined]

@@ -183,7 +183,7 @@ def test_missing_camera_lists_the_topics(unsynced: Path, tmp_path: Path,
 
 def test_compressed_cameras_without_camera_info(tmp_path: Path) -> None:
     from replay import CompressedImage, open_writer
-    from replay.codec import decode_compressed, encode_compressed
+    from replay.frames import decode_frame, encode_compressed
 
     ms = 1_000_000
     log = tmp_path / "compressed.mcap"
@@ -192,8 +192,8 @@ def test_compressed_cameras_without_camera_info(tmp_path: Path) -> None:
         for side, times in (("a", left_ms), ("b", right_ms)):
             for i, t in enumerate(times):
                 pixels = np.full((8, 8), 10 * i + (side == "b"), np.uint8)
-                writer.write(f"/{side}/image_raw/compressed",
-                             encode_compressed(Image(t * ms, side, "mono8", pixels), "png"))
+                frame = decode_frame(Image(t * ms, side, "mono8", pixels))
+                writer.write(f"/{side}/image_raw/compressed", encode_compressed(frame, "png"))
     out = tmp_path / "out.mcap"
     assert main(["resync", str(log), "-o", str(out), "--left", "/a", "--right", "/b/"]) == 0
     got = by_topic(out)
@@ -207,5 +207,5 @@ def test_compressed_cameras_without_camera_info(tmp_path: Path) -> None:
         assert [m.stamp_ns for m in images if isinstance(m, CompressedImage)] == [
             10 * ms, 43 * ms, 76 * ms]
         # of the two left frames stamped 33 ms the first one (value 10) is paired
-        assert [int(decode_compressed(m).pixels[0, 0]) for m in images
+        assert [int(decode_frame(m).pixels[0, 0]) for m in images
                 if isinstance(m, CompressedImage)] == values

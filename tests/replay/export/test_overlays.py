@@ -6,7 +6,6 @@ import numpy as np
 
 from processors.red_pixels import draw_marker
 from replay.camera import CameraModel
-from replay.codec import serialize
 from replay.export.overlays import (
     CENTROID_MARKER,
     EDGE,
@@ -17,6 +16,7 @@ from replay.export.overlays import (
     stamp_free_key,
 )
 from replay.geometry import quat_xyzw_from_rotation, rotation_about
+from replay.wire import serialize
 
 
 def test_mask_classes_of_the_red_pixels_output() -> None:

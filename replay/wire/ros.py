@@ -1,23 +1,22 @@
-"""Conversion between typed records and serialized ROS messages.
+"""ROS serializations of typed records: ROS 2 CDR and ROS1, through rosbags' typestore.
 
-Serialization itself (CDR for ROS 2, ROS1 wire format) is done by rosbags' typestore; this
-module only maps fields between rosbags' message classes and :mod:`replay.messages`.
+Serialization itself is done by rosbags; this module only maps fields between rosbags'
+message classes and :mod:`replay.messages`. An image's bytes are cut into an array with the
+layout its encoding has in :data:`replay.frames.DECODERS`.
 """
 
 from __future__ import annotations
 
 from functools import cache
-from typing import Any, Literal
+from typing import Any
 
-import cv2
 import numpy as np
 from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
-from .errors import EncodingError, ReplayError
-from .messages import (
-    IMAGE_ENCODINGS,
+from ..errors import ReplayError
+from ..messages import (
     MSGTYPES,
     CameraInfo,
     CompressedImage,
@@ -27,6 +26,7 @@ from .messages import (
     PoseStamped,
     Text,
 )
+from .layout import image_from_buffer
 
 #: serialization of raw bytes in a log
 CDR = "cdr"
@@ -43,6 +43,12 @@ def ros2_typestore() -> Typestore:
 def ros1_typestore() -> Typestore:
     """Typestore used for ROS1 message definitions (Header carries ``seq``)."""
     return get_typestore(Stores.ROS1_NOETIC)
+
+
+def normalize_msgtype(name: str) -> str:
+    """``sensor_msgs/Image`` (ROS1 spelling) -> ``sensor_msgs/msg/Image``."""
+    parts = name.split("/")
+    return f"{parts[0]}/msg/{parts[1]}" if len(parts) == 2 else name
 
 
 def msgtype_of(message: Message) -> str:
@@ -136,25 +142,10 @@ def serialize(message: Message, serialization: str = CDR) -> bytes:
 
 
 def _image_from_ros(msg: Any) -> Image:
-    encoding = str(msg.encoding)
-    if encoding not in IMAGE_ENCODINGS:
-        raise EncodingError(f"unsupported image encoding {encoding!r}")
-    dtype, channels = IMAGE_ENCODINGS[encoding]
-    height, width, step = int(msg.height), int(msg.width), int(msg.step)
-    row = width * channels * dtype.itemsize
-    data = np.asarray(msg.data, dtype=np.uint8)
-    if step < row or data.size < step * height:
-        raise EncodingError(
-            f"image buffer of {data.size} bytes too small for {width}x{height} {encoding} "
-            f"(step {step})"
-        )
-    rows = data[: step * height].reshape(height, step)[:, :row]
-    order: Literal["<", ">"] = ">" if msg.is_bigendian else "<"
-    pixels = np.ascontiguousarray(rows).view(dtype.newbyteorder(order))
-    if order == ">":
-        pixels = pixels.astype(dtype)
-    shape = (height, width) if channels == 1 else (height, width, channels)
-    return Image(_stamp_ns(msg.header), str(msg.header.frame_id), encoding, pixels.reshape(shape))
+    return image_from_buffer(
+        _stamp_ns(msg.header), str(msg.header.frame_id), width=int(msg.width),
+        height=int(msg.height), encoding=str(msg.encoding), step=int(msg.step),
+        data=np.asarray(msg.data, dtype=np.uint8), bigendian=bool(msg.is_bigendian))
 
 
 def from_ros(msg: Any) -> Message:
@@ -205,7 +196,8 @@ def from_ros(msg: Any) -> Message:
     raise ReplayError(f"camlog has no typed record for {msgtype}")
 
 
-DECODABLE = frozenset(MSGTYPES.values())
+#: ROS types camlog has records for
+DECODABLE = frozenset(t for t in MSGTYPES.values() if "/msg/" in t)
 
 
 def deserialize(
@@ -232,90 +224,3 @@ def convert_serialization(data: bytes | memoryview, msgtype: str, src: str, dst:
     if src == ROS1:
         return bytes(ts.ros1_to_cdr(data, msgtype))
     return bytes(ts.cdr_to_ros1(data, msgtype))
-
-
-# --- compressed images -------------------------------------------------------------------
-
-def decode_compressed(message: CompressedImage) -> Image:
-    """Decode a JPEG/PNG CompressedImage to an Image (rgb8, mono8 or mono16)."""
-    buf = np.frombuffer(message.data, dtype=np.uint8)
-    array = cv2.imdecode(buf, cv2.IMREAD_UNCHANGED) if buf.size else None
-    if array is None:
-        raise EncodingError(f"cannot decode compressed image (format {message.format!r})")
-    if array.ndim == 2:
-        encoding = "mono16" if array.dtype == np.uint16 else "mono8"
-    elif array.shape[2] == 4:
-        array, encoding = cv2.cvtColor(array, cv2.COLOR_BGRA2RGBA), "rgba8"
-    else:
-        array, encoding = cv2.cvtColor(array, cv2.COLOR_BGR2RGB), "rgb8"
-    if array.dtype != np.uint8 and encoding != "mono16":
-        raise EncodingError(f"unsupported compressed image depth {array.dtype}")
-    return Image(message.stamp_ns, message.frame_id, encoding, array)
-
-
-def encode_compressed(
-    image: Image, fmt: str = "jpeg", *, jpeg_quality: int = 90
-) -> CompressedImage:
-    """Encode an Image as JPEG or PNG (the ``format`` string follows image_transport)."""
-    if fmt not in ("jpeg", "png"):
-        raise EncodingError(f"unsupported compression {fmt!r} (use jpeg or png)")
-    array = to_bgr_or_mono(image)
-    if fmt == "jpeg" and array.dtype != np.uint8:
-        raise EncodingError(f"JPEG cannot hold {image.encoding} images; use png")
-    params = [cv2.IMWRITE_JPEG_QUALITY, jpeg_quality] if fmt == "jpeg" else []
-    ok, buf = cv2.imencode(".jpg" if fmt == "jpeg" else ".png", array, params)
-    if not ok:
-        raise EncodingError(f"cannot encode {image.encoding} image as {fmt}")
-    kind = "bgr8" if array.ndim == 3 else image.encoding
-    return CompressedImage(image.stamp_ns, image.frame_id, f"{kind}; {fmt} compressed {kind}",
-                           buf.tobytes())
-
-
-def to_bgr_or_mono(image: Image) -> np.ndarray:
-    """Pixels as OpenCV expects them: BGR for colour, single channel for mono."""
-    px = image.pixels
-    match image.encoding:
-        case "rgb8":
-            return cv2.cvtColor(px, cv2.COLOR_RGB2BGR)
-        case "rgba8":
-            return cv2.cvtColor(px, cv2.COLOR_RGBA2BGR)
-        case "bgra8":
-            return cv2.cvtColor(px, cv2.COLOR_BGRA2BGR)
-    return px
-
-
-def to_rgb8(image: Image) -> np.ndarray:
-    """``(H, W, 3)`` uint8 RGB view of any supported encoding (16-bit scaled down)."""
-    px = image.pixels
-    match image.encoding:
-        case "rgb8" | "8UC3":
-            return px
-        case "bgr8":
-            return cv2.cvtColor(px, cv2.COLOR_BGR2RGB)
-        case "rgba8":
-            return cv2.cvtColor(px, cv2.COLOR_RGBA2RGB)
-        case "bgra8":
-            return cv2.cvtColor(px, cv2.COLOR_BGRA2RGB)
-        case "mono8" | "8UC1":
-            return cv2.cvtColor(px, cv2.COLOR_GRAY2RGB)
-        case "mono16" | "16UC1":
-            return cv2.cvtColor((px >> 8).astype(np.uint8), cv2.COLOR_GRAY2RGB)
-    raise EncodingError(f"unsupported image encoding {image.encoding!r}")
-
-
-def to_mono8(image: Image) -> np.ndarray:
-    """``(H, W)`` uint8 grayscale of any supported encoding."""
-    px = image.pixels
-    match image.encoding:
-        case "mono8" | "8UC1":
-            return px
-        case "mono16" | "16UC1":
-            mono: np.ndarray = (px >> 8).astype(np.uint8)
-            return mono
-        case "bgr8":
-            return cv2.cvtColor(px, cv2.COLOR_BGR2GRAY)
-        case "bgra8":
-            return cv2.cvtColor(px, cv2.COLOR_BGRA2GRAY)
-        case "rgba8":
-            return cv2.cvtColor(px, cv2.COLOR_RGBA2GRAY)
-    return cv2.cvtColor(to_rgb8(image), cv2.COLOR_RGB2GRAY)

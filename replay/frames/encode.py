@@ -1,0 +1,119 @@
+"""The one table of frame encoders: :class:`Frame` -> an Image or CompressedImage message.
+
+Every raw encoding whose table entry converts nothing (``Raw.convert`` is None) can be
+written: the frame is brought to the entry's colour order and bit depth. Compressed formats
+are one function each.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from functools import partial
+from typing import Any
+
+import cv2
+import numpy as np
+
+from ..errors import EncodingError
+from ..messages import CompressedImage, Image
+from .compressed import encode_compressed_depth, encode_still, original_encoding
+from .decode import DECODERS, Raw
+from .frame import Color, Frame, Pixels
+
+__all__ = ["ENCODERS", "decompress", "encode_compressed", "encode_image", "natural_encoding"]
+
+#: (source colour, target colour) -> OpenCV conversion
+_COLOR_CODES: dict[tuple[Color, Color], int] = {
+    (Color.RGB, Color.BGR): cv2.COLOR_RGB2BGR, (Color.BGR, Color.RGB): cv2.COLOR_BGR2RGB,
+    (Color.RGB, Color.RGBA): cv2.COLOR_RGB2RGBA, (Color.RGB, Color.BGRA): cv2.COLOR_RGB2BGRA,
+    (Color.BGR, Color.RGBA): cv2.COLOR_BGR2RGBA, (Color.BGR, Color.BGRA): cv2.COLOR_BGR2BGRA,
+    (Color.RGBA, Color.RGB): cv2.COLOR_RGBA2RGB, (Color.RGBA, Color.BGR): cv2.COLOR_RGBA2BGR,
+    (Color.RGBA, Color.BGRA): cv2.COLOR_RGBA2BGRA, (Color.BGRA, Color.RGB): cv2.COLOR_BGRA2RGB,
+    (Color.BGRA, Color.BGR): cv2.COLOR_BGRA2BGR, (Color.BGRA, Color.RGBA): cv2.COLOR_BGRA2RGBA,
+    (Color.RGB, Color.MONO): cv2.COLOR_RGB2GRAY, (Color.BGR, Color.MONO): cv2.COLOR_BGR2GRAY,
+    (Color.RGBA, Color.MONO): cv2.COLOR_RGBA2GRAY, (Color.BGRA, Color.MONO): cv2.COLOR_BGRA2GRAY,
+    (Color.MONO, Color.RGB): cv2.COLOR_GRAY2RGB, (Color.MONO, Color.BGR): cv2.COLOR_GRAY2BGR,
+    (Color.MONO, Color.RGBA): cv2.COLOR_GRAY2RGBA, (Color.MONO, Color.BGRA): cv2.COLOR_GRAY2BGRA,
+}
+
+
+def _pixels_as(frame: Frame, raw: Raw) -> Pixels:
+    """The frame's pixels in ``raw``'s colour order and dtype."""
+    px = frame.pixels
+    if px.dtype != raw.dtype:
+        if raw.dtype == np.uint8:
+            px = frame.to8()
+        elif raw.dtype == np.uint16 and px.dtype == np.uint8:
+            px = px.astype(np.uint16) * 257  # 0..255 -> 0..65535
+        else:
+            raise EncodingError(f"cannot write {px.dtype} {frame.color} pixels as {raw.dtype}")
+    source = Color.MONO if frame.color is Color.DEPTH else frame.color
+    target = Color.MONO if raw.color is Color.DEPTH else raw.color
+    if source is target:
+        return px
+    return np.asarray(cv2.cvtColor(px, _COLOR_CODES[source, target]))
+
+
+def _raw_encoder(encoding: str, raw: Raw) -> Callable[[Frame], Image]:
+    def encode(frame: Frame) -> Image:
+        return Image(frame.stamp_ns, frame.frame_id, encoding, _pixels_as(frame, raw))
+    return encode
+
+
+#: (typed record, encoding or format) -> encoder (compressed ones take keyword options)
+ENCODERS: dict[tuple[type, str], Callable[..., Any]] = {
+    **{(Image, encoding): _raw_encoder(encoding, raw)
+       for (kind, encoding), raw in DECODERS.items()
+       if isinstance(raw, Raw) and raw.convert is None},
+    (CompressedImage, "jpeg"): partial(encode_still, fmt="jpeg"),
+    (CompressedImage, "png"): partial(encode_still, fmt="png"),
+    (CompressedImage, "compressedDepth"): encode_compressed_depth,
+}
+
+
+def natural_encoding(frame: Frame) -> str:
+    """The raw encoding that holds the frame as it is: its source encoding when that one
+    does, else the first table entry with its colour order and dtype."""
+    candidates = [frame.source] + [e for (t, e) in DECODERS if t is Image]
+    for encoding in candidates:
+        raw = DECODERS.get((Image, encoding))
+        if isinstance(raw, Raw) and raw.convert is None and raw.color is frame.color \
+                and raw.dtype == frame.pixels.dtype and raw.depth_unit_m == frame.depth_unit_m:
+            return encoding
+    raise EncodingError(f"no raw encoding holds {frame.pixels.dtype} {frame.color} frames")
+
+
+def encode_image(frame: Frame, encoding: str | None = None) -> Image:
+    """An Image message of the frame in ``encoding`` (default: :func:`natural_encoding`,
+    which keeps the pixels without a copy)."""
+    if encoding is None:
+        return Image(frame.stamp_ns, frame.frame_id, natural_encoding(frame), frame.pixels)
+    encoder = ENCODERS.get((Image, encoding))
+    if encoder is None:
+        writable = sorted(e for t, e in ENCODERS if t is Image)
+        raise EncodingError(f"cannot write images as {encoding!r} "
+                            f"(writable: {', '.join(writable)})")
+    image: Image = encoder(frame)
+    return image
+
+
+def encode_compressed(frame: Frame, fmt: str = "jpeg", *, jpeg_quality: int = 90
+                      ) -> CompressedImage:
+    """A CompressedImage of the frame in ``fmt`` (``jpeg`` or ``png``)."""
+    if (CompressedImage, fmt) not in ENCODERS:
+        formats = sorted(f for t, f in ENCODERS if t is CompressedImage)
+        raise EncodingError(f"unsupported compression {fmt!r} (use {' or '.join(formats)})")
+    original = frame.source if (Image, frame.source) in DECODERS else ""
+    message: CompressedImage = ENCODERS[CompressedImage, fmt](
+        frame, original=original, jpeg_quality=jpeg_quality)
+    return message
+
+
+def decompress(message: CompressedImage, frame: Frame) -> Image:
+    """The raw image a compressed message's frame came from: in the original encoding its
+    format string names when that one can be written (image_transport's decompression),
+    else in the frame's natural encoding."""
+    original = original_encoding(message.format)
+    if (Image, original) in ENCODERS:
+        return encode_image(frame, original)
+    return encode_image(frame)

@@ -1,0 +1,108 @@
+"""Raw image encodings (``sensor_msgs/Image``, ``foxglove.RawImage``): the layout of each
+buffer and the frame it makes. A new raw encoding is one :data:`RAW_ENCODINGS` entry.
+
+The entries say how ROS's image_encodings.hpp and cv_bridge read the encodings: 3- and
+4-channel 8UC are BGR(A), 16UC1 is depth in millimetres and 32FC1 depth in metres (REP 118).
+This module knows no message type (the typed records check their pixels against it).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import cv2
+import numpy as np
+
+from .frame import Color, Frame, Pixels
+
+__all__ = ["RAW_ENCODINGS", "Raw", "RawImage"]
+
+
+class RawImage(Protocol):
+    """What a raw image message offers a decoder (``replay.messages.Image``)."""
+
+    @property
+    def stamp_ns(self) -> int:
+        """Header stamp."""
+        ...
+
+    @property
+    def frame_id(self) -> str:
+        """Header frame."""
+        ...
+
+    @property
+    def encoding(self) -> str:
+        """Raw encoding name."""
+        ...
+
+    @property
+    def pixels(self) -> Pixels:
+        """The buffer in the encoding's layout."""
+        ...
+
+
+U8, U16, I16, F32 = (np.dtype(t) for t in (np.uint8, np.uint16, np.int16, np.float32))
+
+
+@dataclass(frozen=True, slots=True)
+class Raw:
+    """One raw image encoding: ``channels`` values of ``dtype`` per pixel, decoded to a
+    ``color`` frame by ``convert`` (None: the pixels as they are)."""
+
+    dtype: np.dtype[Any]
+    channels: int
+    color: Color
+    convert: Callable[[Pixels], Pixels] | None = None
+    depth_unit_m: float | None = None
+
+    def __call__(self, image: RawImage) -> Frame:
+        """The frame of one image message of this encoding."""
+        pixels = image.pixels if self.convert is None else self.convert(image.pixels)
+        return Frame(image.stamp_ns, image.frame_id, pixels, self.color, image.encoding,
+                     self.depth_unit_m)
+
+
+def _cv(code: int) -> Callable[[Pixels], Pixels]:
+    """An OpenCV colour conversion as a ``convert`` step."""
+    def convert(pixels: Pixels) -> Pixels:
+        return np.asarray(cv2.cvtColor(pixels, code))
+    return convert
+
+
+def _first_channel(pixels: Pixels) -> Pixels:
+    return np.ascontiguousarray(pixels[:, :, 0])
+
+
+#: ROS bayer pattern (the colours of the top-left 2x2 block) -> OpenCV demosaicing to RGB
+_BAYER = {"rggb": cv2.COLOR_BayerRGGB2RGB, "bggr": cv2.COLOR_BayerBGGR2RGB,
+          "gbrg": cv2.COLOR_BayerGBRG2RGB, "grbg": cv2.COLOR_BayerGRBG2RGB}
+
+#: raw encoding name -> its entry
+RAW_ENCODINGS: dict[str, Raw] = {
+    "rgb8": Raw(U8, 3, Color.RGB),
+    "bgr8": Raw(U8, 3, Color.BGR),
+    "rgba8": Raw(U8, 4, Color.RGBA),
+    "bgra8": Raw(U8, 4, Color.BGRA),
+    "rgb16": Raw(U16, 3, Color.RGB),
+    "bgr16": Raw(U16, 3, Color.BGR),
+    "rgba16": Raw(U16, 4, Color.RGBA),
+    "bgra16": Raw(U16, 4, Color.BGRA),
+    "mono8": Raw(U8, 1, Color.MONO),
+    "mono16": Raw(U16, 1, Color.MONO),
+    "8UC1": Raw(U8, 1, Color.MONO),
+    "8UC2": Raw(U8, 2, Color.MONO, _first_channel),
+    "8UC3": Raw(U8, 3, Color.BGR),
+    "8UC4": Raw(U8, 4, Color.BGRA),
+    "16UC1": Raw(U16, 1, Color.DEPTH, depth_unit_m=0.001),
+    "16SC1": Raw(I16, 1, Color.MONO),
+    "32FC1": Raw(F32, 1, Color.DEPTH, depth_unit_m=1.0),
+    **{f"bayer_{pattern}{bits}": Raw(dtype, 1, Color.RGB, _cv(code))
+       for pattern, code in _BAYER.items() for bits, dtype in ((8, U8), (16, U16))},
+    "yuv422": Raw(U8, 2, Color.RGB, _cv(cv2.COLOR_YUV2RGB_UYVY)),
+    "uyvy": Raw(U8, 2, Color.RGB, _cv(cv2.COLOR_YUV2RGB_UYVY)),
+    "yuv422_yuy2": Raw(U8, 2, Color.RGB, _cv(cv2.COLOR_YUV2RGB_YUY2)),
+    "yuyv": Raw(U8, 2, Color.RGB, _cv(cv2.COLOR_YUV2RGB_YUY2)),
+}
