@@ -260,10 +260,30 @@ def print_results(results: list[Result]) -> None:
         for r in results) + ")")
 
 
+def compare_peers(tmp: Path, duration_s: float, runs: int) -> None:
+    """camlog and each peer on the same inputs, side by side."""
+    started = time.perf_counter()
+    inputs = make_inputs(tmp, duration_s)
+    floor = run_once(["true"]).peak_mb
+    print(f"inputs made in {time.perf_counter() - started:.0f} s; {os.cpu_count()} cores, "
+          f"load average {os.getloadavg()[0]:.1f}; peak memory reads no lower than "
+          f"{floor:.0f} MB here (this process's size at the child's start)")
+    results = [measure(case, runs) for case in cases(inputs, tmp)]
+    print(f"median of {runs} runs each, load average now {os.getloadavg()[0]:.1f}")
+    print_results(results)
+    for r in results:
+        if r.peer is not None and r.time_ratio is not None:
+            emit(f"peers: {r.case.name}", baseline=r.case.peer_name,
+                 baseline_value=r.peer.wall_s, measured=f"camlog ({r.camlog.peak_mb:.0f} MB)",
+                 measured_value=r.camlog.wall_s, unit="s", ratio=r.time_ratio,
+                 target=r.case.target)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=4.0, help="stereo log length in s (4)")
-    parser.add_argument("--runs", type=int, default=5, help="measured runs per command (5)")
+    parser.add_argument("--runs", type=int, default=5,
+                        help="measured runs per command (5; 0: only the cost growth)")
     parser.add_argument("--growth", default="", metavar="S,S,...",
                         help="also measure cost growth on logs of these lengths in s")
     parser.add_argument("--growth-runs", type=int, default=3, help="runs per growth command")
@@ -272,21 +292,8 @@ def main() -> None:
     with tempfile.TemporaryDirectory(prefix="camlog-peers-") as tmp_name:
         tmp = args.keep or Path(tmp_name)
         tmp.mkdir(parents=True, exist_ok=True)
-        started = time.perf_counter()
-        inputs = make_inputs(tmp, args.duration)
-        floor = run_once(["true"]).peak_mb
-        print(f"inputs made in {time.perf_counter() - started:.0f} s; {os.cpu_count()} cores, "
-              f"load average {os.getloadavg()[0]:.1f}; peak memory reads no lower than "
-              f"{floor:.0f} MB here (this process's size at the child's start)")
-        results = [measure(case, args.runs) for case in cases(inputs, tmp)]
-        print(f"median of {args.runs} runs each, load average now {os.getloadavg()[0]:.1f}")
-        print_results(results)
-        for r in results:
-            if r.peer is not None and r.time_ratio is not None:
-                emit(f"peers: {r.case.name}", baseline=r.case.peer_name,
-                     baseline_value=r.peer.wall_s, measured=f"camlog ({r.camlog.peak_mb:.0f} MB)",
-                     measured_value=r.camlog.wall_s, unit="s", ratio=r.time_ratio,
-                     target=r.case.target)
+        if args.runs > 0:
+            compare_peers(tmp, args.duration, args.runs)
         if args.growth:
             print_growth(tmp, [int(s) for s in args.growth.split(",")], args.growth_runs)
 
@@ -300,17 +307,17 @@ def print_growth(tmp: Path, seconds: list[int], runs: int) -> None:
         for path in tmp.glob(f"growth_{length_s}s*"):
             if length_s != 4:
                 clear([path])
-    print(f"cost growth (320x240 mono8 stereo, median of {runs}; s and MB; peer in brackets; "
-          f"load average now {os.getloadavg()[0]:.1f})")
-    print(f"{'command':26}" + "".join(f"{f'{s} s log':>34}" for s in seconds))
+    print(f"cost growth (320x240 mono8 stereo, median of {runs}; wall s, CPU s, peak MB; peer "
+          f"in brackets; load average now {os.getloadavg()[0]:.1f})")
+    print(f"{'command':26}" + "".join(f"{f'{s} s log':>50}" for s in seconds))
     for name, by_length in rows.items():
         cells = []
         for s in seconds:
             r = by_length[s]
-            cell = f"{r.camlog.wall_s:.2f} s {r.camlog.peak_mb:.0f} MB"
+            cell = f"{r.camlog.wall_s:.2f} s {r.camlog.cpu_s:.2f} s {r.camlog.peak_mb:.0f} MB"
             if r.peer is not None:
-                cell += f" ({r.peer.wall_s:.2f} s {r.peer.peak_mb:.0f} MB)"
-            cells.append(f"{cell:>34}")
+                cell += f" ({r.peer.wall_s:.2f} s {r.peer.cpu_s:.2f} s {r.peer.peak_mb:.0f} MB)"
+            cells.append(f"{cell:>50}")
         print(f"{name:26}" + "".join(cells), flush=True)
 
 
