@@ -82,13 +82,14 @@ def test_malformed_scenario_says_what_and_where(tmp_path: Path, text: str, needl
 
 
 def test_residuals_record_checks_its_shapes() -> None:
-    view = ViewResiduals(5, "f", 0.1, np.array([[1.0, 2], [3, 4]]), np.array([[0.1, 0], [0, 0.2]]))
+    view = ViewResiduals(5, "f", 0.1, np.array([[1.0, 2], [3, 4]]), np.array([[0.1, 0], [0, 0.2]]),
+                         outliers=[1])
     again = ViewResiduals.from_message(view.to_message())
-    assert again.stamp_ns == 5 and again.corners_px.shape == (2, 2)
+    assert again.stamp_ns == 5 and again.corners_px.shape == (2, 2) and again.outliers == [1]
     np.testing.assert_array_equal(again.residuals_px, view.residuals_px)
     assert json.loads(view.to_message().data) == {
         "stamp_ns": 5, "frame_id": "f", "rms_px": 0.1, "corners_px": [[1, 2], [3, 4]],
-        "residuals_px": [[0.1, 0], [0, 0.2]]}
+        "residuals_px": [[0.1, 0], [0, 0.2]], "outliers": [1]}
     with pytest.raises(RecordError, match="1 corners but 2 residuals"):
         ViewResiduals.from_json_text(json.dumps({
             "stamp_ns": 5, "frame_id": "f", "rms_px": 0.1, "corners_px": [[1, 2]],
