@@ -17,7 +17,11 @@ from .spec import IMAGE, POINT, Configured, Option, OptionKind, OutputSpec, Proc
 
 __all__ = ["PROCESSORS", "SPECS", "configure", "make_processor", "spec_of"]
 
-_INT, _FLOAT, _CAMERA = OptionKind.INT, OptionKind.FLOAT, OptionKind.CAMERA_INFO
+_INT, _FLOAT, _TEXT = OptionKind.INT, OptionKind.FLOAT, OptionKind.TEXT
+
+#: a camera's calibration file, given with the processor's flag (``--rectify OST.YAML``)
+CALIBRATION = Option("camera_info", OptionKind.CAMERA_INFO, None, "calibration file",
+                     metavar="OST.YAML", required=True)
 
 SPECS: tuple[ProcessorSpec, ...] = (
     ProcessorSpec(
@@ -50,11 +54,30 @@ SPECS: tuple[ProcessorSpec, ...] = (
         name="rectify",
         summary="undistort and rectify with a camera_info_manager calibration (K, D, R, P)",
         implementation="processors.rectify:Rectifier",
-        options=(Option("camera_info", _CAMERA, None, "calibration file", metavar="OST.YAML",
-                        required=True),),
+        options=(CALIBRATION,),
         outputs=(OutputSpec("image_rect", IMAGE, Display.RECTIFIED, "rectified image",
                             "input encoding and size"),),
         primary="camera_info", title="rectify (image_proc)",
+    ),
+    ProcessorSpec(
+        name="undistort",
+        summary="remove lens distortion, keeping the camera matrix K (cv2.undistort's image; "
+                "for a stereo pair's rectification use --rectify)",
+        implementation="processors.undistort:Undistort",
+        options=(CALIBRATION,),
+        outputs=(OutputSpec("image_undistorted", IMAGE, Display.IMAGE, "undistorted image",
+                            "input encoding and size, camera matrix K"),),
+        primary="camera_info", title="undistort",
+    ),
+    ProcessorSpec(
+        name="resize",
+        summary="resize to WxH pixels or by a scale (area average when shrinking)",
+        implementation="processors.resize:Resize",
+        options=(Option("size", _TEXT, None, "WxH or a scale", metavar="WxH|SCALE",
+                        required=True, example="24x18"),),
+        outputs=(OutputSpec("image_resized", IMAGE, Display.IMAGE, "resized image",
+                            "input encoding"),),
+        primary="size", title="resize (image_proc)",
     ),
     ProcessorSpec(
         name="throttle",
