@@ -33,6 +33,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "play": ("replay a log in (scaled) real time to a viewer, an .rrd or a new log", "play"),
     "convert": ("convert a log between MCAP, rosbag2 and ROS1, filtered, images re-encoded",
                 "convert"),
+    "export": ("write the images of a topic as PNG/JPEG files named by stamp, or one MP4",
+               "export"),
     "import": ("turn a folder of image files (mono or left/right stereo) into a log",
                "import_images"),
     "golden": ("golden-log regression: check, update or re-record the committed golden logs",

@@ -17,14 +17,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "Stereo: --left NS --right NS; frames pair by identical stamps, or within "
         "--approximate SEC. Writes OUTDIR/{ost.yaml | left.yaml, right.yaml}, ost.txt, "
         "calibration.mcap (the log plus detections, residuals, calibrated camera_info and "
-        "rectified images), calibration.json, report.md and PNG figures."
+        "rectified images), calibration.json, report.md and PNG figures. "
+        "camera_calibration's spellings are accepted too: -s/--size, -q/--square, "
+        "-p/--pattern, -c/--camera_name, -k/--k-coefficients, --fix-principal-point, "
+        "--fix-aspect-ratio, --zero-tangent-dist, --max-chessboard-speed."
     )
     p.add_argument("log", metavar="LOG", type=Path, help="input log (never modified)")
-    p.add_argument("--size", required=True, metavar="COLSxROWS",
+    p.add_argument("-s", "--size", required=True, metavar="COLSxROWS",
                    help="board size in inner corners, e.g. 7x6")
-    p.add_argument("--square", required=True, type=float, metavar="M",
+    p.add_argument("-q", "--square", required=True, type=float, metavar="M",
                    help="square side in metres, e.g. 0.01")
-    p.add_argument("--pattern", default="chessboard", choices=PATTERNS,
+    p.add_argument("-p", "--pattern", default="chessboard", choices=PATTERNS,
                    help="calibration target (default chessboard)")
     p.add_argument("--camera", metavar="NS", help="mono camera namespace, e.g. /simple_camera "
                    "(default: the log's only camera)")
@@ -46,7 +49,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-k", "--k-coefficients", type=int, default=2, metavar="N",
                    help="radial coefficients to estimate: <= 3 plumb_bob, > 3 "
                         "rational_polynomial (default 2)")
-    p.add_argument("--camera-name", help="camera_name written in the YAML files")
+    p.add_argument("-c", "--camera-name", "--camera_name", dest="camera_name",
+                   help="camera_name written in the YAML files")
     p.add_argument("--max-chessboard-speed", type=float, metavar="PX",
                    help="reject views whose board moves more than PX pixels per frame")
     p.add_argument("--max-views", type=int, default=150, metavar="N",
