@@ -1,19 +1,21 @@
 """The quick-start demo: record → resync → calibrate → process → view, on built-ins.
 
-1. record ``stereo_unsynced`` (two independently stamped cameras over a moving board) and
-   ``red_block`` (the rig over a red block);
-2. resync the unsynchronised pair;
-3. calibrate the re-stamped stereo pair (intrinsics, baseline, rectification);
-4. process the red-block log: red pixels and Canny edges on the left camera;
-5. view everything in one rerun recording.
+1. record ``stereo_unsynced`` (two independently stamped cameras over a moving board),
+   resync the unsynchronised pair and calibrate it (intrinsics, baseline, rectification);
+2. meanwhile, in a second process, record ``red_block`` (the rig over a red block) and run
+   red pixels and Canny edges on its left camera;
+3. view everything in one rerun recording.
 
-Every output goes under one folder, which the demo owns: re-running replaces its files.
+The two chains share nothing until the view, so they run concurrently. Every output goes
+under one folder, which the demo owns: re-running replaces its files.
 """
 
 from __future__ import annotations
 
+import multiprocessing
 import time
 from collections.abc import Callable
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -37,29 +39,36 @@ class DemoResult:
     wall_s: float = 0.0
 
 
-def run_demo(out_dir: Path, *, duration_s: float = 20.0, seed: int = 0,
-             progress: bool | None = None,
-             say: Callable[[str], None] = print) -> DemoResult:
-    """Run the whole demo into ``out_dir``; ``say`` reports each step as it finishes."""
-    started = time.perf_counter()
-    out_dir.mkdir(parents=True, exist_ok=True)
-    result = DemoResult()
+def size_of(path: Path) -> str:
+    """``12.3 MB``: a file's size, or the total of a folder's files."""
+    files = [path] if path.is_file() else [p for p in path.rglob("*") if p.is_file()]
+    return f"{sum(p.stat().st_size for p in files) / 1e6:.1f} MB"
 
-    def done(step: str, path: Path, note: str) -> None:
-        result.outputs.append((step, path, note))
-        say(f"{step:10} {path}  ({note})")
 
+def red_block_chain(out_dir: Path, seed: int) -> list[tuple[str, Path, str]]:
+    """Record red_block and run red pixels + edges on its left camera (run in a second
+    process while the stereo chain runs); returns the steps' (step, path, note)."""
+    red = out_dir / "red_block.mcap"
+    rec = record(load_scenario("red_block", {"seed": seed}), red, overwrite=True,
+                 progress=False)
+    processed = out_dir / "red_block_processed.mcap"
+    proc = process_log(red, processed, topics=["/stereo_camera/left/image_raw"],
+                       processors=[configure("red_pixels"), configure("edges")],
+                       overwrite=True)
+    return [("record", red, f"{sum(rec.frames.values())} frames, {rec.wall_s:.1f} s"),
+            ("process", processed, f"red pixels + edges on {proc.frames_processed} frames, "
+                                   f"{proc.wall_s:.1f} s")]
+
+
+def _stereo_chain(out_dir: Path, duration_s: float, seed: int, progress: bool | None,
+                  done: Callable[[str, Path, str], None]) -> Path:
+    """Record stereo_unsynced, resync and calibrate it; returns the calibration folder."""
     unsynced = out_dir / "stereo_unsynced.mcap"
     rec = record(load_scenario("stereo_unsynced", {"duration_s": duration_s, "seed": seed}),
                  unsynced, overwrite=True, progress=progress)
     drops = sum(len(d) for d in rec.dropped.values())
     done("record", unsynced, f"{sum(rec.frames.values())} frames, {drops} dropped, "
          f"{rec.wall_s:.1f} s")
-
-    red = out_dir / "red_block.mcap"
-    rec = record(load_scenario("red_block", {"seed": seed}), red, overwrite=True,
-                 progress=progress)
-    done("record", red, f"{sum(rec.frames.values())} frames")
 
     synced = out_dir / "stereo_synced.mcap"
     sync = resync_log(unsynced, synced, overwrite=True)
@@ -78,12 +87,29 @@ def run_demo(out_dir: Path, *, duration_s: float = 20.0, seed: int = 0,
          f"fx {fx.value:.2f} ± {fx.std:.2f} px{truth}, baseline "
          f"{stereo.baseline_m * 1000:.3f} mm, epipolar RMS {stereo.epipolar_rms_px:.3f} px; "
          "see report.md")
+    return calibration
 
-    processed = out_dir / "red_block_processed.mcap"
-    proc = process_log(red, processed, topics=["/stereo_camera/left/image_raw"],
-                       processors=[configure("red_pixels"), configure("edges")],
-                       overwrite=True)
-    done("process", processed, f"red pixels + edges on {proc.frames_processed} frames")
+
+def run_demo(out_dir: Path, *, duration_s: float = 10.0, seed: int = 0,
+             progress: bool | None = None,
+             say: Callable[[str], None] = print) -> DemoResult:
+    """Run the whole demo into ``out_dir``; ``say`` reports each step as it finishes."""
+    started = time.perf_counter()
+    out_dir.mkdir(parents=True, exist_ok=True)
+    result = DemoResult()
+
+    def done(step: str, path: Path, note: str) -> None:
+        result.outputs.append((step, path, note))
+        say(f"{step:10} {path}  {size_of(path)}  ({note})")
+
+    # the red-block chain in a fresh process (spawn: no inherited GL or thread state)
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
+        red_chain = pool.submit(red_block_chain, out_dir, seed)
+        calibration = _stereo_chain(out_dir, duration_s, seed, progress, done)
+        red_steps = red_chain.result()
+    for step, path, note in red_steps:
+        done(step, path, note)
+    processed = red_steps[-1][1]
 
     rrd = out_dir / "demo.rrd"
     view_logs([calibration / "calibration.mcap", processed], output=rrd, overwrite=True,

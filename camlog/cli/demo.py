@@ -10,13 +10,14 @@ from ..errors import UsageError
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Register the ``demo`` arguments."""
-    p.epilog = ("Records stereo_unsynced and red_block, resyncs the unsynchronised pair, "
-                "calibrates it, runs red pixels + edges on the red block, and writes one "
-                "rerun recording of the results. Re-running replaces the folder's files.")
+    p.epilog = ("Records stereo_unsynced, resyncs the unsynchronised pair and calibrates it; "
+                "meanwhile records red_block and runs red pixels + edges on it; then writes "
+                "one rerun recording of the results. Each step prints what it wrote and its "
+                "size. Re-running replaces the folder's files.")
     p.add_argument("-o", "--output", type=Path, default=Path("demo"), metavar="OUTDIR",
                    help="folder for every output (default ./demo)")
-    p.add_argument("--duration", type=float, default=20.0, metavar="S",
-                   help="length of the stereo recording in seconds (default 20)")
+    p.add_argument("--duration", type=float, default=10.0, metavar="S",
+                   help="length of the stereo recording in seconds (default 10)")
     p.add_argument("--seed", type=int, default=0, help="random seed of both scenarios")
     p.add_argument("--no-progress", action="store_true", help="hide progress bars")
 

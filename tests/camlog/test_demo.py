@@ -18,7 +18,8 @@ def test_demo_runs_every_step_and_says_where_outputs_went(
     assert main(["demo", "-o", str(out), "--duration", "4", "--no-progress"]) == 0
     printed = capsys.readouterr().out
     steps = [line.split()[0] for line in printed.splitlines()[:-1]]
-    assert steps == ["record", "record", "resync", "calibrate", "process", "view"]
+    assert steps == ["record", "resync", "calibrate", "record", "process", "view"]
+    assert all(" MB  (" in line for line in printed.splitlines()[:-1])  # sizes
     for name in ("stereo_unsynced.mcap", "red_block.mcap", "stereo_synced.mcap",
                  "red_block_processed.mcap", "demo.rrd", "calibration/left.yaml",
                  "calibration/right.yaml", "calibration/report.md"):
