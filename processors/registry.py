@@ -62,7 +62,7 @@ SPECS: tuple[ProcessorSpec, ...] = (
     ProcessorSpec(
         name="undistort",
         summary="remove lens distortion, keeping the camera matrix K (cv2.undistort's image; "
-                "for a stereo pair's rectification use --rectify)",
+                "for a stereo pair's rectification use rectify)",
         implementation="processors.undistort:Undistort",
         options=(CALIBRATION,),
         outputs=(OutputSpec("image_undistorted", IMAGE, Display.IMAGE, "undistorted image",
