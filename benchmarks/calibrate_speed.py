@@ -18,12 +18,16 @@ import tempfile
 import time
 from pathlib import Path
 
-from camlog.calibrate.flow import calibrate_log
-from processors.calibration.board import make_board
-from processors.calibration.solve import CalibrationOptions
+import cv2
+import numpy as np
+
+from camlog.calibrate.flow import CalibrationRun, calibrate_log
+from processors.calibration.board import Board, make_board
+from processors.calibration.solve import CalibrationOptions, max_projection_difference
 from recorder.record import record
 from recorder.scenario import load_scenario
 from replay import open_reader
+from replay.camera import CameraModel
 from replay.records import ParameterEstimate
 
 from .report import cli_peak_rss_mb, emit
@@ -58,6 +62,36 @@ def relative(estimate: ParameterEstimate) -> float:
     """(estimate - truth) / truth."""
     assert estimate.truth is not None, "the log has no ground truth"
     return error(estimate) / estimate.truth
+
+
+def opencv_reference(run: CalibrationRun, board: Board) -> float | None:
+    """A plain OpenCV script's result on the same detections: ``cv2.calibrateCamera`` (or
+    ``cv2.fisheye.calibrate``) with default flags on every detected view; its max projection
+    difference against the truth over the image, camera frames aligned (px)."""
+    camera = run.cameras[0]
+    if camera.truth is None:
+        return None
+    views = camera.views
+    frames = [f for f in views.frames if f.candidate]
+    points = board.points_in_board()
+    objects = [points[f.detection.ids].reshape(1, -1, 3) for f in frames if f.detection]
+    images = [f.detection.corners_px.reshape(1, -1, 2) for f in frames if f.detection]
+    true_model = camera.truth.model()
+    if true_model.is_fisheye:
+        _rms, k, d, _r, _t = cv2.fisheye.calibrate(
+            objects, images, views.size, np.zeros((3, 3)), np.zeros(4),
+            flags=cv2.CALIB_RECOMPUTE_EXTRINSIC | cv2.CALIB_FIX_SKEW)
+        model = CameraModel(views.size[0], views.size[1], np.asarray(k, dtype=np.float64),
+                            "equidistant", np.asarray(d, dtype=np.float64).reshape(-1)[:4])
+    else:
+        rational = true_model.distortion_model == "rational_polynomial"
+        _rms, k, d, _r, _t = cv2.calibrateCamera(
+            [o.astype(np.float32) for o in objects], [i.astype(np.float32) for i in images],
+            views.size, None, None, flags=cv2.CALIB_RATIONAL_MODEL if rational else 0)
+        model = CameraModel(views.size[0], views.size[1], np.asarray(k, dtype=np.float64),
+                            true_model.distortion_model,
+                            np.asarray(d, dtype=np.float64).reshape(-1)[:8 if rational else 5])
+    return max_projection_difference(model, true_model, align_rotation=True)
 
 
 def peak_rss_mb(path: Path, camera: str, out: Path) -> float:
@@ -118,6 +152,12 @@ def main() -> None:
                     errors += [abs(s.truth.baseline_error_percent), s.epipolar_rms_px]
                 worst[label] = [max(a, b) for a, b in zip(worst.get(label, errors), errors,
                                                           strict=True)]
+                whole = cam.max_projection_difference_vs_truth_aligned_px
+                reference = opencv_reference(run, board) if len(cameras) == 1 else None
+                if reference is not None and whole is not None:
+                    print(f"{'  plain OpenCV':24} {seed:4d} same detections: max difference "
+                          f"{reference:.3f} px over the image (camlog {whole:.3f} px, ratio "
+                          f"{whole / reference:.2f})", flush=True)
                 print(f"{label:24} {seed:4d} {frames:6d} {decode:8.2f} {wall:8.2f} "
                       f"{100 * relative(p['fx']):+9.4f} {100 * relative(p['fy']):+9.4f} "
                       f"{error(p['cx']):+6.3f}±{p['cx'].std:.3f} "

@@ -171,7 +171,7 @@ def _calibrate(log: Location, out: Path, o: dict[str, Any], workers: int) -> Ste
                                        bool(o.get("tangent_dist", False))),
             k_coefficients=int(o.get("k_coefficients", 2))),
         approximate_s=o.get("approximate"), camera_name=o.get("camera_name"),
-        max_views=int(o.get("max_views", 150)), overwrite=True, workers=workers,
+        overwrite=True, workers=workers,
         progress=False)
     summary = run.summary
     figures: dict[str, Any] = {}
@@ -234,7 +234,7 @@ STEPS: dict[str, tuple[frozenset[str], Runner]] = {
     "resync": (frozenset({"left", "right", "slop", "out_prefix"}), _resync),
     "calibrate": (frozenset({"size", "square", "camera", "left", "right", "approximate",
                              "fix_principal_point", "fix_aspect_ratio", "zero_tangent_dist",
-                             "tangent_dist", "k_coefficients", "camera_name", "max_views"}),
+                             "tangent_dist", "k_coefficients", "camera_name"}),
                   _calibrate),
     "process": (frozenset({"topic", "output_ns", "compress", "drop_input"}
                           | {s.name for s in SPECS if s.flag}

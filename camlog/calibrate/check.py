@@ -16,7 +16,7 @@ from replay.camera import CameraModel
 from replay.formats import open_reader
 
 from ..errors import CalibrationError, InputError, UsageError
-from .solving import stereo_pairs
+from .instants import stereo_pairs
 from .views import detect_views, resolve_camera, size_hint
 
 
@@ -67,14 +67,17 @@ def check_log(log: Path, *, board: Board, cameras: list[str], calibrations: list
     if not candidates:
         raise CalibrationError(f"no {board.cols}x{board.rows} board found in "
                                f"{streams[0].source.image_topic}{size_hint(streams[0], board)}")
-    first = [streams[0].corners(i) for i in candidates]
-    linear = [linearity_error(c, models[0], board) for c in first]
-    reproj = [reprojection_rms(c, models[0], board) for c in first]
+    first = [streams[0].detection(i) for i in candidates]
+    # rows are straight lines only where a view shows them whole
+    linear = [linearity_error(d.corners_px, models[0], board) for d in first
+              if len(d.ids) == board.corner_count] or [float("nan")]
+    reproj = [reprojection_rms(d.corners_px, models[0], board, d.ids) for d in first]
     epipolar: list[float] = []
     if len(streams) == 2:
         left, right = streams
         pairs = [(li, ri) for li, ri in stereo_pairs(left, right, approximate_s)
-                 if left.frames[li].candidate and right.frames[ri].candidate]
+                 if left.frames[li].candidate and right.frames[ri].candidate
+                 and np.array_equal(left.detection(li).ids, right.detection(ri).ids)]
         if not pairs:
             raise CalibrationError("no stereo pair shows the whole board in both cameras")
         left_views = [left.corners(li) for li, _ in pairs]

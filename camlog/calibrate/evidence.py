@@ -19,6 +19,7 @@ from tqdm import tqdm
 
 from processors.calibration.board import Board
 from processors.calibration.figures import annotate_detection
+from replay.camera import rectify_maps
 from replay.formats import LogReader, open_writer
 from replay.frames import encode_image
 from replay.messages import CameraInfo, Image, PointStamped
@@ -40,9 +41,7 @@ class Evidence:
 
 
 def _rectify_maps(info: CameraInfo) -> tuple[np.ndarray, np.ndarray]:
-    maps = cv2.initUndistortRectifyMap(info.k, info.d, info.r, info.p[:, :3],
-                                       (info.width, info.height), cv2.CV_16SC2)
-    return maps[0], maps[1]
+    return rectify_maps(info, cv2.CV_16SC2)
 
 
 def write_evidence(reader: LogReader, path: Path, cameras: list[CalibratedCamera], *,
@@ -96,7 +95,8 @@ def write_evidence(reader: LogReader, path: Path, cameras: list[CalibratedCamera
             writer.write(topics.detections, Image(stamp, image.frame_id, "rgb8", annotated),
                          log_time_ns=log_time)
             result = camera.solution.result
-            if used and corners is not None:
+            # a held pose's view is recorded at its first frame
+            if used and corners is not None and frame.index in result.view_rms_px:
                 rms = result.view_rms_px[frame.index]
                 writer.write(topics.view_error, PointStamped(
                     stamp, image.frame_id, np.array([rms, 0.0, 0.0], dtype=np.float64)),

@@ -1,7 +1,7 @@
 """Calibrate cameras from a log: detect, solve, summarise, write the evidence and report.
 
 The steps are plain functions from value to value: :func:`~.views.detect_views` (the pass
-over the log), :func:`~.solving.solve_camera` per camera, :func:`~.solving.solve_stereo`,
+over the log), :func:`~.solving.solve_rig` (every camera, the rig and every board pose at once),
 :func:`~.summary.build_summary`, :func:`~.evidence.write_evidence` (the second pass, which
 copies the log) and :func:`~.report.write_files`. Every output is written into a hidden
 temporary folder and moved into place only when all of it succeeded.
@@ -24,15 +24,7 @@ from replay.storage import Location, local_paths
 from ..errors import InputError
 from .evidence import write_evidence
 from .report import output_names, write_files
-from .solving import (
-    MAX_VIEWS,
-    CalibratedCamera,
-    CameraSolution,
-    StereoSolution,
-    calibrated_cameras,
-    solve_camera,
-    solve_stereo,
-)
+from .solving import CalibratedCamera, RigSolution, StereoSolution, calibrated_cameras, solve_rig
 from .summary import build_summary
 from .views import CameraViews, detect_views, resolve_camera, with_speed_limit
 
@@ -45,6 +37,7 @@ class CalibrationRun:
 
     cameras: list[CalibratedCamera]
     stereo: StereoSolution | None
+    solved: RigSolution
     output_dir: Path
     files: list[Path]
     wall_s: float
@@ -71,7 +64,6 @@ def calibrate_log(
     approximate_s: float | None = None,
     camera_name: str | None = None,
     max_speed_px: float | None = None,
-    max_views: int = MAX_VIEWS,
     overwrite: bool = False,
     workers: int | None = None,
     progress: bool | None = None,
@@ -91,27 +83,24 @@ def calibrate_log(
         sources = [resolve_camera(reader, ns) for ns in cameras]
         found = detect_views(reader, sources, board, workers=workers or os.cpu_count() or 2,
                              progress=progress)
-        solutions: list[CameraSolution] = []
+        cameras_views = []
         for detected in found.cameras:
             _check_size(detected)
-            views = detected if max_speed_px is None else \
-                with_speed_limit(detected, max_speed_px)
-            note = f" (camera {views.source.namespace})" if stereo_mode else ""
-            solutions.append(solve_camera(views, board, options, max_views=max_views,
-                                          topic_note=note))
-        stereo = solve_stereo(solutions[0], solutions[1], board, approximate_s=approximate_s,
-                              max_views=max_views) if stereo_mode else None
+            cameras_views.append(detected if max_speed_px is None else
+                                 with_speed_limit(detected, max_speed_px))
+        solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s)
+        solutions, stereo = solved.cameras, solved.stereo
         scenario = found.scenario
         truth = [scenario.camera_for(s.views.source.namespace,
                                      s.views.log_info.frame_id if s.views.log_info else None)
                  if scenario is not None else None for s in solutions]
         calibrated = calibrated_cameras(solutions, stereo, truth)
-        summary = build_summary(calibrated, stereo, board=board, options=options,
-                                ground_truth=scenario is not None)
+        summary = build_summary(calibrated, solved, board=board, options=options,
+                                scenario=scenario)
         evidence = write_evidence(reader, staged.path / "calibration.mcap", calibrated,
                                   board=board, stereo=stereo, summary=summary,
                                   progress=progress) if report else None
         write_files(staged.path, calibrated, stereo=stereo, summary=summary,
                     evidence=evidence, camera_name=camera_name)
-    return CalibrationRun(calibrated, stereo, output_dir, staged.files,
+    return CalibrationRun(calibrated, stereo, solved, output_dir, staged.files,
                           time.perf_counter() - started, summary)

@@ -44,10 +44,38 @@ def _camera_lines(camera: CameraSummary) -> list[str]:
     if camera.tangential.summary is not None:
         text = camera.tangential.summary
         lines.append(text[0].upper() + text[1:] + ".")
-    if camera.cross_validation_px is not None:
-        lines.append(f"Cross-validation: two disjoint halves of the views, calibrated "
-                     f"separately, differ by at most {camera.cross_validation_px:.3f} px "
-                     "over the image once their camera frames are aligned.")
+    if camera.evidence is not None:
+        e = camera.evidence
+        held = f" ({e.held_views} of them held poses, their frames averaged)" \
+            if e.held_views else ""
+        lines.append(
+            f"Evidence: {e.frames_used} frames in {e.views} views{held}; left out: "
+            f"{e.outlier_views} views as not the board, {e.blurred_views} as too blurred, "
+            f"{e.outlier_corners} single outlier corners. Corner noise {e.corner_noise_px:.3f} "
+            "px per coordinate" + (f"; held frames scatter {e.frame_scatter_px:.4f} px about "
+                                   "their mean" if e.frame_scatter_px is not None else "")
+            + ".")
+        if e.blur is not None:
+            lines.append(f"Motion blur: {e.blur}.")
+    if camera.uncertainty is not None:
+        u = camera.uncertainty
+        lines.append(
+            f"Projection uncertainty (uncertainty.png): a point {u.range_m:.3f} m away (the "
+            f"boards' median distance) projects to within {u.median_px:.3f} px (median over "
+            f"the image) and {u.worst_px:.3f} px (worst, usually a corner of the image), one "
+            "standard deviation in the worst direction, from the covariance of every "
+            "parameter and board pose (mrcal's method); for points far away (rays) "
+            f"{u.rays_median_px:.3f} px and {u.rays_worst_px:.3f} px.")
+        if u.cross_validation_worst_px is not None:
+            lines.append(
+                "Cross-validation: two disjoint halves of the views, calibrated separately, "
+                "differ by twice the expected error of the whole; half their difference is "
+                f"{u.cross_validation_median_px:.3f} px (median) and "
+                f"{u.cross_validation_worst_px:.3f} px (worst), camera frames aligned.")
+        if u.true_error_worst_px is not None:
+            lines.append(f"Against the simulator's truth the same way: "
+                         f"{u.true_error_median_px:.3f} px (median) and "
+                         f"{u.true_error_worst_px:.3f} px (worst).")
     if camera.max_projection_difference_vs_truth_px is not None:
         lines.append(
             "Against the simulator's true model, max projection difference: "
@@ -79,7 +107,9 @@ def _stereo_lines(s: StereoSummary) -> list[str]:
         f"{s.joint_views} joint views. Stereo RMS {s.rms_px:.4f} px, epipolar RMS "
         f"after rectification {s.epipolar_rms_px:.4f} px.",
         f"Baseline {s.baseline_m:.6f} m (σ {s.baseline_std_m:.2g} m), rotation "
-        f"{s.rotation_deg:.4f}°, T = [{', '.join(f'{v:.5f}' for v in s.translation_m)}] m.",
+        f"{s.rotation_deg:.4f}°"
+        + (f" (σ {s.rotation_std_deg:.2g}°)" if s.rotation_std_deg is not None else "")
+        + f", T = [{', '.join(f'{v:.5f}' for v in s.translation_m)}] m.",
         f"Board square re-estimated by triangulation: {s.square_m:.5f} m.",
     ]
     if s.rejected:
@@ -101,7 +131,8 @@ def markdown_report(summary: CalibrationSummary, figures: list[str]) -> str:
         ("fix_aspect_ratio", options.fix_aspect_ratio)) if on)
     lines = [
         "# Calibration report", "",
-        f"Board: {board.cols}x{board.rows} inner corners, {board.square_m:g} m squares. "
+        f"Board: {board.pattern} {board.cols}x{board.rows} points, {board.square_m:g} m "
+        "spacing. "
         f"Model: {options.distortion_model} with {options.k_coefficients} radial "
         f"coefficients; options: {flags or 'none'}; tangential distortion: "
         f"{options.tangential}.", "",

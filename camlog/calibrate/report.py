@@ -5,11 +5,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import cv2
+import numpy as np
 
 from processors.calibration.figures import (
     coverage_figure,
     rectified_pair_figure,
     residual_figure,
+    uncertainty_figure,
     view_error_figure,
 )
 from replay.calibration_ini import ost_text
@@ -23,7 +25,7 @@ from .solving import CalibratedCamera, StereoSolution
 __all__ = ["FIGURES", "output_names", "write_files"]
 
 #: figures drawn per camera (stereo: prefixed ``left_`` / ``right_``)
-FIGURES = ("coverage.png", "view_errors.png", "residuals.png")
+FIGURES = ("coverage.png", "view_errors.png", "residuals.png", "uncertainty.png")
 
 
 def output_names(stereo: bool, *, report: bool = True) -> list[str]:
@@ -57,6 +59,13 @@ def _figures(folder: Path, camera: CalibratedCamera, prefix: str) -> list[str]:
         "residuals.png": residual_figure(
             size, used, [result.residuals_px[i] for i in result.view_ids],
             f"{namespace}: residuals (observed - projected)"),
+        "uncertainty.png": uncertainty_figure(
+            size, solution.uncertainty.pixels, solution.uncertainty.sigma_px,
+            f"{namespace}: projection uncertainty (1 sigma) at "
+            f"{solution.uncertainty.range_m:.2f} m: median "
+            f"{solution.uncertainty.median_px:.3f} px, worst "
+            f"{solution.uncertainty.worst_px:.3f} px",
+            np.concatenate(used) if used else None),
     }
     for name, image in figures.items():
         cv2.imwrite(str(folder / f"{prefix}{name}"), image)

@@ -1,9 +1,10 @@
-"""Solving: choose views, calibrate each camera, then the stereo pair, from detected corners.
+"""Solving: every camera, the rig and every board pose from the detected views, at once.
 
-Every step takes the views the detection pass returned and returns a new value; the solvers
-themselves live in :mod:`processors.calibration` and know nothing of logs or frames. Their
-view ids are positions in the lists they are given; here they are mapped back to frame
-indices, which is what every later step (summary, evidence, report) speaks.
+Every view of every camera goes into one least-squares problem
+(:func:`processors.calibration.joint.calibrate_cameras`): intrinsics of all cameras, the rig
+and every board pose, outlier corners left out, blurred views weighted down. The solvers know
+nothing of frames; here their views are mapped back to frame indices, a view being named by
+its first frame, which is what every later step (summary, evidence, report) speaks.
 """
 
 from __future__ import annotations
@@ -14,66 +15,70 @@ import cv2
 import numpy as np
 
 from processors.calibration.board import Board
-from processors.calibration.selection import Coverage, coverage, select_views, view_parameters
-from processors.calibration.solve import (
-    OUTLIER_FACTOR,
-    OUTLIER_FLOOR_PX,
-    CalibrationOptions,
-    MonoResult,
-    calibrate_mono,
-    cross_validate,
-)
-from processors.calibration.stereo import StereoResult, calibrate_stereo, orient_right_views
-from processors.resync import pair_stamps
+from processors.calibration.joint import MIN_VIEWS, BoardView, JointResult, calibrate_cameras
+from processors.calibration.options import CalibrationOptions
+from processors.calibration.seed import seed_model
+from processors.calibration.selection import Coverage, coverage, view_parameters
+from processors.calibration.solve import MonoResult
+from processors.calibration.stereo import StereoResult, orient_right_views, stereo_result
+from processors.calibration.uncertainty import UncertaintyMap, projection_uncertainty
+from processors.calibration.validation import CrossValidation, cross_validate
 from replay.camera import CameraModel
 from replay.messages import F64, CameraInfo
 from replay.records import ScenarioCamera
 
 from ..errors import CalibrationError
-from .views import CameraViews, Frame, size_hint
+from .instants import ViewsOfRig, rig_views
+from .views import CameraViews, Frame
 
-#: most views given to the solver, chosen for coverage
-MAX_VIEWS = 150
-#: views closer than this in camera_calibration's (X, Y, size, skew) add nothing new
-MIN_VIEW_DISTANCE = 0.02
+#: "far away": the uncertainty of rays, comparable to projection differences of rays
+FAR_M = 1e4
 
-__all__ = ["MAX_VIEWS", "CalibratedCamera", "CameraSolution", "StereoSolution",
-           "calibrated_cameras", "solve_camera", "solve_stereo", "stereo_pairs"]
+__all__ = ["CalibratedCamera", "CameraSolution", "RigSolution", "StereoSolution",
+           "calibrated_cameras", "solve_rig"]
 
 
 @dataclass(frozen=True)
 class CameraSolution:
-    """One camera calibrated from its views. ``result``'s view ids are frame indices."""
+    """One camera of the joint calibration. ``result``'s view ids are frame indices: each
+    view is named by its first frame; ``view_of`` maps every frame of a view to that name."""
 
     views: CameraViews
     candidates: list[int]  # frames whose board passed every check
-    selected: list[int]  # frames given to the solver
+    selected: list[int]  # frames in the views given to the solver (all the candidates)
     result: MonoResult
+    view_of: dict[int, int]
+    frames_in_view: dict[int, int]  # view name -> how many frames it averages
     coverage: Coverage  # of the used views
-    cross_validation_px: float | None
+    uncertainty: UncertaintyMap  # at the working range
+    rays_uncertainty: UncertaintyMap  # for points far away
+    cross_validation: CrossValidation | None
+
+    @property
+    def cross_validation_px(self) -> float | None:
+        """Expected worst error of the calibration from the two halves' difference."""
+        return None if self.cross_validation is None else self.cross_validation.worst_px
 
     def used_corners(self) -> list[F64]:
-        """Corners ``(N, 2)`` of every used view, in ``result.view_ids`` order."""
+        """Corners ``(M, 2)`` of every used view (its first frame's), in view order."""
         return [self.views.corners(i) for i in self.result.view_ids]
 
     def rejected_corners(self) -> list[F64]:
-        """Corners of every distinct frame whose board was found but not used as a view."""
+        """Corners of every distinct frame whose board was found but not used."""
         return [f.detection.corners_px for f in self.views.distinct()
                 if f.detection is not None and self.rejection(f) is not None]
 
     def rejection(self, frame: Frame) -> str | None:
-        """Why a frame's board is not a view (None: it is one, or could have been)."""
+        """Why a frame's board is not (in) a view (None: it is)."""
         if frame.detection is not None and not frame.detection.accepted:
             return frame.detection.reason
         if frame.reason:
             return frame.reason
-        return self.result.rejected.get(frame.index)
+        return self.result.rejected.get(self.view_of.get(frame.index, -1))
 
-    def outlier_limit_px(self) -> float:
-        """The per-view RMS above which a view counts as far above the rest."""
-        errors = list(self.result.view_rms_px.values())
-        return max(OUTLIER_FACTOR * float(np.median(errors)), OUTLIER_FLOOR_PX) \
-            if errors else 0.0
+    def outlier_limit_px(self) -> float | None:
+        """Views are not judged by their RMS: outliers are single corners."""
+        return None
 
     def status(self, frame: Frame) -> tuple[str, bool]:
         """Text drawn on an annotated frame, and whether the view was used."""
@@ -82,115 +87,119 @@ class CameraSolution:
         why = self.rejection(frame)
         if why is not None:
             return f"rejected: {why}", False
-        if frame.index in self.result.view_rms_px:
-            return f"used: RMS {self.result.view_rms_px[frame.index]:.3f} px", True
-        return "not used: adds no coverage", False
-
-
-def _by_frame(result: MonoResult, frames: list[int]) -> MonoResult:
-    """``result`` with its view ids (positions in ``frames``) replaced by frame indices."""
-    at = dict(enumerate(frames))
-    return MonoResult(
-        model=result.model, rms_px=result.rms_px,
-        view_ids=[at[i] for i in result.view_ids],
-        view_rms_px={at[i]: e for i, e in result.view_rms_px.items()},
-        rejected={at[i]: why for i, why in result.rejected.items()},
-        std=result.std,
-        camera_from_board={at[i]: p for i, p in result.camera_from_board.items()},
-        residuals_px={at[i]: r for i, r in result.residuals_px.items()},
-        inliers={at[i]: m for i, m in result.inliers.items()},
-        options=result.options, tangential_test=result.tangential_test,
-        sigma_px=result.sigma_px, joint=result.joint,
-    )
-
-
-def solve_camera(views: CameraViews, board: Board, options: CalibrationOptions, *,
-                 max_views: int = MAX_VIEWS, topic_note: str = "") -> CameraSolution:
-    """Select the most informative views and calibrate one camera."""
-    found = [f for f in views.distinct() if f.detection is not None]
-    topic = views.source.image_topic
-    if not found:
-        raise CalibrationError(
-            f"no {board.cols}x{board.rows} board found in {len(views.frames)} frames of "
-            f"{topic}{size_hint(views, board)}{topic_note}")
-    candidates = [f.index for f in views.frames if f.candidate]
-    if not candidates:
-        reasons = sorted({f.reason or f.detection.reason for f in found if f.detection})
-        raise CalibrationError(f"{topic}: every board found was rejected "
-                               f"({'; '.join(reasons)}){size_hint(views, board)}")
-    params = np.array([view_parameters(views.corners(i), board, views.size)
-                       for i in candidates])
-    chosen = select_views(params, max_views=max_views, min_distance=MIN_VIEW_DISTANCE)
-    selected = [candidates[i] for i in chosen]
-    solved = calibrate_mono(board.points_in_board(), [views.corners(i) for i in selected],
-                            views.size, options)
-    result = _by_frame(solved, selected)
-    used = [views.corners(i) for i in result.view_ids]
-    used_params = np.array([view_parameters(c, board, views.size) for c in used])
-    return CameraSolution(
-        views, candidates, selected, result, coverage(used_params, used, views.size),
-        cross_validate(board.points_in_board(), used, views.size, solved.options))
-
-
-def stereo_pairs(left: CameraViews, right: CameraViews,
-                 approximate_s: float | None) -> list[tuple[int, int]]:
-    """(left frame, right frame) indices shot at the same time (or within the slop)."""
-    left_ns = np.array([f.stamp_ns for f in left.frames], dtype=np.int64)
-    right_ns = np.array([f.stamp_ns for f in right.frames], dtype=np.int64)
-    if approximate_s is None:
-        _common, li, ri = np.intersect1d(left_ns, right_ns, return_indices=True)
-        pairs = list(zip(li.tolist(), ri.tolist(), strict=True))
-    else:
-        pairing = pair_stamps(np.sort(left_ns), np.sort(right_ns),
-                              slop_ns=round(approximate_s * 1e9))
-        order_l, order_r = np.argsort(left_ns), np.argsort(right_ns)
-        pairs = [(int(order_l[a]), int(order_r[b]))
-                 for a, b in zip(pairing.left_index, pairing.right_index, strict=True)]
-    if not pairs:
-        gap = np.min(np.abs(left_ns[:, None] - right_ns[None, :])) / 1e6 \
-            if len(left_ns) * len(right_ns) <= 4_000_000 else float("nan")
-        how = "within the slop" if approximate_s is not None else "with identical stamps"
-        raise CalibrationError(
-            f"{left.source.image_topic} and {right.source.image_topic} never pair {how} "
-            f"(closest stamps {gap:.3f} ms apart); use --approximate SEC or resync the log"
-        )
-    return pairs
+        name = self.view_of.get(frame.index)
+        if name is not None and name in self.result.view_rms_px:
+            held = self.frames_in_view[name]
+            suffix = f", held pose of {held} frames" if held > 1 else ""
+            return f"used: RMS {self.result.view_rms_px[name]:.3f} px{suffix}", True
+        return "not used", False
 
 
 @dataclass(frozen=True)
 class StereoSolution:
-    """The stereo solve and the joint views (left frame, right frame) it used or left out."""
+    """The rig's rectification and figures, and the joint views (left frame, right frame,
+    each named by its first frame) it used or left out."""
 
     result: StereoResult
     pairs: list[tuple[int, int]]
     rejected: list[tuple[tuple[int, int], str]]
 
 
-def solve_stereo(left: CameraSolution, right: CameraSolution, board: Board, *,
-                 approximate_s: float | None, max_views: int = MAX_VIEWS) -> StereoSolution:
-    """Calibrate the rig from the joint views, each camera's intrinsics held fixed."""
-    lv, rv = left.views, right.views
-    joint = [(li, ri) for li, ri in stereo_pairs(lv, rv, approximate_s)
-             if _usable(lv.frames[li]) and _usable(rv.frames[ri])
-             and not (lv.frames[li].duplicate and rv.frames[ri].duplicate)]
-    params = np.array([view_parameters(lv.corners(li), board, lv.size) for li, _ in joint]) \
-        if joint else np.zeros((0, 4))
-    chosen = [joint[i] for i in select_views(params, max_views=max_views,
-                                             min_distance=MIN_VIEW_DISTANCE)]
-    left_views = [lv.corners(li) for li, _ in chosen]
-    right_views = orient_right_views(
-        board.points_in_board(), left_views, [rv.corners(ri) for _, ri in chosen],
-        left_model=left.result.model, right_model=right.result.model)
-    result = calibrate_stereo(board.points_in_board(), left_views, right_views,
-                              left_model=left.result.model, right_model=right.result.model,
-                              square_m=board.square_m)
-    return StereoSolution(result, [chosen[i] for i in result.view_ids],
-                          [(chosen[i], why) for i, why in sorted(result.rejected.items())])
+@dataclass(frozen=True)
+class RigSolution:
+    """Everything the joint solve found."""
+
+    cameras: list[CameraSolution]
+    stereo: StereoSolution | None
+    joint: JointResult
+    rig: ViewsOfRig
 
 
-def _usable(frame: Frame) -> bool:
-    """A frame whose board passed every check (a repeated frame counts: held still)."""
-    return frame.detection is not None and frame.detection.accepted and not frame.reason
+def _mono_result(joint: JointResult, rig: ViewsOfRig, camera: int) -> MonoResult:
+    """One camera's share of the joint result, its views named by their first frames."""
+    mine = [i for i, v in enumerate(rig.views) if v.camera == camera]
+    name = {i: rig.frames_of[i][0] for i in mine}
+    used = [i for i in mine if i not in joint.rejected]
+    camera_from_reference = joint.camera_from_reference[camera]
+    return MonoResult(
+        model=joint.models[camera], rms_px=joint.rms_px,
+        view_ids=[name[i] for i in used],
+        view_rms_px={name[i]: joint.view_rms_px(i) for i in used},
+        rejected={name[i]: joint.rejected[i] for i in mine if i in joint.rejected},
+        std=dict(joint.std[camera]),
+        camera_from_board={name[i]: camera_from_reference
+                           @ joint.reference_from_board[rig.views[i].instant] for i in used},
+        residuals_px={name[i]: joint.residuals_px[i] for i in used},
+        inliers={name[i]: joint.inliers[i] for i in used},
+        options=joint.options[camera], tangential_test=joint.tangential_tests[camera],
+        sigma_px=joint.sigma_px, joint=joint)
+
+
+def _seeds(rig: ViewsOfRig, board: Board, sizes: list[tuple[int, int]],
+           options: CalibrationOptions) -> list[CameraModel]:
+    points = board.points_in_board()
+    seeds = []
+    for camera, size in enumerate(sizes):
+        mine = [v for v in rig.views if v.camera == camera]
+        if len(mine) < MIN_VIEWS:
+            raise CalibrationError(
+                f"too few good views to calibrate{'' if len(sizes) == 1 else f' camera {camera}'}"
+                f": {len(mine)} (need at least {MIN_VIEWS}); record more board poses")
+        seeds.append(seed_model([points[v.point_ids] for v in mine],
+                                [v.corners_px for v in mine], size, options))
+    return seeds
+
+
+def _oriented(rig: ViewsOfRig, board: Board, seeds: list[CameraModel]) -> ViewsOfRig:
+    """Right views numbered from the same end of a symmetric board as their left views."""
+    if not rig.pairs or not board.symmetric:
+        return rig
+    points = board.points_in_board()
+    right = orient_right_views(points, [rig.views[lv].corners_px for lv, _ in rig.pairs],
+                               [rig.views[rv].corners_px for _, rv in rig.pairs],
+                               left_model=seeds[0], right_model=seeds[1])
+    views = list(rig.views)
+    for (_, rv), corners in zip(rig.pairs, right, strict=True):
+        views[rv] = BoardView(views[rv].camera, views[rv].instant, views[rv].point_ids,
+                              corners, speed_px=views[rv].speed_px)
+    return ViewsOfRig(views, rig.frames_of, rig.pairs, rig.candidates, rig.frame_scatter_px)
+
+
+def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOptions, *,
+              approximate_s: float | None) -> RigSolution:
+    """Calibrate every camera, and for two the stereo rig, from every view."""
+    sizes = [c.size for c in cameras]
+    rig = rig_views(cameras, board, approximate_s=approximate_s,
+                    stereo_note=len(cameras) > 1)
+    seeds = _seeds(rig, board, sizes, options)
+    rig = _oriented(rig, board, seeds)
+    points = board.points_in_board()
+    joint = calibrate_cameras(points, rig.views, sizes, options, seeds=seeds)
+    validation = cross_validate(points, rig.views, sizes, joint.options)
+    solutions = []
+    for index, views in enumerate(cameras):
+        result = _mono_result(joint, rig, index)
+        mine = [i for i, v in enumerate(rig.views) if v.camera == index]
+        view_of = {f: rig.frames_of[i][0] for i in mine for f in rig.frames_of[i]}
+        used = [(rig.views[i].corners_px, rig.views[i].point_ids) for i in mine
+                if i not in joint.rejected]
+        params = np.array([view_parameters(c, board, views.size, ids) for c, ids in used])
+        solutions.append(CameraSolution(
+            views, rig.candidates[index], sorted(view_of), result, view_of,
+            {rig.frames_of[i][0]: len(rig.frames_of[i]) for i in mine},
+            coverage(params, [c for c, _ in used], views.size),
+            projection_uncertainty(joint.problem, index),
+            projection_uncertainty(joint.problem, index, range_m=FAR_M),
+            validation[index] if validation is not None else None))
+    stereo = None
+    if len(cameras) == 2:
+        rectified = stereo_result(joint, rig.pairs, points_in_board=points,
+                                  square_m=board.square_m)
+        names = [(rig.frames_of[lv][0], rig.frames_of[rv][0]) for lv, rv in rig.pairs]
+        stereo = StereoSolution(rectified, [names[i] for i in rectified.view_ids],
+                                [(names[i], why) for i, why in
+                                 sorted(rectified.rejected.items())])
+    return RigSolution(solutions, stereo, joint, rig)
 
 
 @dataclass(frozen=True)
@@ -210,7 +219,11 @@ class CalibratedCamera:
 def mono_camera_info(model: CameraModel, frame_id: str) -> CameraInfo:
     """Calibrated CameraInfo; P is camera_calibration's (alpha 0: only valid pixels)."""
     size = (model.width, model.height)
-    new_k, _roi = cv2.getOptimalNewCameraMatrix(model.k, model.d, size, 0.0)
+    if model.is_fisheye:
+        new_k = cv2.fisheye.estimateNewCameraMatrixForUndistortRectify(
+            model.k, model.d, size, np.eye(3), balance=0.0)
+    else:
+        new_k, _roi = cv2.getOptimalNewCameraMatrix(model.k, model.d, size, 0.0)
     p = np.zeros((3, 4))
     p[:, :3] = new_k
     return CameraInfo(0, frame_id, model.width, model.height, model.distortion_model,

@@ -14,11 +14,13 @@ from processors.calibration.solve import (
     MonoResult,
     max_projection_difference,
 )
+from processors.calibration.validation import projection_difference
 from replay.records import (
     BoardSummary,
     CalibrationSummary,
     CameraSummary,
     CoverageSummary,
+    EvidenceSummary,
     OptionsSummary,
     ParameterEstimate,
     RangeProgress,
@@ -27,9 +29,11 @@ from replay.records import (
     StereoSummary,
     StereoTruth,
     TangentialSummary,
+    UncertaintySummary,
 )
+from replay.records.scenario import Scenario
 
-from .solving import CalibratedCamera, StereoSolution
+from .solving import CalibratedCamera, RigSolution, StereoSolution
 
 __all__ = ["build_summary"]
 
@@ -70,7 +74,38 @@ def _rejected(camera: CalibratedCamera) -> list[RejectedView]:
     return rejected
 
 
-def _camera(camera: CalibratedCamera) -> CameraSummary:
+def _evidence(camera: CalibratedCamera, index: int, solved: RigSolution) -> EvidenceSummary:
+    solution, joint = camera.solution, solved.joint
+    used = solution.result.view_ids
+    mine = [i for i, v in enumerate(solved.rig.views) if v.camera == index]
+    reasons = [joint.rejected[i] for i in mine if i in joint.rejected]
+    return EvidenceSummary(
+        frames_used=sum(solution.frames_in_view[name] for name in used),
+        views=len(used), held_views=sum(solution.frames_in_view[name] > 1 for name in used),
+        outlier_views=sum("outlier" in r for r in reasons),
+        blurred_views=sum("motion blur" in r for r in reasons),
+        outlier_corners=sum(int((~solution.result.inliers[name]).sum()) for name in used),
+        corner_noise_px=joint.sigma_px, frame_scatter_px=solved.rig.frame_scatter_px,
+        blur=joint.blur.describe() if joint.blur is not None else None)
+
+
+def _uncertainty(camera: CalibratedCamera) -> UncertaintySummary:
+    solution = camera.solution
+    u, validation = solution.uncertainty, solution.cross_validation
+    true_median = true_worst = None
+    if camera.truth is not None:
+        error = projection_difference(solution.result.model, camera.truth.model(), u.pixels)
+        true_median, true_worst = float(np.nanmedian(error)), float(np.nanmax(error))
+    far = solution.rays_uncertainty
+    return UncertaintySummary(
+        range_m=u.range_m, median_px=u.median_px, worst_px=u.worst_px,
+        rays_median_px=far.median_px, rays_worst_px=far.worst_px,
+        cross_validation_median_px=validation.median_px if validation is not None else None,
+        cross_validation_worst_px=validation.worst_px if validation is not None else None,
+        true_error_median_px=true_median, true_error_worst_px=true_worst)
+
+
+def _camera(camera: CalibratedCamera, index: int, solved: RigSolution) -> CameraSummary:
     solution, views = camera.solution, camera.views
     result = solution.result
     distinct = list(views.distinct())
@@ -98,6 +133,7 @@ def _camera(camera: CalibratedCamera) -> CameraSummary:
              for name, (lo, hi, p) in solution.coverage.ranges.items()},
             solution.coverage.image_cells),
         **differences,
+        evidence=_evidence(camera, index, solved), uncertainty=_uncertainty(camera),
     )
 
 
@@ -115,22 +151,24 @@ def _stereo(cameras: list[CalibratedCamera], stereo: StereoSolution) -> StereoSu
         rms_px=s.rms_px, epipolar_rms_px=s.epipolar_rms_px, baseline_m=s.baseline_m,
         baseline_std_m=s.baseline_std_m, square_m=s.square_m, rotation_deg=s.rotation_deg,
         translation_m=s.right_from_left[:3, 3].tolist(), joint_views=len(s.view_epipolar_px),
+        rotation_std_deg=s.rotation_std_deg,
         rejected=[RejectedJointView(left.views.frames[li].stamp_ns,
                                     right.views.frames[ri].stamp_ns, why)
                   for (li, ri), why in stereo.rejected],
         truth=truth)
 
 
-def build_summary(cameras: list[CalibratedCamera], stereo: StereoSolution | None, *,
+def build_summary(cameras: list[CalibratedCamera], solved: RigSolution, *,
                   board: Board, options: CalibrationOptions,
-                  ground_truth: bool) -> CalibrationSummary:
-    """The summary of a run; ``ground_truth``: the log had the simulator's scenario."""
+                  scenario: Scenario | None) -> CalibrationSummary:
+    """The summary of a run; ``scenario``: the simulator's record, when the log has one."""
+    stereo = solved.stereo
     return CalibrationSummary(
         board=BoardSummary(board.pattern, board.cols, board.rows, board.square_m),
         options=OptionsSummary(options.fix_principal_point, options.fix_aspect_ratio,
                                options.tangential, options.radial_count,
                                options.distortion_model),
-        cameras=[_camera(c) for c in cameras],
-        ground_truth=ground_truth,
+        cameras=[_camera(c, i, solved) for i, c in enumerate(cameras)],
+        ground_truth=scenario is not None,
         stereo=_stereo(cameras, stereo) if stereo is not None else None,
     )

@@ -1,8 +1,11 @@
 """What a log shows of each camera: its topics, and the board found in every frame.
 
 This is the one pass over the log that calibration needs for solving: it streams the camera
-images, skips frames identical to the previous one (a board held still; they share its
-detection), and detects the board on a thread pool (OpenCV releases the GIL). Only corners
+images, skips frames whose pixels are byte for byte those of the previous frame (they share
+its detection and count once), and detects the board on a thread pool (OpenCV releases the
+GIL) in runs of consecutive frames: the first frame of a run is searched, the next ones
+follow the board from frame to frame (a chessboard's corners refined where its motion says
+they are, a twentieth of the cost) and are searched afresh only when that fails. Only corners
 are kept, so memory does not grow with the number of images. The camera_info and the
 simulator's scenario record are read in the same pass.
 """
@@ -10,17 +13,18 @@ simulator's scenario record are read in the same pass.
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 from collections import deque
 from collections.abc import Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 
-import cv2
 import numpy as np
 from tqdm import tqdm
 
 from processors.calibration.board import Board
-from processors.calibration.detect import Detection, find_chessboard
+from processors.calibration.detect import Detection
+from processors.calibration.targets import SEGMENT_FRAMES, detect_segment, find_board
 from replay.errors import RecordError
 from replay.formats import LogReader
 from replay.messages import CameraInfo
@@ -31,9 +35,6 @@ from ..errors import InputError
 from ..processing.checks import IMAGE_SUFFIXES, IMAGE_TYPES, camera_info_topic
 from .pixels import as_frame
 
-#: mean absolute difference (8-bit levels) of 80x60 thumbnails below which a frame repeats
-#: the previous one; sensor noise averages out over the 64 pixels of a thumbnail cell
-DUPLICATE_LEVELS = 1.0
 #: frames kept per camera to suggest another board size when none is found
 HINT_SAMPLES = 12
 
@@ -75,13 +76,16 @@ def resolve_camera(reader: LogReader, namespace: str) -> CameraSource:
 
 @dataclass(frozen=True)
 class Frame:
-    """One image of one camera, as the detection pass saw it."""
+    """One image of one camera, as the detection pass saw it. ``speed_px``: how far the
+    board's corners moved to the nearer neighbouring frame (px; None without a neighbour
+    showing the same corners)."""
 
     index: int
     stamp_ns: int
-    duplicate: bool  # same picture as the previous frame: shares its detection
+    duplicate: bool  # byte for byte the previous frame: shares its detection, counts once
     detection: Detection | None = None
     reason: str = ""  # why a found board is not a candidate view (beyond the detection's own)
+    speed_px: float | None = None
 
     @property
     def candidate(self) -> bool:
@@ -106,12 +110,16 @@ class CameraViews:
         """The camera's optical frame: from its camera_info, else its name."""
         return self.log_info.frame_id if self.log_info is not None else self.source.name
 
-    def corners(self, index: int) -> np.ndarray:
-        """Detected corners ``(N, 2)`` of frame ``index`` (which must have a detection)."""
+    def detection(self, index: int) -> Detection:
+        """The board found in frame ``index`` (which must have one)."""
         detection = self.frames[index].detection
         if detection is None:
             raise ValueError(f"frame {index} of {self.source.image_topic} has no board")
-        return detection.corners_px
+        return detection
+
+    def corners(self, index: int) -> np.ndarray:
+        """Detected corners ``(M, 2)`` of frame ``index`` (which must have a detection)."""
+        return self.detection(index).corners_px
 
     def distinct(self) -> Iterator[Frame]:
         """The frames that do not repeat the previous one."""
@@ -126,10 +134,6 @@ class LogViews:
     scenario: Scenario | None
 
 
-def _thumbnail(gray: np.ndarray) -> np.ndarray:
-    return cv2.resize(gray, (80, 60), interpolation=cv2.INTER_AREA).astype(np.int16)
-
-
 @dataclass
 class _Seen:
     """What the pass has collected for one camera so far."""
@@ -142,7 +146,8 @@ class _Seen:
     size: tuple[int, int] | None = None
     log_info: CameraInfo | None = None
     samples: list[np.ndarray] = field(default_factory=list)
-    thumbnail: np.ndarray | None = None
+    last: bytes = b""
+    run: list[tuple[int, np.ndarray]] = field(default_factory=list)  # frames to detect
 
     def add(self, gray: np.ndarray, stamp_ns: int, where: str) -> tuple[int, bool]:
         """Record a frame; its index and whether it repeats the previous one."""
@@ -153,10 +158,9 @@ class _Seen:
             raise InputError(
                 f"{where} changes image size from {self.size[0]}x{self.size[1]} to "
                 f"{size[0]}x{size[1]}")
-        thumb = _thumbnail(gray)
-        duplicate = self.thumbnail is not None and \
-            float(np.abs(thumb - self.thumbnail).mean()) < DUPLICATE_LEVELS
-        self.thumbnail = thumb
+        digest = hashlib.blake2b(np.ascontiguousarray(gray).data, digest_size=16).digest()
+        duplicate = digest == self.last
+        self.last = digest
         index = len(self.stamps)
         self.stamps.append(stamp_ns)
         self.duplicates.append(duplicate)
@@ -165,17 +169,40 @@ class _Seen:
         return index, duplicate
 
     def views(self) -> CameraViews:
-        """The frames, duplicates sharing the detection of the frame they repeat."""
+        """The frames, duplicates sharing the detection of the frame they repeat, each with
+        its board's speed."""
         if self.size is None:
             raise InputError(f"no images on {self.source.image_topic}")
-        frames, last = [], None
-        for index, (stamp, duplicate) in enumerate(zip(self.stamps, self.duplicates,
-                                                       strict=True)):
+        detections, last = [], None
+        for index, duplicate in enumerate(self.duplicates):
             if not duplicate:
                 last = self.detections.get(index)
-            frames.append(Frame(index, stamp, duplicate, last))
-        return CameraViews(self.source, tuple(frames), self.size, self.log_info,
-                           tuple(self.samples))
+            detections.append(last)
+        speeds = _speeds(detections, self.duplicates)
+        frames = tuple(Frame(i, stamp, duplicate, detection, speed_px=speed)
+                       for i, (stamp, duplicate, detection, speed) in enumerate(zip(
+                           self.stamps, self.duplicates, detections, speeds, strict=True)))
+        return CameraViews(self.source, frames, self.size, self.log_info, tuple(self.samples))
+
+
+def _speeds(detections: list[Detection | None], duplicates: list[bool]) -> list[float | None]:
+    """Per frame, the mean displacement of its corners to the nearer neighbouring frame that
+    shows the same corners (0 next to a repeated frame: nothing moved)."""
+    def moved(a: Detection | None, b: Detection | None) -> float | None:
+        if a is None or b is None or not a.accepted or not b.accepted \
+                or not np.array_equal(a.ids, b.ids):
+            return None
+        return float(np.linalg.norm(a.corners_px - b.corners_px, axis=1).mean())
+
+    out: list[float | None] = []
+    for i, detection in enumerate(detections):
+        if (i + 1 < len(duplicates) and duplicates[i + 1]) or duplicates[i]:
+            out.append(0.0 if detection is not None else None)
+            continue
+        near = [m for j in (i - 1, i + 1) if 0 <= j < len(detections)
+                and (m := moved(detection, detections[j])) is not None]
+        out.append(min(near) if near else None)
+    return out
 
 
 def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *,
@@ -187,9 +214,19 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
     by_info = {s.info_topic: seen[s.namespace] for s in sources if s.info_topic}
     scenario: Scenario | None = None
     wanted = [*by_image, *by_info, *([SCENARIO] if SCENARIO in reader.topics else [])]
-    pending: deque[tuple[_Seen, int, Future[Detection | None]]] = deque()
+    pending: deque[tuple[_Seen, list[int], Future[list[Detection | None]]]] = deque()
     bar = tqdm(total=sum(reader.topics[s.image_topic].count for s in sources), unit="frame",
                desc="detect", disable=None if progress is None else not progress, leave=False)
+
+    def submit(camera: _Seen) -> None:
+        indices = [i for i, _ in camera.run]
+        pending.append((camera, indices, pool.submit(detect_segment,
+                                                     [g for _, g in camera.run], board)))
+        camera.run = []
+        while len(pending) > 2 * workers + 2:
+            done, at, future = pending.popleft()
+            done.detections.update(zip(at, future.result(), strict=True))
+
     with ThreadPoolExecutor(max_workers=workers) as pool, bar:
         for raw in reader.raw_messages(wanted):
             message = reader.decode(raw)
@@ -206,13 +243,15 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
             gray = image.mono8()
             index, duplicate = camera.add(gray, image.stamp_ns, f"{reader.path}: {raw.topic}")
             if not duplicate:
-                pending.append((camera, index, pool.submit(find_chessboard, gray, board)))
-            while len(pending) > 2 * workers + 2:
-                done, at, future = pending.popleft()
-                done.detections[at] = future.result()
+                camera.run.append((index, gray))
+                if len(camera.run) >= SEGMENT_FRAMES:
+                    submit(camera)
             bar.update()
+        for camera in seen.values():
+            if camera.run:
+                submit(camera)
         for done, at, future in pending:
-            done.detections[at] = future.result()
+            done.detections.update(zip(at, future.result(), strict=True))
     return LogViews([seen[s.namespace].views() for s in sources], scenario)
 
 
@@ -225,41 +264,28 @@ def _scenario(message: object) -> Scenario | None:
 
 
 def with_speed_limit(views: CameraViews, max_speed_px: float) -> CameraViews:
-    """The views with boards moving faster than ``max_speed_px`` per frame rejected.
-
-    A view's speed is its corners' mean displacement to the nearer of its neighbouring
-    frames (zero when the next frame repeats it: the board was held still).
-    """
-    frames = list(views.frames)
-    for i, frame in enumerate(views.frames):
-        if frame.duplicate or frame.detection is None or not frame.detection.accepted:
-            continue
-        speeds = []
-        for j in (i - 1, i + 1):
-            if 0 <= j < len(frames):
-                other = views.frames[j]
-                if j == i + 1 and other.duplicate:
-                    speeds.append(0.0)
-                elif other.detection is not None:
-                    delta = other.detection.corners_px - frame.detection.corners_px
-                    speeds.append(float(np.linalg.norm(delta, axis=1).mean()))
-        speed = min(speeds) if speeds else float("inf")
-        if speed > max_speed_px:
-            frames[i] = dataclasses.replace(
-                frame, reason=f"board moving {speed:.2f} px/frame > {max_speed_px:g}")
-    return dataclasses.replace(views, frames=tuple(frames))
+    """The views with boards moving faster than ``max_speed_px`` per frame rejected
+    (camera_calibration's --max-chessboard-speed; see :attr:`Frame.speed_px`)."""
+    frames = tuple(
+        dataclasses.replace(f, reason=f"board moving {f.speed_px:.2f} px/frame > "
+                                      f"{max_speed_px:g}")
+        if f.candidate and f.speed_px is not None and f.speed_px > max_speed_px else f
+        for f in views.frames)
+    return dataclasses.replace(views, frames=frames)
 
 
 def size_hint(views: CameraViews, board: Board) -> str:
-    """A hint when another inner-corner count would have matched the frames."""
+    """A hint when another point count would have matched the frames."""
+    if board.pattern == "charuco":
+        return ""
     c, r = board.cols, board.rows
     for cols, rows in ((r, c), (c + 1, r), (c, r + 1), (c + 1, r + 1), (c - 1, r), (c, r - 1),
                        (c - 1, r - 1)):
         if cols < 2 or rows < 2 or (cols, rows) == (c, r):
             continue
-        other = Board(cols, rows, board.square_m)
+        other = Board(cols, rows, board.square_m, board.pattern)
         for gray in views.samples:
-            found = find_chessboard(gray, other)
+            found = find_board(gray, other)
             if found is not None and found.accepted:
                 return (f"; the frames show a {cols}x{rows} board: --size counts inner "
                         "corners (squares minus one) per row x per column")

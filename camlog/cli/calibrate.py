@@ -4,10 +4,14 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
-from processors.calibration.board import PATTERNS
+from processors.calibration.board import DEFAULT_DICTIONARY, PATTERNS
 
 from ..errors import UsageError
+
+#: ROS distortion_model names (and OpenCV's "fisheye" for equidistant)
+MODELS = ("plumb_bob", "rational_polynomial", "equidistant", "fisheye")
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -46,15 +50,22 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="always estimate tangential distortion p1, p2 (camera_calibration's "
                         "default; by default they are estimated only when the views show "
                         "them, by a likelihood-ratio test)")
-    p.add_argument("-k", "--k-coefficients", type=int, default=2, metavar="N",
-                   help="radial coefficients to estimate: <= 3 plumb_bob, > 3 "
-                        "rational_polynomial (default 2)")
+    p.add_argument("--model", choices=MODELS, metavar="MODEL",
+                   help="lens model: plumb_bob (default), rational_polynomial or equidistant "
+                        "(OpenCV's fisheye; 'fisheye' is accepted for it)")
+    p.add_argument("--marker", type=float, metavar="M",
+                   help="--pattern charuco: marker side in metres (--size counts squares)")
+    p.add_argument("--dictionary", metavar="NAME",
+                   help=f"--pattern charuco: OpenCV ArUco dictionary (default "
+                        f"{DEFAULT_DICTIONARY})")
+    p.add_argument("-k", "--k-coefficients", type=int, metavar="N",
+                   help="radial coefficients to estimate (default: 2 plumb_bob, 6 "
+                        "rational_polynomial, 4 equidistant); without --model, > 3 selects "
+                        "rational_polynomial as camera_calibration does")
     p.add_argument("-c", "--camera-name", "--camera_name", dest="camera_name",
                    help="camera_name written in the YAML files")
     p.add_argument("--max-chessboard-speed", type=float, metavar="PX",
                    help="reject views whose board moves more than PX pixels per frame")
-    p.add_argument("--max-views", type=int, default=150, metavar="N",
-                   help="most views given to the solver, chosen for coverage (default 150)")
     p.add_argument("--check", action="store_true",
                    help="measure --calibration files on LOG instead of calibrating")
     p.add_argument("--calibration", type=Path, action="append", metavar="YAML",
@@ -88,6 +99,14 @@ def cameras_from(args: argparse.Namespace) -> list[str]:
     return spaces
 
 
+def _truth_error(camera: Any) -> str:
+    u = camera.uncertainty
+    if u.true_error_worst_px is None:
+        return ""
+    return (f"; vs truth (frames aligned) median {u.true_error_median_px:.3f} px, worst "
+            f"{u.true_error_worst_px:.3f} px")
+
+
 def run(args: argparse.Namespace) -> int:
     """Calibrate (or ``--check``) and print the key figures."""
     from processors.calibration.board import make_board
@@ -96,7 +115,8 @@ def run(args: argparse.Namespace) -> int:
     from ..calibrate.check import check_log
     from ..calibrate.flow import calibrate_log
 
-    board = make_board(args.size, args.square, args.pattern)
+    board = make_board(args.size, args.square, args.pattern, marker_m=args.marker,
+                       dictionary=args.dictionary)
     cameras = cameras_from(args)
     progress = False if args.no_progress else None
     if args.check:
@@ -110,12 +130,12 @@ def run(args: argparse.Namespace) -> int:
     options = CalibrationOptions(
         fix_principal_point=args.fix_principal_point, fix_aspect_ratio=args.fix_aspect_ratio,
         tangential=tangential_mode(args.zero_tangent_dist, args.tangent_dist),
-        k_coefficients=args.k_coefficients)
+        k_coefficients=args.k_coefficients, model=args.model)
     output = args.output or args.log.with_name(f"{args.log.stem}_calibration")
     run_ = calibrate_log(
         args.log, board=board, cameras=cameras, output_dir=output, options=options,
         approximate_s=args.approximate, camera_name=args.camera_name,
-        max_speed_px=args.max_chessboard_speed, max_views=args.max_views,
+        max_speed_px=args.max_chessboard_speed,
         overwrite=args.overwrite, progress=progress, recover=args.recover,
         report=not args.no_report)
     for camera in run_.summary.cameras:
@@ -128,6 +148,11 @@ def run(args: argparse.Namespace) -> int:
                                for name in ("fx", "fy", "cx", "cy")))
         if camera.tangential.summary is not None:
             print(f"  {camera.tangential.summary}")
+        if camera.uncertainty is not None:
+            u = camera.uncertainty
+            print(f"  projection uncertainty at {u.range_m:.3f} m: median {u.median_px:.3f} px, "
+                  f"worst {u.worst_px:.3f} px; rays {u.rays_median_px:.3f} / "
+                  f"{u.rays_worst_px:.3f} px (1 sigma){_truth_error(camera)}")
         if camera.max_projection_difference_vs_truth_px is not None:
             print(f"  vs simulator truth: max projection difference "
                   f"{camera.max_projection_difference_vs_truth_covered_aligned_px:.3f} px "

@@ -13,11 +13,14 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
-import cv2
 import numpy as np
 
 from replay.messages import F64
+
+if TYPE_CHECKING:
+    import cv2
 
 from ..errors import ProcessorError
 
@@ -75,6 +78,8 @@ class Board:
 
     def charuco(self) -> cv2.aruco.CharucoBoard:
         """The OpenCV ChArUco board (squares are one more than inner corners each way)."""
+        import cv2
+
         dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, self.dictionary))
         return cv2.aruco.CharucoBoard((self.cols + 1, self.rows + 1), self.square_m,
                                       self.marker_m, dictionary)
@@ -111,6 +116,8 @@ def make_board(size: str, square_m: float, pattern: str = "chessboard", *,
         raise ProcessorError(f"--square must be > 0 metres, got {square_m}")
     cols, rows = parse_size(size)
     if pattern == "charuco":
+        import cv2
+
         if cols < 3 or rows < 3:
             raise ProcessorError(f"a ChArUco board needs at least 3x3 squares, got {size!r}")
         if marker_m is None or not 0 < marker_m < square_m:

@@ -132,7 +132,10 @@ def annotate_detection(bgr: np.ndarray, corners_px: F64 | None, board_size: tupl
                        status: str, used: bool) -> np.ndarray:
     """The frame with its corners drawn: OpenCV's rainbow when used, red crosses otherwise."""
     out = bgr.copy()
-    if corners_px is not None:
+    if corners_px is not None and used and len(corners_px) != board_size[0] * board_size[1]:
+        for p in np.rint(corners_px).astype(int):  # some corners of a ChArUco board
+            cv2.circle(out, (int(p[0]), int(p[1])), 4, GREEN, 2, cv2.LINE_AA)
+    elif corners_px is not None:
         if used:
             cv2.drawChessboardCorners(out, board_size,
                                       corners_px.reshape(-1, 1, 2).astype(np.float32), True)

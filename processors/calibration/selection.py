@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from replay.messages import F64
@@ -41,9 +42,18 @@ def _cross(a: F64, b: F64) -> float:
     return float(a[0] * b[1] - a[1] * b[0])
 
 
-def view_parameters(corners_px: F64, board: Board, size: tuple[int, int]) -> F64:
-    """camera_calibration's (X, Y, size, skew) of one view, each in [0, 1]."""
+def view_parameters(corners_px: F64, board: Board, size: tuple[int, int],
+                    point_ids: np.ndarray | None = None) -> F64:
+    """camera_calibration's (X, Y, size, skew) of one view, each in [0, 1]. A view of some
+    of the points (``point_ids``) is described by the whole board where the homography of
+    the points it shows puts it."""
     width, height = size
+    if point_ids is not None and len(point_ids) < board.corner_count:
+        plane = board.points_in_board()[:, :2]
+        homography, _mask = cv2.findHomography(plane[point_ids].astype(np.float64),
+                                               corners_px.astype(np.float64))
+        corners_px = np.asarray(cv2.perspectiveTransform(plane.reshape(-1, 1, 2), homography),
+                                dtype=np.float64).reshape(-1, 2)
     ul, ur, dr, dl = outside_corners(corners_px, board)
     a, b, c = ur - ul, dr - ur, dl - dr
     area = abs(_cross(b + c, a + b)) / 2.0  # half the cross product of the diagonals

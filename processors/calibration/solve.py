@@ -3,7 +3,7 @@
 A thin layer over :func:`~.joint.calibrate_cameras` with one camera: outlier corners are
 left out one by one (views that are not the board whole), tangential distortion is
 estimated when the views show it (see :mod:`.options`), and every parameter comes with its
-standard deviation. Also projection differences between two models, and cross-validation.
+standard deviation. Also projection differences between two models.
 """
 
 from __future__ import annotations
@@ -26,18 +26,14 @@ from .options import (
     tangential_mode,
 )
 from .rotation import matrices
-from .stereo import OUTLIER_FACTOR, OUTLIER_FLOOR_PX
 
 __all__ = [
     "MIN_VIEWS",
-    "OUTLIER_FACTOR",
-    "OUTLIER_FLOOR_PX",
     "TANGENTIAL_P_VALUE",
     "CalibrationOptions",
     "MonoResult",
     "TangentialTest",
     "calibrate_mono",
-    "cross_validate",
     "max_projection_difference",
     "tangential_mode",
 ]
@@ -144,19 +140,3 @@ def best_rotation(rays: F64, pixels: F64, model: CameraModel, iterations: int = 
         if np.abs(step).max() < 1e-12:
             break
     return turn
-
-
-def cross_validate(points_in_board: F64, corners: list[F64], size: tuple[int, int],
-                   options: CalibrationOptions, seed: int = 0) -> float | None:
-    """Calibrate two disjoint halves separately; their max projection difference (px) over
-    the image, after aligning their camera frames (see :func:`max_projection_difference`)."""
-    if len(corners) < 2 * MIN_VIEWS:
-        return None
-    order = np.random.default_rng(seed).permutation(len(corners))
-    halves = [order[: len(order) // 2], order[len(order) // 2:]]
-    models = [
-        calibrate_mono(points_in_board, [corners[i] for i in h], size, options,
-                       reject_outliers=False).model
-        for h in halves
-    ]
-    return max_projection_difference(models[0], models[1], align_rotation=True)

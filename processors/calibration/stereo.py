@@ -1,9 +1,11 @@
-"""Stereo extrinsics and rectification from per-camera calibrations.
+"""Stereo rectification and the rig's figures of merit, from a joint calibration.
 
-Each camera's intrinsics come from every frame it saw (``calibrate_mono``); the pair's
-rotation and translation come from the joint views with those intrinsics held fixed
-(``stereoCalibrate``), then ``stereoRectify`` gives R1, R2, P1, P2 with
-``P2[0, 3] = -fx' * B``.
+Both cameras' intrinsics and the rig transform come out of one least-squares problem
+(:mod:`.joint`). Here: rectification (``stereoRectify``, OpenCV's fisheye version for an
+equidistant lens) with ``P2[0, 3] = -fx' * B``; the epipolar error of the joint views after
+rectification; the board square re-estimated by triangulating them (independent of
+``--square`` but for the baseline's scale); and the standard deviations of the baseline and
+of the rig rotation from the joint covariance.
 """
 
 from __future__ import annotations
@@ -18,24 +20,17 @@ from replay.camera import CameraModel
 from replay.messages import F64
 
 from ..errors import ProcessorError
-from .joint import MIN_VIEWS
+from .joint import JointResult
+from .seed import board_pose
 
-CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 200, 1e-12)
-#: a joint view whose RMS exceeds max(OUTLIER_FACTOR * median, OUTLIER_FLOOR_PX) is rejected
-OUTLIER_FACTOR = 3.0
-OUTLIER_FLOOR_PX = 0.3
-#: rounds of removing joint views far above the rest, each followed by a fresh solve
-REJECTION_ROUNDS = 3
-#: stereo re-solves for the baseline's standard deviation, each on this many views at most
-BOOTSTRAP_RESAMPLES = 30
-BOOTSTRAP_VIEWS = 40
 #: views whose rig rotation lies within this angle of another's support it
 ORIENTATION_AGREEMENT_RAD = math.radians(10.0)
 
 
 @dataclass
 class StereoResult:
-    """``right_from_left`` (4, 4): X_right = R X_left + T (metres)."""
+    """``right_from_left`` (4, 4): X_right = R X_left + T (metres); rectification ``r1``,
+    ``r2`` (3, 3) and ``p1``, ``p2`` (3, 4)."""
 
     right_from_left: F64
     rms_px: float
@@ -46,51 +41,53 @@ class StereoResult:
     epipolar_rms_px: float
     baseline_m: float
     baseline_std_m: float
+    rotation_std_deg: float  # worst direction
     square_m: float  # square size re-estimated by triangulating the joint views
-    view_epipolar_px: list[float]  # per used joint view
-    view_ids: list[int] = field(default_factory=list)  # indices of the joint views used
-    rejected: dict[int, str] = field(default_factory=dict)  # joint view index -> why
+    view_epipolar_px: list[float]  # per joint view used
+    view_ids: list[int] = field(default_factory=list)  # joint views used (pair indices)
+    rejected: dict[int, str] = field(default_factory=dict)  # pair index -> why
 
     @property
     def rotation_deg(self) -> float:
-        """Angle of the rig rotation ``right_from_left``, in degrees."""
+        """Angle of the rig rotation (degrees)."""
         angle = math.acos(max(-1.0, min(1.0, (np.trace(self.right_from_left[:3, :3]) - 1) / 2)))
         return math.degrees(angle)
 
 
-def far_above_the_rest(view_ids: list[int], view_rms_px: F64, what: str) -> dict[int, str]:
-    """Views whose RMS error exceeds max(OUTLIER_FACTOR x the median, OUTLIER_FLOOR_PX),
-    with why; none when removing them would leave fewer than MIN_VIEWS."""
-    median = float(np.median(view_rms_px))
-    limit = max(OUTLIER_FACTOR * median, OUTLIER_FLOOR_PX)
-    bad = {i: (f"{what} RMS {e:.3f} px > {limit:.3f} px "
-               f"({OUTLIER_FACTOR:g}x the median {median:.3f} px)")
-           for i, e in zip(view_ids, view_rms_px, strict=True) if e > limit}
-    return bad if len(view_ids) - len(bad) >= MIN_VIEWS else {}
-
-
-def rectified_points(corners_px: F64, model: CameraModel, r: F64, p: F64) -> F64:
-    """Corners ``(N, 2)`` in the rectified image given by rotation ``r`` and projection ``p``."""
-    out = cv2.undistortPoints(corners_px.reshape(-1, 1, 2), model.k, model.d, R=r, P=p)
-    return np.asarray(out, dtype=np.float64).reshape(-1, 2)
+def rectify(left: CameraModel, right: CameraModel, right_from_left: F64
+            ) -> tuple[F64, F64, F64, F64]:
+    """``R1, R2`` (3, 3) and ``P1, P2`` (3, 4) of the rectified pair (only valid pixels)."""
+    size = (left.width, left.height)
+    rotation, translation = right_from_left[:3, :3], right_from_left[:3, 3].reshape(3, 1)
+    try:
+        if left.is_fisheye or right.is_fisheye:
+            if not (left.is_fisheye and right.is_fisheye):
+                raise ProcessorError("rectifying a fisheye with a pinhole camera is not "
+                                     "supported")
+            r1, r2, p1, p2, _q = cv2.fisheye.stereoRectify(
+                left.k, left.d, right.k, right.d, size, rotation, translation,
+                flags=cv2.CALIB_ZERO_DISPARITY, balance=0.0)
+        else:
+            r1, r2, p1, p2, _q, _roi1, _roi2 = cv2.stereoRectify(
+                left.k, left.d, right.k, right.d, size, rotation, translation,
+                flags=cv2.CALIB_ZERO_DISPARITY, alpha=0.0)
+    except cv2.error as err:
+        raise ProcessorError(f"stereo rectification failed: "
+                             f"{str(err).strip().splitlines()[-1]}") from None
+    return tuple(np.asarray(m, dtype=np.float64) for m in (r1, r2, p1, p2))  # type: ignore[return-value]
 
 
 def epipolar_errors(left: list[F64], right: list[F64], *, left_model: CameraModel,
                     right_model: CameraModel, r1: F64, p1: F64, r2: F64, p2: F64) -> list[float]:
     """Per joint view, RMS of the row difference of matching rectified corners (px)."""
-    errors = []
-    for cl, cr in zip(left, right, strict=True):
-        yl = rectified_points(cl, left_model, r1, p1)[:, 1]
-        yr = rectified_points(cr, right_model, r2, p2)[:, 1]
-        errors.append(float(np.sqrt(np.mean((yl - yr) ** 2))))
-    return errors
+    return [float(np.sqrt(np.mean((left_model.rectify_points(cl, r1, p1)[:, 1]
+                                   - right_model.rectify_points(cr, r2, p2)[:, 1]) ** 2)))
+            for cl, cr in zip(left, right, strict=True)]
 
 
-def _board_rotation(points_in_board: F64, corners_px: F64, model: CameraModel) -> F64:
-    """``camera_from_board`` rotation (3, 3) of one view."""
-    _ok, rvec, _tvec = cv2.solvePnP(points_in_board.astype(np.float64),
-                                    corners_px.astype(np.float64), model.k, model.d)
-    return np.asarray(cv2.Rodrigues(rvec)[0], dtype=np.float64)
+def _rotation_of(points: F64, corners: F64, model: CameraModel) -> F64 | None:
+    pose = board_pose(points, corners, model)
+    return None if pose is None else pose[:3, :3]
 
 
 def _angle_rad(a: F64, b: F64) -> float:
@@ -108,9 +105,12 @@ def orient_right_views(points_in_board: F64, left: list[F64], right: list[F64], 
     """
     candidates = []
     for cl, cr in zip(left, right, strict=True):
-        left_from_board = _board_rotation(points_in_board, cl, left_model)
-        candidates.append([_board_rotation(points_in_board, c, right_model) @ left_from_board.T
-                           for c in (cr, cr[::-1])])
+        left_from_board = _rotation_of(points_in_board, cl, left_model)
+        turned = [_rotation_of(points_in_board, c, right_model) for c in (cr, cr[::-1])]
+        if left_from_board is None or turned[0] is None or turned[1] is None:
+            candidates.append([np.eye(3), -np.eye(3)])
+            continue
+        candidates.append([t @ left_from_board.T for t in turned])  # type: ignore[operator]
     if not candidates:
         return []
     flat = [rotation for pair in candidates for rotation in pair]
@@ -122,134 +122,76 @@ def orient_right_views(points_in_board: F64, left: list[F64], right: list[F64], 
             for cr, (a, b) in zip(right, candidates, strict=True)]
 
 
-def _stereo_solve(points_in_board: F64, left: list[F64], right: list[F64], *,
-                  left_model: CameraModel, right_model: CameraModel
-                  ) -> tuple[float, F64, F64, F64]:
-    """R, T of the rig with the intrinsics held; RMS and per-view RMS (px, worse camera)."""
-    size = (left_model.width, left_model.height)
-    objects = [points_in_board.astype(np.float32)] * len(left)
-    try:
-        out = cv2.stereoCalibrateExtended(
-            objects, [c.reshape(-1, 1, 2).astype(np.float32) for c in left],
-            [c.reshape(-1, 1, 2).astype(np.float32) for c in right],
-            left_model.k, left_model.d, right_model.k, right_model.d, size, np.eye(3),
-            np.zeros(3), flags=cv2.CALIB_FIX_INTRINSIC, criteria=CRITERIA,
-        )
-    except cv2.error as err:
-        raise ProcessorError(f"stereo calibration failed: {str(err).strip().splitlines()[-1]}") \
-            from None
-    rms, rot, trans, per_view = out[0], out[5], out[6], out[11]
-    return (float(rms), np.asarray(rot, dtype=np.float64),
-            np.asarray(trans, dtype=np.float64).reshape(3),
-            np.asarray(per_view, dtype=np.float64).reshape(len(left), 2).max(axis=1))
+def stereo_result(joint: JointResult, pairs: list[tuple[int, int]], *,
+                  points_in_board: F64, square_m: float) -> StereoResult:
+    """Rectification and figures of merit of cameras 0 and 1 of a joint calibration.
 
-
-def calibrate_stereo(points_in_board: F64, left: list[F64], right: list[F64], *,
-                     left_model: CameraModel, right_model: CameraModel,
-                     square_m: float) -> StereoResult:
-    """Extrinsics and rectification from joint views ``left[i]``, ``right[i]`` ``(N, 2)``.
-
-    Joint views whose error lies far above the rest (e.g. two frames paired across a move
-    of the board) are removed and the rig re-solved, up to three rounds.
+    ``pairs[i]`` are the views (indices into the joint calibration's views) of the left and
+    right camera at one instant. Only corners that are inliers in both views count.
     """
-    if len(left) < MIN_VIEWS:
-        raise ProcessorError(
-            f"too few joint stereo views: {len(left)} (need at least {MIN_VIEWS}); "
-            "both cameras must see the whole board at the same time"
-        )
-    active = list(range(len(left)))
-    rejected: dict[int, str] = {}
-    for round_ in range(REJECTION_ROUNDS + 1):
-        rms, rot, trans, per_view = _stereo_solve(
-            points_in_board, [left[i] for i in active], [right[i] for i in active],
-            left_model=left_model, right_model=right_model)
-        bad = far_above_the_rest(active, per_view, "stereo reprojection") \
-            if round_ < REJECTION_ROUNDS else {}
-        if not bad:
-            break
-        rejected |= {i: f"{why}: the two frames do not show the board at one pose"
-                     for i, why in bad.items()}
-        active = [i for i in active if i not in rejected]
-    left, right = [left[i] for i in active], [right[i] for i in active]
-    size = (left_model.width, left_model.height)
-    try:
-        r1_cv, r2_cv, p1_cv, p2_cv, _q, _roi1, _roi2 = cv2.stereoRectify(
-            left_model.k, left_model.d, right_model.k, right_model.d, size, rot,
-            trans.reshape(3, 1), flags=cv2.CALIB_ZERO_DISPARITY, alpha=0.0,
-        )
-    except cv2.error as err:
-        raise ProcessorError(f"stereo rectification failed: "
-                             f"{str(err).strip().splitlines()[-1]}") from None
-    r1, r2 = np.asarray(r1_cv, dtype=np.float64), np.asarray(r2_cv, dtype=np.float64)
-    p1, p2 = np.asarray(p1_cv, dtype=np.float64), np.asarray(p2_cv, dtype=np.float64)
-    pose = np.eye(4)
-    pose[:3, :3] = rot
-    pose[:3, 3] = trans
+    left_model, right_model = joint.models[0], joint.models[1]
+    right_from_left = joint.camera_from_reference[1]
+    r1, r2, p1, p2 = rectify(left_model, right_model, right_from_left)
+    used, rejected, left, right, common = [], {}, [], [], []
+    for index, (lv, rv) in enumerate(pairs):
+        lid, rid = joint.views[lv].point_ids, joint.views[rv].point_ids
+        if lv in joint.rejected or rv in joint.rejected:
+            rejected[index] = joint.rejected.get(lv) or joint.rejected[rv]
+            continue
+        ids, li, ri = np.intersect1d(lid, rid, return_indices=True)
+        keep = joint.inliers[lv][li] & joint.inliers[rv][ri]
+        if keep.sum() < 2:
+            continue
+        used.append(index)
+        left.append(_corners(joint, lv, li[keep]))
+        right.append(_corners(joint, rv, ri[keep]))
+        common.append(ids[keep])
+    if not used:
+        raise ProcessorError("no joint stereo view: both cameras must see the board at the "
+                             "same time")
     view_errors = epipolar_errors(left, right, left_model=left_model, right_model=right_model,
                                   r1=r1, p1=p1, r2=r2, p2=p2)
-    squared = np.concatenate([
-        (rectified_points(cl, left_model, r1, p1)[:, 1]
-         - rectified_points(cr, right_model, r2, p2)[:, 1]) ** 2
-        for cl, cr in zip(left, right, strict=True)
-    ])
+    translation = right_from_left[:3, 3]
+    baseline = float(np.linalg.norm(translation))
+    covariance = joint.rig_covariance[1]
+    direction = translation / baseline
+    rms = math.sqrt(float(np.mean(np.square(view_errors)))) if view_errors else float("nan")
+    rms_px = math.sqrt(np.mean([joint.view_rms_px(v) ** 2 for pair in
+                                (pairs[i] for i in used) for v in pair]))
     return StereoResult(
-        right_from_left=pose, rms_px=rms, r1=r1, r2=r2, p1=p1, p2=p2,
-        epipolar_rms_px=float(np.sqrt(squared.mean())),
-        baseline_m=float(np.linalg.norm(trans)),
-        baseline_std_m=_baseline_std(points_in_board, left, right, left_model=left_model,
-                                     right_model=right_model),
-        square_m=_square_size(left, right, left_model=left_model, right_model=right_model,
-                              r1=r1, p1=p1, r2=r2, p2=p2, points_in_board=points_in_board,
-                              square_m=square_m),
-        view_epipolar_px=view_errors, view_ids=active, rejected=rejected,
-    )
+        right_from_left=right_from_left, rms_px=float(rms_px), r1=r1, r2=r2, p1=p1, p2=p2,
+        epipolar_rms_px=rms, baseline_m=baseline,
+        baseline_std_m=math.sqrt(max(float(direction @ covariance[3:, 3:] @ direction), 0.0)),
+        rotation_std_deg=math.degrees(math.sqrt(max(float(np.linalg.eigvalsh(
+            covariance[:3, :3]).max()), 0.0))),
+        square_m=_square_size(left, right, common, left_model=left_model,
+                              right_model=right_model, r1=r1, p1=p1, r2=r2, p2=p2,
+                              points_in_board=points_in_board, square_m=square_m),
+        view_epipolar_px=view_errors, view_ids=used, rejected=rejected)
 
 
-def _baseline_std(points_in_board: F64, left: list[F64], right: list[F64], *,
-                  left_model: CameraModel, right_model: CameraModel,
-                  resamples: int = BOOTSTRAP_RESAMPLES) -> float:
-    """Standard deviation of the baseline from an m-out-of-n bootstrap of the joint views.
-
-    Each resample of ``m <= BOOTSTRAP_VIEWS`` views re-solves R, T with the intrinsics fixed
-    (OpenCV's solver is dense in every view's pose, so small resamples keep this cheap); the
-    spread scales to the full ``n`` views as ``sqrt(m / n)``. Seeded, so reproducible.
-    """
-    rng = np.random.default_rng(0)
-    size = (left_model.width, left_model.height)
-    objects = points_in_board.astype(np.float32)
-    lefts = [c.reshape(-1, 1, 2).astype(np.float32) for c in left]
-    rights = [c.reshape(-1, 1, 2).astype(np.float32) for c in right]
-    flags = cv2.CALIB_FIX_INTRINSIC
-    criteria = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 30, 1e-10)
-    n = len(left)
-    m = min(n, BOOTSTRAP_VIEWS)
-    baselines = []
-    for _ in range(resamples):
-        pick = rng.integers(0, n, m)
-        out = cv2.stereoCalibrate(
-            [objects] * len(pick), [lefts[i] for i in pick], [rights[i] for i in pick],
-            left_model.k, left_model.d, right_model.k, right_model.d, size,
-            flags=flags, criteria=criteria)
-        baselines.append(float(np.linalg.norm(out[6])))
-    return float(np.std(baselines, ddof=1) * math.sqrt(m / n))
+def _corners(joint: JointResult, view: int, rows: np.ndarray) -> F64:
+    """Observed corners ``rows`` of one view of the joint calibration."""
+    return np.asarray(joint.views[view].corners_px[rows], dtype=np.float64)
 
 
-def _square_size(left: list[F64], right: list[F64], *, left_model: CameraModel,
-                 right_model: CameraModel, r1: F64, p1: F64, r2: F64, p2: F64,
-                 points_in_board: F64, square_m: float) -> float:
-    """Mean distance between neighbouring corners triangulated from the rectified pair.
-
-    Independent of the given square size except through the baseline's scale, so it checks
-    that the stereo geometry and the board agree (camera_calibration's chessboard size).
-    """
-    grid = np.rint(points_in_board[:, :2] / square_m).astype(int)
-    cols = int(grid[:, 0].max()) + 1
+def _square_size(left: list[F64], right: list[F64], ids: list[np.ndarray], *,
+                 left_model: CameraModel, right_model: CameraModel, r1: F64, p1: F64, r2: F64,
+                 p2: F64, points_in_board: F64, square_m: float) -> float:
+    """The board's spacing from the rectified pair: mean distance between triangulated
+    nearest neighbours on the board, scaled from their distance to ``square_m`` (asymmetric
+    circle grids have no neighbours one spacing apart)."""
+    layout = np.linalg.norm(points_in_board[:, None, :] - points_in_board[None, :, :], axis=2)
+    nearest = float(layout[layout > 0].min())
     distances = []
-    for cl, cr in zip(left, right, strict=True):
-        xl = rectified_points(cl, left_model, r1, p1)
-        xr = rectified_points(cr, right_model, r2, p2)
-        points = cv2.triangulatePoints(p1, p2, xl.T, xr.T)
-        xyz = (points[:3] / points[3]).T.reshape(-1, cols, 3)
-        distances.append(np.linalg.norm(np.diff(xyz, axis=1), axis=2).ravel())
-        distances.append(np.linalg.norm(np.diff(xyz, axis=0), axis=2).ravel())
-    return float(np.mean(np.concatenate(distances)))
+    for cl, cr, pid in zip(left, right, ids, strict=True):
+        xl = left_model.rectify_points(cl, r1, p1)
+        xr = right_model.rectify_points(cr, r2, p2)
+        homogeneous = cv2.triangulatePoints(p1, p2, xl.T, xr.T)
+        xyz = (homogeneous[:3] / homogeneous[3]).T
+        board = points_in_board[pid]
+        gap = np.linalg.norm(board[:, None, :] - board[None, :, :], axis=2)
+        a, b = np.nonzero(np.triu(np.abs(gap - nearest) < 1e-6 * nearest))
+        distances.append(np.linalg.norm(xyz[a] - xyz[b], axis=1))
+    joined = np.concatenate(distances) if distances else np.zeros(0)
+    return float(joined.mean()) * square_m / nearest if joined.size else float("nan")

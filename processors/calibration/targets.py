@@ -15,7 +15,7 @@ import cv2
 import numpy as np
 
 from .board import Board
-from .detect import BORDER_PX, Detection, canonical_order, find_chessboard
+from .detect import BORDER_PX, Detection, canonical_order, find_chessboard, track_chessboard
 
 #: fewest ChArUco corners worth a view (a board pose has 6 unknowns)
 MIN_CHARUCO_CORNERS = 6
@@ -84,3 +84,26 @@ def find_circles(gray: np.ndarray, board: Board) -> Detection | None:
             or (centres_px[:, 1] > h - 1 - BORDER_PX).any():
         return Detection(centres_px, False, "touches the image border")
     return Detection(centres_px, True)
+
+
+#: consecutive frames one detection job handles: the first is found afresh, the others
+#: tracked from it when the board is a chessboard
+SEGMENT_FRAMES = 8
+
+
+def detect_segment(grays: list[np.ndarray], board: Board) -> list[Detection | None]:
+    """Detections of consecutive frames ``(H, W)`` uint8: the first found afresh, each next
+    chessboard tracked from the previous two (their motion carried on) and found afresh
+    only when tracking fails; other targets found afresh in every frame."""
+    out: list[Detection | None] = []
+    for gray in grays:
+        last = out[-1] if out else None
+        found = None
+        if board.pattern == "chessboard" and last is not None and last.accepted:
+            before = out[-2] if len(out) > 1 else None
+            velocity = last.corners_px - before.corners_px \
+                if before is not None and before.accepted \
+                and np.abs(last.corners_px - before.corners_px).max() < 50 else 0.0
+            found = track_chessboard(gray, last.corners_px + velocity, board)
+        out.append(found if found is not None else find_board(gray, board))
+    return out

@@ -6,6 +6,7 @@ from .calibration import (
     CalibrationSummary,
     CameraSummary,
     CoverageSummary,
+    EvidenceSummary,
     OptionsSummary,
     ParameterEstimate,
     RangeProgress,
@@ -14,6 +15,7 @@ from .calibration import (
     StereoSummary,
     StereoTruth,
     TangentialSummary,
+    UncertaintySummary,
     ViewResiduals,
 )
 from .processed import ProcessedOutput, ProcessedOutputs, outputs_by_topic
@@ -25,6 +27,7 @@ __all__ = [
     "CalibrationSummary",
     "CameraSummary",
     "CoverageSummary",
+    "EvidenceSummary",
     "JsonRecord",
     "OffsetStats",
     "OptionsSummary",
@@ -42,6 +45,7 @@ __all__ = [
     "StereoSummary",
     "StereoTruth",
     "TangentialSummary",
+    "UncertaintySummary",
     "ViewResiduals",
     "from_json",
     "outputs_by_topic",

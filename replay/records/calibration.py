@@ -21,6 +21,7 @@ __all__ = [
     "CalibrationSummary",
     "CameraSummary",
     "CoverageSummary",
+    "EvidenceSummary",
     "OptionsSummary",
     "ParameterEstimate",
     "RangeProgress",
@@ -29,6 +30,7 @@ __all__ = [
     "StereoSummary",
     "StereoTruth",
     "TangentialSummary",
+    "UncertaintySummary",
     "ViewResiduals",
 ]
 
@@ -143,6 +145,43 @@ class CoverageSummary:
 
 
 @dataclass(frozen=True)
+class EvidenceSummary:
+    """What the frames gave: how many went into the used views (a held pose averages its
+    frames into one view), views left out as outliers or as too blurred, outlier corners,
+    the corner noise the residuals show, the frame-to-frame scatter of held corners and the
+    motion-blur law (None when the views show no blur)."""
+
+    frames_used: int
+    views: int
+    held_views: int
+    outlier_views: int
+    blurred_views: int
+    outlier_corners: int
+    corner_noise_px: float
+    frame_scatter_px: float | None = field(default=None, metadata=OMIT_NONE)
+    blur: str | None = field(default=None, metadata=OMIT_NONE)
+
+
+@dataclass(frozen=True)
+class UncertaintySummary:
+    """Projection uncertainty over the image (1 sigma, worst direction) at ``range_m`` and
+    for rays (points far away), the calibration's error expected from cross-validation
+    (half the two halves' difference, camera frames aligned by a rotation, rays) and, in
+    simulated logs, the true error measured the same way; median and worst over the image,
+    px."""
+
+    range_m: float
+    median_px: float
+    worst_px: float
+    rays_median_px: float  # the same for points far away (rays): comparable to the rest
+    rays_worst_px: float
+    cross_validation_median_px: float | None = field(default=None, metadata=OMIT_NONE)
+    cross_validation_worst_px: float | None = field(default=None, metadata=OMIT_NONE)
+    true_error_median_px: float | None = field(default=None, metadata=OMIT_NONE)
+    true_error_worst_px: float | None = field(default=None, metadata=OMIT_NONE)
+
+
+@dataclass(frozen=True)
 class CameraSummary:
     """One calibrated camera: what its frames gave, the model, its evidence and accuracy.
 
@@ -176,6 +215,8 @@ class CameraSummary:
                                                                         metadata=OMIT_NONE)
     max_projection_difference_vs_truth_covered_aligned_px: float | None = field(
         default=None, metadata=OMIT_NONE)
+    evidence: EvidenceSummary | None = field(default=None, metadata=OMIT_NONE)
+    uncertainty: UncertaintySummary | None = field(default=None, metadata=OMIT_NONE)
 
     @property
     def has_truth(self) -> bool:
@@ -216,6 +257,7 @@ class StereoSummary:
     joint_views: int
     rejected: list[RejectedJointView]
     truth: StereoTruth | None = field(default=None, metadata=OMIT_NONE)
+    rotation_std_deg: float | None = field(default=None, metadata=OMIT_NONE)
 
 
 @dataclass(frozen=True)

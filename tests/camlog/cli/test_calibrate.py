@@ -27,7 +27,7 @@ LEFT, RIGHT = "/stereo_camera/left", "/stereo_camera/right"
 #: every simulated camera: 640 px wide, 0.6 rad horizontal field of view, no skew
 FOCAL_PX = 320 / math.tan(0.3)
 BASELINE_M = 0.02
-FIGURES = ["coverage.png", "view_errors.png", "residuals.png"]
+FIGURES = ["coverage.png", "view_errors.png", "residuals.png", "uncertainty.png"]
 
 
 @dataclass

@@ -7,15 +7,16 @@ import math
 import numpy as np
 import pytest
 
+from processors.calibration.joint import BoardView
 from processors.calibration.solve import (
     TANGENTIAL_P_VALUE,
     CalibrationOptions,
     MonoResult,
     calibrate_mono,
-    cross_validate,
     max_projection_difference,
     tangential_mode,
 )
+from processors.calibration.validation import cross_validate
 from processors.errors import ProcessorError
 from replay.camera import CameraModel
 
@@ -147,18 +148,22 @@ def test_too_few_views(poses: list[np.ndarray]) -> None:
 def test_cross_validation_vanishes_without_noise_and_grows_with_it(
     poses: list[np.ndarray]
 ) -> None:
-    options = CalibrationOptions(tangential="estimate")  # the same model in every half
+    options = [CalibrationOptions(tangential="estimate")]  # the same model in every half
     points = BOARD.points_in_board()
-    exact = cross_validate(points, views(true_model(), poses, 0.0, seed=6), (W, H), options)
+
+    def halves(noise_px: float, count: int = VIEWS) -> float | None:
+        corners = views(true_model(), poses[:count], noise_px, seed=6)
+        found = cross_validate(points, [BoardView(0, i, np.arange(BOARD.corner_count), c)
+                                        for i, c in enumerate(corners)], [(W, H)], options)
+        return None if found is None else found[0].worst_px
+
+    exact = halves(0.0)
     assert exact is not None and exact < 0.01
     # the same noise draw scaled: to first order the halves' difference scales with it
-    quiet = cross_validate(points, views(true_model(), poses, NOISE_PX, seed=6), (W, H), options)
-    loud = cross_validate(points, views(true_model(), poses, 2 * NOISE_PX, seed=6), (W, H),
-                          options)
+    quiet, loud = halves(NOISE_PX), halves(2 * NOISE_PX)
     assert quiet is not None and loud is not None
     assert loud / quiet == pytest.approx(2.0, rel=0.1)
-    assert cross_validate(points, views(true_model(), poses[:9], NOISE_PX, seed=6), (W, H),
-                          options) is None  # two halves need 5 views each
+    assert halves(NOISE_PX, 9) is None  # two halves need 5 views each
 
 
 def test_max_projection_difference() -> None:

@@ -1,4 +1,5 @@
-"""Stereo extrinsics and rectification of a synthetic rig with a 0.02 m baseline along x."""
+"""Stereo rig from a joint calibration: rectification and figures of merit of a synthetic rig
+with a 0.02 m baseline along x."""
 
 from __future__ import annotations
 
@@ -7,12 +8,13 @@ import math
 import numpy as np
 import pytest
 
+from processors.calibration.joint import BoardView, JointResult, calibrate_cameras
+from processors.calibration.options import CalibrationOptions
 from processors.calibration.stereo import (
     StereoResult,
-    calibrate_stereo,
     epipolar_errors,
     orient_right_views,
-    rectified_points,
+    stereo_result,
 )
 from processors.errors import ProcessorError
 from replay.camera import CameraModel
@@ -39,11 +41,28 @@ def rig() -> tuple[list[np.ndarray], list[np.ndarray]]:
     return left, right
 
 
+ALL = np.arange(BOARD.corner_count)
+
+
+def solve(left: list[np.ndarray], right: list[np.ndarray]) -> tuple[JointResult, StereoResult]:
+    """Both cameras and the rig jointly, then the stereo figures of the joint views."""
+    views = [BoardView(0, i, ALL, c) for i, c in enumerate(left)] + \
+        [BoardView(1, i, ALL, c) for i, c in enumerate(right)]
+    joint = calibrate_cameras(BOARD.points_in_board(), views, [(W, H)] * 2,
+                              CalibrationOptions(tangential="zero"))
+    pairs = [(i, len(left) + i) for i in range(len(left))]
+    return joint, stereo_result(joint, pairs, points_in_board=BOARD.points_in_board(),
+                                square_m=BOARD.square_m)
+
+
 @pytest.fixture(scope="module")
-def result(rig: tuple[list[np.ndarray], list[np.ndarray]]) -> StereoResult:
-    left, right = rig
-    return calibrate_stereo(BOARD.points_in_board(), left, right, left_model=LEFT,
-                            right_model=RIGHT, square_m=BOARD.square_m)
+def solved(rig: tuple[list[np.ndarray], list[np.ndarray]]) -> tuple[JointResult, StereoResult]:
+    return solve(*rig)
+
+
+@pytest.fixture(scope="module")
+def result(solved: tuple[JointResult, StereoResult]) -> StereoResult:
+    return solved[1]
 
 
 def test_recovers_the_rig(result: StereoResult) -> None:
@@ -51,10 +70,10 @@ def test_recovers_the_rig(result: StereoResult) -> None:
     np.testing.assert_allclose(result.right_from_left[:3, 3], RIGHT_FROM_LEFT[:3, 3],
                                atol=0.002 * BASELINE_M)
     assert result.rotation_deg == pytest.approx(0.5, abs=0.02)
-    # the per-view spread overstates the joint estimate's scatter (about 10x here), so
-    # only check it is not an understatement
+    # the joint covariance gives the baseline's and the rotation's uncertainty
     assert abs(result.baseline_m - BASELINE_M) < 3 * result.baseline_std_m
-    # stereo RMS over both cameras' 2-D residuals: about sigma * sqrt(2)
+    assert 0 < result.rotation_std_deg < 0.02
+    # RMS over both cameras' 2-D residuals: about sigma * sqrt(2)
     assert result.rms_px == pytest.approx(NOISE_PX * math.sqrt(2), rel=0.15)
 
 
@@ -72,8 +91,8 @@ def test_rectification_aligns_rows(result: StereoResult,
         np.testing.assert_allclose(r @ r.T, np.eye(3), atol=1e-9)
     # rectified corners of a pair share their rows, and disparity is positive (left - right)
     left, right = rig
-    xl = rectified_points(left[0], LEFT, result.r1, result.p1)
-    xr = rectified_points(right[0], RIGHT, result.r2, result.p2)
+    xl = LEFT.rectify_points(left[0], result.r1, result.p1)
+    xr = RIGHT.rectify_points(right[0], result.r2, result.p2)
     assert np.abs(xl[:, 1] - xr[:, 1]).max() < 0.5
     assert (xl[:, 0] - xr[:, 0] > 0).all()
 
@@ -83,25 +102,27 @@ def test_square_size_from_triangulation(result: StereoResult) -> None:
 
 
 def test_epipolar_errors_grow_when_the_rig_is_wrong(
-    result: StereoResult, rig: tuple[list[np.ndarray], list[np.ndarray]]
+    solved: tuple[JointResult, StereoResult], rig: tuple[list[np.ndarray], list[np.ndarray]]
 ) -> None:
     left, right = rig
-    good = epipolar_errors(left, right, left_model=LEFT, right_model=RIGHT, r1=result.r1,
-                           p1=result.p1, r2=result.r2, p2=result.p2)
+    joint, result = solved
+    models = {"left_model": joint.models[0], "right_model": joint.models[1]}
+    good = epipolar_errors(left, right, **models, r1=result.r1, p1=result.p1, r2=result.r2,
+                           p2=result.p2)
     assert np.sqrt(np.mean(np.square(good))) == pytest.approx(result.epipolar_rms_px, rel=0.05)
     # turn the right rectification by 0.5° about the baseline: rows slip by about f * 0.0087
     tilt = pose(np.array([math.radians(0.5), 0.0, 0.0]), np.zeros(3))[:3, :3]
-    bad = epipolar_errors(left, right, left_model=LEFT, right_model=RIGHT, r1=result.r1,
-                          p1=result.p1, r2=tilt @ result.r2, p2=result.p2)
+    bad = epipolar_errors(left, right, **models, r1=result.r1, p1=result.p1,
+                          r2=tilt @ result.r2, p2=result.p2)
     slip = result.p2[1, 1] * math.radians(0.5)
     assert np.median(bad) > 0.5 * slip > 10 * np.median(good)
 
 
-def test_too_few_joint_views(rig: tuple[list[np.ndarray], list[np.ndarray]]) -> None:
-    left, right = rig
-    with pytest.raises(ProcessorError, match="too few joint stereo views"):
-        calibrate_stereo(BOARD.points_in_board(), left[:4], right[:4], left_model=LEFT,
-                         right_model=RIGHT, square_m=BOARD.square_m)
+def test_no_joint_view(rig: tuple[list[np.ndarray], list[np.ndarray]]) -> None:
+    joint, _result = solve(*rig)
+    with pytest.raises(ProcessorError, match="no joint stereo view"):
+        stereo_result(joint, [], points_in_board=BOARD.points_in_board(),
+                      square_m=BOARD.square_m)
 
 
 def test_a_pair_from_two_board_poses_is_rejected(
@@ -112,14 +133,13 @@ def test_a_pair_from_two_board_poses_is_rejected(
     left, right = rig
     mixed = list(right)
     mixed[4] = right[5]
-    out = calibrate_stereo(BOARD.points_in_board(), left, mixed, left_model=LEFT,
-                           right_model=RIGHT, square_m=BOARD.square_m)
-    assert set(out.rejected) == {4} and "one pose" in out.rejected[4]
-    assert out.view_ids == [i for i in range(len(left)) if i != 4]
-    assert len(out.view_epipolar_px) == len(left) - 1
-    assert out.baseline_m == pytest.approx(result.baseline_m, abs=2 * result.baseline_std_m)
+    joint, out = solve(left, mixed)
+    assert 4 in out.rejected and "one pose" in out.rejected[4]
+    assert 4 not in out.view_ids
+    assert out.baseline_m == pytest.approx(result.baseline_m, abs=3 * result.baseline_std_m)
     assert out.epipolar_rms_px < 2 * result.epipolar_rms_px
     assert not result.rejected and result.view_ids == list(range(len(left)))
+    assert joint.rejected
 
 
 def test_right_views_numbered_from_the_other_end_are_turned_back(

@@ -1,0 +1,160 @@
+"""From frames to the solver's views: instants, stereo pairs and held poses.
+
+The frames become instants — one per camera frame, or one per stereo pair shot at the same
+time (an approximately paired frame joins its partner only while the board holds still:
+7 ms apart a moving board is at another pose). Consecutive instants that show the board
+held still become one view per camera, their corners averaged (:mod:`processors.calibration.
+holds`: the frames of a hold share the detector's error, so they are one observation, made
+more precise). Every view of every camera then goes into one least-squares problem
+(:func:`processors.calibration.joint.calibrate_cameras`); nothing is selected away.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from processors.calibration.board import Board
+from processors.calibration.holds import Seen, frame_scatter_px, holds
+from processors.calibration.joint import BoardView
+from processors.resync import pair_stamps
+
+from ..errors import CalibrationError
+from .views import CameraViews, Frame, size_hint
+
+#: an approximately paired stereo frame joins its partner while the board moves less than
+#: this (px per frame) in both
+STILL_PX = 0.25
+
+__all__ = ["STILL_PX", "Instant", "ViewsOfRig", "rig_views", "stereo_pairs"]
+
+
+@dataclass(frozen=True)
+class Instant:
+    """Frames shot at one instant: camera -> frame index."""
+
+    frames: dict[int, int]
+    stamp_ns: int
+
+
+@dataclass(frozen=True)
+class ViewsOfRig:
+    """The solver's input and how it maps back: ``views[i]`` is camera ``views[i].camera``
+    over the frames ``frames_of[i]`` (a hold: their corners averaged)."""
+
+    views: list[BoardView]
+    frames_of: list[list[int]]  # per view, its frames (of its camera)
+    pairs: list[tuple[int, int]]  # (left view, right view) seen at the same instants
+    candidates: list[list[int]]  # per camera, frames whose board passed every check
+    frame_scatter_px: float | None  # frame-to-frame scatter of held corners
+
+
+def stereo_pairs(left: CameraViews, right: CameraViews,
+                 approximate_s: float | None) -> list[tuple[int, int]]:
+    """(left frame, right frame) indices shot at the same time (or within the slop)."""
+    left_ns = np.array([f.stamp_ns for f in left.frames], dtype=np.int64)
+    right_ns = np.array([f.stamp_ns for f in right.frames], dtype=np.int64)
+    if approximate_s is None:
+        _common, li, ri = np.intersect1d(left_ns, right_ns, return_indices=True)
+        pairs = list(zip(li.tolist(), ri.tolist(), strict=True))
+    else:
+        pairing = pair_stamps(np.sort(left_ns), np.sort(right_ns),
+                              slop_ns=round(approximate_s * 1e9))
+        order_l, order_r = np.argsort(left_ns), np.argsort(right_ns)
+        pairs = [(int(order_l[a]), int(order_r[b]))
+                 for a, b in zip(pairing.left_index, pairing.right_index, strict=True)]
+    if not pairs:
+        gap = np.min(np.abs(left_ns[:, None] - right_ns[None, :])) / 1e6 \
+            if len(left_ns) * len(right_ns) <= 4_000_000 else float("nan")
+        how = "within the slop" if approximate_s is not None else "with identical stamps"
+        raise CalibrationError(
+            f"{left.source.image_topic} and {right.source.image_topic} never pair {how} "
+            f"(closest stamps {gap:.3f} ms apart); use --approximate SEC or resync the log"
+        )
+    return pairs
+
+
+def _candidates(views: CameraViews, board: Board, note: str) -> list[int]:
+    """Distinct frames whose board passed every check; an error naming why when none did."""
+    found = [f for f in views.distinct() if f.detection is not None]
+    topic = views.source.image_topic
+    if not found:
+        raise CalibrationError(
+            f"no {board.cols}x{board.rows} "
+            f"{'board' if board.pattern == 'chessboard' else board.pattern} found in "
+            f"{len(views.frames)} frames of "
+            f"{topic}{size_hint(views, board)}{note}")
+    candidates = [f.index for f in views.frames if f.candidate]
+    if not candidates:
+        reasons = sorted({f.reason or f.detection.reason for f in found if f.detection})
+        raise CalibrationError(f"{topic}: every board found was rejected "
+                               f"({'; '.join(reasons)}){size_hint(views, board)}")
+    return candidates
+
+
+def _still(frame: Frame) -> bool:
+    return frame.speed_px is not None and frame.speed_px <= STILL_PX
+
+
+def _sources(views: CameraViews) -> list[int]:
+    """Per frame, the distinct frame it shows (itself, or the one it repeats byte for byte)."""
+    out: list[int] = []
+    for frame in views.frames:
+        out.append(out[-1] if frame.duplicate and out else frame.index)
+    return out
+
+
+def _instants(cameras: list[CameraViews], candidates: list[list[int]],
+              approximate_s: float | None) -> list[Instant]:
+    """Every candidate frame in one instant, paired stereo frames sharing one, in time
+    order."""
+    usable = [set(c) for c in candidates]
+    out: list[Instant] = []
+    paired: list[set[int]] = [set() for _ in cameras]
+    if len(cameras) == 2:
+        left, right = cameras
+        source = [_sources(c) for c in cameras]
+        for li_frame, ri_frame in stereo_pairs(left, right, approximate_s):
+            # a repeated frame stands for the frame it repeats
+            li, ri = source[0][li_frame], source[1][ri_frame]
+            if li not in usable[0] or ri not in usable[1] or li in paired[0] \
+                    or ri in paired[1]:
+                continue
+            if approximate_s is not None and not (_still(left.frames[li])
+                                                  and _still(right.frames[ri])):
+                continue
+            out.append(Instant({0: li, 1: ri}, left.frames[li].stamp_ns))
+            paired[0].add(li)
+            paired[1].add(ri)
+    for camera, views in enumerate(cameras):
+        out += [Instant({camera: i}, views.frames[i].stamp_ns)
+                for i in candidates[camera] if i not in paired[camera]]
+    return sorted(out, key=lambda instant: (instant.stamp_ns, sorted(instant.frames.items())))
+
+
+def rig_views(cameras: list[CameraViews], board: Board, *, approximate_s: float | None,
+              stereo_note: bool) -> ViewsOfRig:
+    """The solver's views of every camera: instants, held poses averaged."""
+    candidates = [_candidates(v, board, f" (camera {v.source.namespace})" if stereo_note
+                              else "") for v in cameras]
+    instants = _instants(cameras, candidates, approximate_s)
+    seen = [{c: Seen(cameras[c].detection(i).ids, cameras[c].corners(i))
+             for c, i in instant.frames.items()} for instant in instants]
+    groups = holds(seen)
+    views: list[BoardView] = []
+    frames_of: list[list[int]] = []
+    pairs: list[tuple[int, int]] = []
+    for number, group in enumerate(groups):
+        at: dict[int, int] = {}
+        for camera, mean in sorted(group.mean.items()):
+            frames = [instants[m].frames[camera] for m in group.members]
+            speeds = [cameras[camera].frames[f].speed_px for f in frames]
+            speed = 0.0 if len(frames) > 1 or speeds[0] is None else float(speeds[0])
+            at[camera] = len(views)
+            views.append(BoardView(camera, number, mean.point_ids, mean.corners_px,
+                                   speed_px=speed))
+            frames_of.append(frames)
+        if len(at) == 2:
+            pairs.append((at[0], at[1]))
+    return ViewsOfRig(views, frames_of, pairs, candidates, frame_scatter_px(seen, groups))
