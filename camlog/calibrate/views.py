@@ -38,8 +38,17 @@ from .pixels import as_frame
 #: frames kept per camera to suggest another board size when none is found
 HINT_SAMPLES = 12
 
-__all__ = ["CameraSource", "CameraViews", "Frame", "LogViews", "detect_views",
-           "resolve_camera", "size_hint", "with_speed_limit"]
+__all__ = [
+    "CameraSource",
+    "CameraViews",
+    "Frame",
+    "LogViews",
+    "board_speeds",
+    "detect_views",
+    "resolve_camera",
+    "size_hint",
+    "with_speed_limit",
+]
 
 
 @dataclass(frozen=True)
@@ -178,14 +187,14 @@ class _Seen:
             if not duplicate:
                 last = self.detections.get(index)
             detections.append(last)
-        speeds = _speeds(detections, self.duplicates)
+        speeds = board_speeds(detections, self.duplicates)
         frames = tuple(Frame(i, stamp, duplicate, detection, speed_px=speed)
                        for i, (stamp, duplicate, detection, speed) in enumerate(zip(
                            self.stamps, self.duplicates, detections, speeds, strict=True)))
         return CameraViews(self.source, frames, self.size, self.log_info, tuple(self.samples))
 
 
-def _speeds(detections: list[Detection | None], duplicates: list[bool]) -> list[float | None]:
+def board_speeds(detections: list[Detection | None], duplicates: list[bool]) -> list[float | None]:
     """Per frame, the mean displacement of its corners to the nearer neighbouring frame that
     shows the same corners (0 next to a repeated frame: nothing moved)."""
     def moved(a: Detection | None, b: Detection | None) -> float | None:
