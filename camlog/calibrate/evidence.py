@@ -85,7 +85,9 @@ def write_evidence(reader: LogReader, path: Path, cameras: list[CalibratedCamera
                 side = 0 if camera is cameras[0] else 1
                 if shown is not None and frame.index == shown[side]:
                     rectified_shown[side] = rectified.bgr8()
-            if frame.duplicate:
+            # a held pose is one view: its first frame carries the annotation
+            view = camera.solution.view_of.get(frame.index, frame.index)
+            if frame.duplicate or view != frame.index:
                 continue
             status, used = camera.solution.status(frame)
             corners = frame.detection.corners_px if frame.detection is not None else None
