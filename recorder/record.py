@@ -49,6 +49,7 @@ class RecordResult:
     wall_s: float  # everything, setup included
     loop_s: float = 0.0  # rendering and writing frames, from the first shot to the closed log
     topics: list[str] = field(default_factory=list)
+    storage: str = ""  # format and compression, e.g. "mcap, zstd chunks"
 
     @property
     def fps(self) -> float:
@@ -122,7 +123,11 @@ class _Pipeline:
         self._opened = threading.Event()
         self.thread = threading.Thread(target=self._run, name="camlog-writer", daemon=True)
         self.thread.start()
-        self._opened.wait()
+        try:
+            self._opened.wait()
+        except BaseException:  # Ctrl-C while the log opens: drop it once it is open
+            self.abort()
+            raise
         if self.error is not None:  # the log could not be opened
             self.thread.join()
             raise self.error
@@ -229,8 +234,11 @@ def record(
     metadata = {"scenario": scenario.name, "seed": str(scenario.seed), "version": VERSION,
                 "renderer": f"mujoco/{gl_backend()}"}
 
+    storage: list[str] = []
+
     def open_log() -> LogWriter:
         writer = open_writer(output, fmt=fmt, overwrite=overwrite, **writer_options)
+        storage.append(f"{writer.format_name}, {writer.compression}")
         try:
             writer.write(SCENARIO, header, log_time_ns=scenario.start_stamp_ns)
             writer.set_metadata("camlog", metadata)
@@ -268,6 +276,7 @@ def record(
         dropped={c.name: dropped[i].tolist() for i, c in enumerate(scenario.cameras)},
         wall_s=time.perf_counter() - started,
         loop_s=loop_s,
+        storage=storage[0],
         topics=sorted({SCENARIO} | {
             t for c in scenario.cameras for topics in [CameraTopics(c.namespace)]
             for t in (topics.image_raw, topics.camera_info,

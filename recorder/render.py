@@ -63,6 +63,7 @@ class SceneRenderer:
         ]
         self._renderers: dict[tuple[int, int], Any] = {}
         self._views: ViewRenderer | None = None
+        size = (0, 0)
         try:
             for o in optics:
                 if isinstance(o, Optics):
@@ -73,6 +74,11 @@ class SceneRenderer:
                     self._views = ViewRenderer(mj, self.model)
         except Exception as err:
             self.close()
+            if "framebuffer" in str(err).lower() and max(size) > 2048:
+                raise RenderError(
+                    f"cannot render {size[0]}x{size[1]} images (each camera's size times its "
+                    f"supersampling): more than MuJoCo's GL framebuffer holds ({_line(err)}); "
+                    "use a smaller --resolution or --supersample") from None
             raise RenderError(
                 f"no working GL backend for MuJoCo (MUJOCO_GL={gl_backend()}): "
                 f"{_line(err)}; install Mesa EGL (libegl1, libgl1) or set MUJOCO_GL"

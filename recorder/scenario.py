@@ -71,6 +71,10 @@ class Scenario:
 
 # --- loading -------------------------------------------------------------------------------
 
+#: most frames per camera of one recording (9 hours at 30 Hz; planning and memory stay sane)
+MAX_FRAMES = 1_000_000
+
+
 def load_scenario(
     name_or_path: str | None = None, overrides: dict[str, Any] | None = None
 ) -> Scenario:
@@ -163,5 +167,9 @@ def parse_scenario(raw: dict[str, Any], source: str) -> Scenario:
     if len(set(names)) != len(names):
         raise ScenarioError(f"{source}: targets: names must be unique, got {names}")
     top.check_unknown()
-    return Scenario(name, description, seed, duration_s, frames, start_stamp_ns,
-                    tuple(cameras), targets, raw, source)
+    scenario = Scenario(name, description, seed, duration_s, frames, start_stamp_ns,
+                        tuple(cameras), targets, raw, source)
+    if max(scenario.frame_counts) > MAX_FRAMES:
+        raise ScenarioError(f"{source}: {max(scenario.frame_counts)} frames per camera is more "
+                            f"than camlog records at once ({MAX_FRAMES}); shorten it")
+    return scenario

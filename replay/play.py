@@ -26,6 +26,7 @@ from .export.blueprint import REPLAY_TIME, make_blueprint
 from .export.logger import LoggerOptions, SceneLogger
 from .export.sink import RecordingSink
 from .export.view import ExportSession, open_logs
+from .export.viewer import DEFAULT_PORT, LOCALHOST
 from .formats import open_writer
 from .formats.base import LogWriter, RawMessage
 from .pacing import Pacer, loop_period_ns
@@ -112,6 +113,8 @@ def play_log(
     output: Path | None = None,
     spawn: bool = False,
     connect: str | None = None,
+    bind: str = LOCALHOST,
+    port: int = DEFAULT_PORT,
     log_time: str = "replay",
     fmt: str | None = None,
     overwrite: bool = False,
@@ -123,7 +126,8 @@ def play_log(
 ) -> PlayResult:
     """Replay ``paths`` (merged like ``view``) at ``rate`` x real time, ``loops`` times
     (0: until interrupted). ``output`` ending in ``.rrd`` is a rerun recording; any other
-    output is a log (format from its name or ``fmt``)."""
+    output is a log (format from its name or ``fmt``). ``bind``, ``port``: where a
+    spawned viewer listens."""
     started = time.perf_counter()
     pacer = Pacer(rate, clock=clock, sleep=sleep)
     if loops < 0:
@@ -145,9 +149,9 @@ def play_log(
             blueprint = make_blueprint(session.plan, timeline=REPLAY_TIME, follow=True)
             sink = stack.enter_context(RecordingSink(
                 output=output, connect=connect, spawn=spawn, overwrite=overwrite,
-                blueprint=blueprint, inputs=paths))
+                blueprint=blueprint, bind=bind, port=port, inputs=paths))
             logger = SceneLogger(sink.rec, session.plan, options or LoggerOptions(),
-                                 decode=session.decode)
+                                 decode=session.decode, flush=sink.flush)
             logger.log_static()
             destination = _RerunDestination(logger)
         else:

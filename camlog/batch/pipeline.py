@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import hashlib
 import json
+import math
 import tomllib
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -253,6 +254,29 @@ def run_step(step: Step, log: Location, out: Path, workers: int) -> StepOutcome:
 
 # --- loading -----------------------------------------------------------------------------
 
+def _scalar(value: Any) -> bool:
+    if isinstance(value, float):
+        return math.isfinite(value)
+    return isinstance(value, str | bool | int)
+
+
+def _check_value(where: str, key: str, value: Any, *, text: bool = False) -> None:
+    """A pipeline value is a scalar, a list of scalars (topics) or a table of scalars (a
+    processor's options), with finite numbers: deeper nesting, NaN and infinities are
+    refused here in one line rather than failing inside a step."""
+    if text:
+        ok, kind = isinstance(value, str) and bool(value.strip()), "a non-empty text"
+    else:
+        ok = _scalar(value) or (isinstance(value, list) and all(map(_scalar, value))) or (
+            isinstance(value, dict) and all(isinstance(k, str) and _scalar(v)
+                                            for k, v in value.items()))
+        kind = "a value, a list of values or a table of values (finite numbers, no nesting)"
+    if not ok:
+        shown = repr(value)
+        raise PipelineError(f"{where}: {key} must be {kind}, got "
+                            f"{shown if len(shown) <= 60 else shown[:57] + '...'}")
+
+
 def parse_pipeline(raw: Any, source: str) -> Pipeline:
     """Validate raw pipeline data (from TOML or YAML)."""
     if not isinstance(raw, dict) or not isinstance(raw.get("steps"), list) or not raw["steps"]:
@@ -266,8 +290,11 @@ def parse_pipeline(raw: Any, source: str) -> Pipeline:
         if not isinstance(table, dict) or "run" not in table:
             raise PipelineError(f"{where}: each step needs run = one of {', '.join(STEPS)}")
         kind = table["run"]
-        if kind not in STEPS:
+        if not isinstance(kind, str) or kind not in STEPS:
             raise PipelineError(f"{where}: unknown step {kind!r} (known: {', '.join(STEPS)})")
+        for key in ("name", "input"):
+            if key in table:
+                _check_value(where, key, table[key], text=True)
         name = str(table.get("name", kind))
         if any(s.name == name for s in steps):
             raise PipelineError(f"{where}: step name {name!r} is used twice; give name = ...")
@@ -281,6 +308,8 @@ def parse_pipeline(raw: Any, source: str) -> Pipeline:
         if bad:
             raise PipelineError(f"{where}: {kind} has no option {bad[0]!r} "
                               f"(options: {', '.join(sorted(STEPS[kind][0])) or 'none'})")
+        for key, value in options.items():
+            _check_value(where, key, value)
         steps.append(Step(name, kind, source_step, options))
     return Pipeline(tuple(steps), source)
 

@@ -3,15 +3,18 @@
 Start-up stays small: a command's module (and what it imports) is loaded only when that
 command runs, and its arguments are registered only then; ``camlog --help`` loads none.
 Heavy libraries (numpy, OpenCV, rerun, MuJoCo) are imported inside the functions that use
-them, never to build the parser.
+them, never to build the parser. This module imports only the standard library, so that
+Ctrl-C while the packages load is handled like Ctrl-C at any later moment.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Collection, Sequence
+from typing import NoReturn
 
 #: subcommand name -> (one-line help, module under camlog.cli with add_arguments and run)
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -46,9 +49,17 @@ KNOWN_ERRORS = (("camlog.errors", "CamlogError"), ("replay.errors", "ReplayError
                 ("recorder.errors", "RecorderError"), ("processors.errors", "ProcessorError"))
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with its errors in one line, like every other camlog error."""
+
+    def error(self, message: str) -> NoReturn:
+        """Print ``PROG: error: MESSAGE (see PROG --help)`` and exit with status 2."""
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
+
 def build_parser(commands: Collection[str] = COMMANDS) -> argparse.ArgumentParser:
     """The parser with every subcommand, and the arguments of ``commands`` (default: all)."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="camlog",
         description="Log-first record/replay toolchain for robot cameras.",
     )
@@ -79,20 +90,44 @@ def known_error(err: BaseException) -> bool:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point: known errors become one line on stderr and exit status 1."""
+    """Entry point: known errors, and OS errors, become one line on stderr and exit status 1;
+    Ctrl-C at any moment (start-up included) ends with one line and exit status 130."""
     argv = sys.argv[1:] if argv is None else list(argv)
     command = _command_in(argv)
-    args = build_parser([command] if command else []).parse_args(argv)
+    where = f"camlog {command}" if command else "camlog"
     try:
+        # rerun's Rust side logs a failure (disk full, lost viewer) as several lines of its
+        # own; camlog reports it in one. RUST_LOG=warn (or any value) brings them back.
+        os.environ.setdefault("RUST_LOG", "off")
+        args = build_parser([command] if command else []).parse_args(argv)
         return int(args.run(args))
     except KeyboardInterrupt:
-        print(f"camlog {args.command}: interrupted", file=sys.stderr)
+        print(f"{where}: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:  # e.g. `camlog info LOG | head -1`
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # exit writes too
+        return 1
+    except OSError as err:  # disk full, permissions, names too long: with the path
+        if known_error(err):
+            print(f"{where}: error: {err}", file=sys.stderr)
+        else:
+            print(f"{where}: error: {os_error_text(err)}", file=sys.stderr)
+        return 1
+    except MemoryError:
+        print(f"{where}: error: out of memory", file=sys.stderr)
+        return 1
     except Exception as err:
         if not known_error(err):
             raise
-        print(f"camlog {args.command}: error: {err}", file=sys.stderr)
+        print(f"{where}: error: {err}", file=sys.stderr)
         return 1
+
+
+def os_error_text(err: OSError) -> str:
+    """``PATH: reason`` of an OS error (both paths of a failed rename or copy)."""
+    reason = err.strerror or str(err) or type(err).__name__
+    paths = [str(p) for p in (err.filename, err.filename2) if p is not None]
+    return f"{' -> '.join(paths)}: {reason}" if paths else reason
 
 
 if __name__ == "__main__":

@@ -9,6 +9,7 @@ from typing import Any
 from processors.calibration.board import DEFAULT_DICTIONARY, PATTERNS
 
 from ..errors import UsageError
+from .args import name, non_negative, output_path, positive
 
 #: ROS distortion_model names (and OpenCV's "fisheye" for equidistant)
 MODELS = ("plumb_bob", "rational_polynomial", "equidistant", "fisheye")
@@ -29,17 +30,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("log", metavar="LOG", type=Path, help="input log (never modified)")
     p.add_argument("-s", "--size", required=True, metavar="COLSxROWS",
                    help="board size in inner corners, e.g. 7x6")
-    p.add_argument("-q", "--square", required=True, type=float, metavar="M",
+    p.add_argument("-q", "--square", required=True, type=positive, metavar="M",
                    help="square side in metres, e.g. 0.01")
     p.add_argument("-p", "--pattern", default="chessboard", choices=PATTERNS,
                    help="calibration target (default chessboard)")
-    p.add_argument("--camera", metavar="NS", help="mono camera namespace, e.g. /simple_camera "
-                   "(default: the log's only camera)")
-    p.add_argument("--left", metavar="NS", help="stereo left camera namespace")
-    p.add_argument("--right", metavar="NS", help="stereo right camera namespace")
-    p.add_argument("--approximate", type=float, metavar="SEC",
+    p.add_argument("--camera", type=name, metavar="NS",
+                   help="mono camera namespace, e.g. /simple_camera (default: the log's only "
+                        "camera)")
+    p.add_argument("--left", type=name, metavar="NS", help="stereo left camera namespace")
+    p.add_argument("--right", type=name, metavar="NS", help="stereo right camera namespace")
+    p.add_argument("--approximate", type=non_negative, metavar="SEC",
                    help="pair stereo frames whose stamps differ by at most SEC")
-    p.add_argument("-o", "--output", type=Path, metavar="OUTDIR",
+    p.add_argument("-o", "--output", type=output_path, metavar="OUTDIR",
                    help="output folder (default: LOG_calibration next to the log)")
     p.add_argument("--fix-principal-point", action="store_true",
                    help="hold the principal point at the image centre")
@@ -64,7 +66,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "rational_polynomial as camera_calibration does")
     p.add_argument("-c", "--camera-name", "--camera_name", dest="camera_name",
                    help="camera_name written in the YAML files")
-    p.add_argument("--max-chessboard-speed", type=float, metavar="PX",
+    p.add_argument("--max-chessboard-speed", type=positive, metavar="PX",
                    help="reject views whose board moves more than PX pixels per frame")
     p.add_argument("--check", action="store_true",
                    help="measure --calibration files on LOG instead of calibrating")

@@ -8,7 +8,7 @@ from pathlib import Path
 from replay.convert import COMPRESSIONS, convert_log
 from replay.formats import FORMATS
 
-from .args import add_selection, print_warnings
+from .args import add_selection, output_path, print_warnings
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -23,7 +23,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "copied."
     )
     p.add_argument("input", metavar="IN", type=Path, help="MCAP file, rosbag2 directory or .bag")
-    p.add_argument("output", metavar="OUT", type=Path,
+    p.add_argument("output", metavar="OUT", type=output_path,
                    help="output log: .mcap, .bag or a directory name (rosbag2)")
     p.add_argument("--format", choices=sorted(FORMATS), help="output format (default: from OUT)")
     add_selection(p)

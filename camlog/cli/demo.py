@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from ..errors import UsageError
+from .args import positive
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -16,7 +17,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                 "size. Re-running replaces the folder's files.")
     p.add_argument("-o", "--output", type=Path, default=Path("demo"), metavar="OUTDIR",
                    help="folder for every output (default ./demo)")
-    p.add_argument("--duration", type=float, default=10.0, metavar="S",
+    p.add_argument("--duration", type=positive, default=10.0, metavar="S",
                    help="length of the stereo recording in seconds (default 10)")
     p.add_argument("--seed", type=int, default=0, help="random seed of both scenarios")
     p.add_argument("--no-progress", action="store_true", help="hide progress bars")

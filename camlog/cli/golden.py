@@ -5,6 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..errors import GoldenError
+from .args import bounded_int
+
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Register the ``golden`` arguments."""
@@ -28,7 +31,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="where check writes images that differ (default ./golden_diff)")
     p.add_argument("--work-dir", type=Path, metavar="DIR",
                    help="keep the jobs' output logs here (default: a temporary folder)")
-    p.add_argument("--workers", type=int, default=1, metavar="N",
+    p.add_argument("--workers", type=bounded_int(1, 64), default=1, metavar="N",
                    help="threads per job (outputs must not depend on it; default 1)")
 
 
@@ -36,6 +39,10 @@ def run(args: argparse.Namespace) -> int:
     """Call :func:`golden.check`, :func:`golden.regenerate` or :func:`golden.record_inputs`."""
     from ..golden import run as golden
 
+    if args.action != "check" and args.inputs is None and not golden.in_checkout():
+        raise GoldenError(
+            f"camlog golden {args.action} rewrites the committed golden files: run it in a "
+            "camlog checkout (they live in datasets/golden there), or give --inputs DIR")
     inputs = args.inputs or golden.golden_dir()
     expected = args.expected or inputs / "expected"
     if args.action == "record":

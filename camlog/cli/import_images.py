@@ -8,14 +8,7 @@ from pathlib import Path
 from replay.formats import FORMATS
 from replay.importer import DEFAULT_START_NS, import_images
 
-from .args import bounded_int, print_warnings
-
-
-def _rate(text: str) -> float:
-    try:
-        return float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+from .args import bounded_int, name, number, output_path, print_warnings
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -27,12 +20,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "NS/left/image_raw and NS/right/image_raw with identical stamps."
     )
     p.add_argument("folder", metavar="DIR", type=Path, help="folder of image files")
-    p.add_argument("-o", "--output", type=Path, required=True, metavar="LOG",
+    p.add_argument("-o", "--output", type=output_path, required=True, metavar="LOG",
                    help="output log: .mcap, .bag or a directory name (rosbag2)")
-    p.add_argument("--topic", metavar="T",
+    p.add_argument("--topic", type=name, metavar="T",
                    help="image topic (default /camera/image_raw); with --stereo the camera "
                         "namespace (default /stereo)")
-    p.add_argument("--rate", type=_rate, default=10.0, metavar="HZ",
+    p.add_argument("--rate", type=number(above=0.0, high=1e6), default=10.0, metavar="HZ",
                    help="frame rate of the stamps (default 10)")
     p.add_argument("--stereo", action="store_true", help="pair left*/right* files")
     p.add_argument("--camera-info", type=Path, action="append", default=[], metavar="YAML",
@@ -41,7 +34,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--start-time", type=bounded_int(0, None), default=DEFAULT_START_NS,
                    metavar="NS", help=f"first stamp in ns since the epoch (default "
                                       f"{DEFAULT_START_NS})")
-    p.add_argument("--frame-id", metavar="ID",
+    p.add_argument("--frame-id", type=name, metavar="ID",
                    help="header frame_id (default from the namespace, e.g. "
                         "camera_optical_frame; with --stereo ID_left / ID_right)")
     p.add_argument("--format", choices=sorted(FORMATS), help="output format (default: from LOG)")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 
 
@@ -25,15 +26,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Print the summary of ``args.log``; errors propagate as :class:`replay.ReplayError`."""
-    print(info_text(args.log, recover=args.recover, verify=args.verify))
-    return 0
-
-
-def info_text(path: Path, *, recover: bool = False, verify: bool = False) -> str:
-    """The text ``camlog info`` prints for one log."""
+    """Print the summary of ``args.log`` on stdout and what is wrong with the log (damage,
+    recovery) on stderr; errors propagate as :class:`replay.ReplayError`."""
     from replay.formats import open_reader
     from replay.info import format_summary, summarize
 
-    with open_reader(path, recover=recover) as reader:
-        return format_summary(summarize(reader, verify=verify))
+    from .args import print_warnings
+
+    with open_reader(args.log, recover=args.recover) as reader:
+        summary = summarize(reader, verify=args.verify)
+    print(format_summary(dataclasses.replace(summary, warnings=())))
+    print_warnings(summary.warnings)
+    return 0

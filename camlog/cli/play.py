@@ -8,17 +8,7 @@ from pathlib import Path
 from replay.formats import FORMATS
 from replay.play import LOG_TIMES, play_log
 
-from .args import add_selection, add_viewer_destination, bounded_int, print_warnings
-
-
-def _rate(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"the rate must be > 0, got {value}")
-    return value
+from .args import add_selection, add_viewer_destination, bounded_int, number, print_warnings
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -33,7 +23,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     )
     p.add_argument("logs", metavar="LOG", type=Path, nargs="+",
                    help="log(s) to replay (several are merged in log time)")
-    p.add_argument("--rate", type=_rate, default=1.0, metavar="R",
+    p.add_argument("--rate", type=number(low=1e-3, high=1e6), default=1.0, metavar="R",
                    help="speed factor (default 1: real time; 2: twice as fast)")
     add_selection(p)
     p.add_argument("--loop", nargs="?", const=0, default=1, type=bounded_int(1, None),
@@ -52,6 +42,7 @@ def run(args: argparse.Namespace) -> int:
     result = play_log(
         args.logs, rate=args.rate, start_s=args.start, end_s=args.end, topics=args.topics,
         loops=args.loop, output=args.output, spawn=args.spawn, connect=args.connect,
+        bind=args.bind, port=args.port,
         log_time=args.log_time, fmt=args.format, overwrite=args.overwrite,
         recover=args.recover, progress=False if args.no_progress else None)
     print(f"played {result.messages} messages ({result.loops} loop(s) of "

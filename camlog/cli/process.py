@@ -13,6 +13,7 @@ from replay.formats import FORMATS
 
 from ..errors import UsageError
 from ..processing.outputs import CHAPTER_NS, COMPRESSIONS
+from .args import bounded_int, name, output_path
 from .processor_args import add_processor_arguments, chosen_processors, worded
 
 
@@ -25,9 +26,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "the log records which processor wrote each output and how `camlog view` shows it."
     )
     p.add_argument("log", metavar="LOG", type=Path, help="input log (never modified)")
-    p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
+    p.add_argument("-o", "--output", type=output_path, required=True, metavar="OUT",
                    help="output log: .mcap, .bag or a rosbag2 directory name")
-    p.add_argument("--topic", required=True, action="append", metavar="T", dest="topics",
+    p.add_argument("--topic", type=name, required=True, action="append", metavar="T",
+                   dest="topics",
                    help="image topic to process (Image or CompressedImage, e.g. "
                         "/cam/image_raw or /cam/image_raw/compressed); repeat it for "
                         "several cameras")
@@ -39,9 +41,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="write image outputs as CompressedImage on TOPIC/compressed")
     p.add_argument("--drop-input", "--topics-only", dest="drop_input", action="store_true",
                    help="write only the processors' output topics, not the input's")
-    p.add_argument("--max-frames", type=int, metavar="N",
+    p.add_argument("--max-frames", type=bounded_int(1, None), metavar="N",
                    help="stop after N frames of each topic (quick runs)")
-    p.add_argument("--workers", type=int, metavar="N", help="processing threads (default: cores)")
+    p.add_argument("--workers", type=bounded_int(1, 256), metavar="N",
+                   help="processing threads (default: cores)")
     p.add_argument("--format", choices=sorted(FORMATS), help="output format (default: from OUT)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output")
     p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")

@@ -3,21 +3,33 @@
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 from typing import Any
 
-from recorder.scenario import DEFAULT_SCENARIO, builtin_names
+from recorder.scenario import DEFAULT_SCENARIO, MAX_FRAMES, builtin_names
 from replay.camera import CAMERA_MODELS
-from replay.formats import FORMATS, format_for_output
+from replay.formats import FORMATS
+
+from .args import bounded_int, non_negative, number, output_path, positive
+
+#: longest recording in seconds and largest image side the command line accepts
+MAX_DURATION_S = 86_400.0
+MAX_SIDE = 8192
+#: distortion model -> number of coefficients
+DISTORTION_COEFFICIENTS = {"plumb_bob": 5, "rational_polynomial": 8, "equidistant": 4}
 
 
 def _floats(text: str) -> list[float]:
     try:
-        return [float(v) for v in text.replace(" ", "").split(",") if v]
+        values = [float(v) for v in text.replace(" ", "").split(",") if v]
     except ValueError:
         raise argparse.ArgumentTypeError(
             f"expected comma-separated numbers, got {text!r}"
         ) from None
+    if not all(math.isfinite(v) for v in values):
+        raise argparse.ArgumentTypeError(f"expected finite numbers, got {text!r}")
+    return values
 
 
 def _intrinsics(text: str) -> list[float]:
@@ -34,17 +46,24 @@ def _resolution(text: str) -> tuple[int, int]:
         raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, got {text!r}") from None
     if w < 16 or h < 16:
         raise argparse.ArgumentTypeError(f"resolution {text} is too small (min 16x16)")
+    if w > MAX_SIDE or h > MAX_SIDE:
+        raise argparse.ArgumentTypeError(
+            f"resolution {text} is too large (at most {MAX_SIDE} pixels per side)")
     return w, h
 
 
 def _distortion(text: str) -> tuple[str, list[float]]:
     model, _, coeffs = text.partition(":")
-    if model not in CAMERA_MODELS or not coeffs:
+    if model not in CAMERA_MODELS or model not in DISTORTION_COEFFICIENTS or not coeffs:
         raise argparse.ArgumentTypeError(
             f"expected plumb_bob:k1,k2,p1,p2,k3, rational_polynomial:k1,k2,p1,p2,k3,k4,k5,k6 or "
             f"equidistant:k1,k2,k3,k4, got {text!r}"
         )
-    return model, _floats(coeffs)
+    values = _floats(coeffs)
+    if len(values) != DISTORTION_COEFFICIENTS[model]:
+        raise argparse.ArgumentTypeError(
+            f"{model} has {DISTORTION_COEFFICIENTS[model]} coefficients, got {len(values)}")
+    return model, values
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -52,32 +71,37 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("scenario", nargs="?", default=DEFAULT_SCENARIO,
                    help=f"built-in scenario name ({', '.join(builtin_names())}) or path to a "
                         f".toml spec (default: {DEFAULT_SCENARIO})")
-    p.add_argument("-o", "--output", type=Path,
+    p.add_argument("-o", "--output", type=output_path,
                    help="output log: NAME.mcap (default), NAME.bag (ROS1) or a directory name "
                         "(rosbag2); default: recordings/SCENARIO.mcap")
     p.add_argument("--format", choices=sorted(FORMATS),
                    help="output format (default: from the output name; .mcap when none)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output")
-    p.add_argument("--seed", type=int, help="random seed (board poses, stamps, noise)")
+    p.add_argument("--seed", type=bounded_int(0, 2**63 - 1),
+                   help="random seed (board poses, stamps, noise)")
     length = p.add_mutually_exclusive_group()
-    length.add_argument("--duration", type=float, metavar="S", help="recording length in seconds")
-    length.add_argument("--frames", type=int, metavar="N", help="frames per camera")
+    length.add_argument("--duration", type=number(above=0.0, high=MAX_DURATION_S), metavar="S",
+                        help=f"recording length in seconds (at most {MAX_DURATION_S:g})")
+    length.add_argument("--frames", type=bounded_int(1, MAX_FRAMES), metavar="N",
+                        help=f"frames per camera (at most {MAX_FRAMES})")
     p.add_argument("--resolution", type=_resolution, metavar="WxH",
                    help="image size of every camera, e.g. 640x480")
-    p.add_argument("--hfov", type=float, metavar="RAD", help="horizontal field of view (rad)")
+    p.add_argument("--hfov", type=positive, metavar="RAD", help="horizontal field of view (rad)")
     p.add_argument("--intrinsics", type=_intrinsics, metavar="FX,FY,CX,CY",
                    help="pinhole intrinsics in pixels (overrides --hfov)")
     p.add_argument("--distortion", type=_distortion, metavar="MODEL:K1,K2,...",
                    help="lens distortion, e.g. plumb_bob:-0.2,0.05,0,0,0, "
                         "rational_polynomial:k1,k2,p1,p2,k3,k4,k5,k6 or equidistant:k1,k2,k3,k4 "
                         "(a fisheye, rendered as several views)")
-    p.add_argument("--noise", type=float, metavar="SIGMA",
+    p.add_argument("--noise", type=non_negative, metavar="SIGMA",
                    help="Gaussian sensor noise, standard deviation in 8-bit levels")
     p.add_argument("--supersample", type=int, choices=(1, 2, 3, 4),
                    help="render s x s samples per pixel (default 1 for ideal cameras, 2 otherwise)")
     p.add_argument("--encoding", choices=("rgb8", "bgr8", "mono8"), help="image encoding")
-    p.add_argument("--compression", choices=("zstd", "lz4", "none"), default="zstd",
-                   help="MCAP chunk compression (default zstd)")
+    p.add_argument("--compression", choices=("zstd", "lz4", "bz2", "none"),
+                   help="compression: MCAP chunks zstd (default), lz4 or none; rosbag2 "
+                        "zstd (MCAP chunks, default; sqlite3: per message) or none "
+                        "(sqlite3 default); ROS1 chunks lz4 (default), bz2 or none")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
 
@@ -110,15 +134,13 @@ def run(args: argparse.Namespace) -> int:
     output = args.output or Path("recordings") / f"{scenario.name}.mcap"
     if args.output is None:
         output.parent.mkdir(parents=True, exist_ok=True)
-    options: dict[str, Any] = {}
-    if format_for_output(output, args.format) == "mcap":
-        options["compression"] = args.compression
     result = record(scenario, output, fmt=args.format, overwrite=args.overwrite,
-                    progress=False if args.no_progress else None, **options)
+                    progress=False if args.no_progress else None,
+                    compression=args.compression)
     frames = ", ".join(f"{name} {n}" for name, n in result.frames.items())
     drops = {n: len(d) for n, d in result.dropped.items() if d}
     dropped = f", dropped {drops}" if drops else ""
     print(f"recorded {scenario.name} (seed {scenario.seed}): {frames} frames{dropped} "
           f"in {result.wall_s:.1f} s ({result.fps:.0f} frames/s)")
-    print(f"wrote {result.path}")
+    print(f"wrote {result.path} ({result.storage})")
     return 0

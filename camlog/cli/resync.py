@@ -9,6 +9,7 @@ from replay.formats import FORMATS
 from replay.topics import RESYNC_PREFIX
 
 from ..processing.resync_log import resync_log
+from .args import name, number, output_path
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -22,17 +23,17 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "input topic is kept."
     )
     p.add_argument("log", metavar="LOG", type=Path, help="input log (never modified)")
-    p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
+    p.add_argument("-o", "--output", type=output_path, required=True, metavar="OUT",
                    help="output log: .mcap, .bag or a rosbag2 directory name")
-    p.add_argument("--left", default="/unsynced/left", metavar="NS",
+    p.add_argument("--left", type=name, default="/unsynced/left", metavar="NS",
                    help="left camera namespace with image_raw[/compressed] and camera_info "
                         "(default /unsynced/left)")
-    p.add_argument("--right", default="/unsynced/right", metavar="NS",
+    p.add_argument("--right", type=name, default="/unsynced/right", metavar="NS",
                    help="right camera namespace (default /unsynced/right)")
-    p.add_argument("--slop", type=float, metavar="SEC",
+    p.add_argument("--slop", type=number(low=0.0, high=3600.0), metavar="SEC",
                    help="largest |right - left| stamp difference of a pair "
                         "(default: half the median frame period)")
-    p.add_argument("--out-prefix", default=RESYNC_PREFIX, metavar="NS",
+    p.add_argument("--out-prefix", type=name, default=RESYNC_PREFIX, metavar="NS",
                    help=f"namespace of the re-stamped topics (default {RESYNC_PREFIX})")
     p.add_argument("--format", choices=sorted(FORMATS), help="output format (default: from OUT)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output")

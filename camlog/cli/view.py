@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .args import add_selection, add_viewer_destination, bounded_int, print_warnings
+from .args import add_selection, add_viewer_destination, bounded_int, positive, print_warnings
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -28,7 +28,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--every", type=bounded_int(1, None), default=1, metavar="N",
                    help="keep every N-th image of each camera (and its overlays)")
     add_selection(p)
-    p.add_argument("--residual-scale", type=float, default=50.0, metavar="X",
+    p.add_argument("--residual-scale", type=positive, default=50.0, metavar="X",
                    help="draw calibration residual arrows X times their length (default 50)")
     p.add_argument("--no-ground-truth", action="store_true",
                    help="do not project the simulator's target points into the images")
@@ -45,6 +45,7 @@ def run(args: argparse.Namespace) -> int:
                             ground_truth=not args.no_ground_truth)
     result = view_logs(
         args.logs, output=args.output, spawn=args.spawn, connect=args.connect,
+        bind=args.bind, port=args.port,
         overwrite=args.overwrite, topics=args.topics, start_s=args.start, end_s=args.end,
         options=options, recover=args.recover, progress=False if args.no_progress else None)
     images = sum(n for entity, n in result.counts.items() if entity.endswith("/image"))

@@ -51,6 +51,7 @@ __all__ = [
     "compare",
     "compute_outputs",
     "golden_dir",
+    "in_checkout",
     "opencv_threads",
     "record_inputs",
     "regenerate",
@@ -64,6 +65,13 @@ MANIFEST = "manifest.json"
 def golden_dir() -> Path:
     """``datasets/golden``: the inputs, ``manifest.json`` and ``expected/``."""
     return Path(str(resources.files("camlog_datasets") / "golden"))
+
+
+def in_checkout() -> bool:
+    """Whether the golden files are a source checkout's ``datasets/golden`` (an editable
+    install) rather than the copy an installed wheel carries."""
+    datasets = golden_dir().parent
+    return datasets.name == "datasets" and (datasets.parent / "pyproject.toml").is_file()
 
 
 # --- golden inputs -------------------------------------------------------------------------

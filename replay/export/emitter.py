@@ -16,14 +16,17 @@ import numpy as np
 import rerun as rr
 
 from .blueprint import LOG_TIME, REPLAY_TIME, STAMP_TIME
+from .sink import flush_recording
 
-__all__ = ["FLUSH_EVERY", "MAX_PENDING", "Emitter"]
+__all__ = ["FLUSH_EVERY", "MAX_PENDING", "Emitter", "Flush"]
 
 #: log calls held back behind an image still being encoded (bounds memory)
 MAX_PENDING = 16
 #: log calls between blocking flushes of the recording (bounds rerun's write queue)
 FLUSH_EVERY = 400
 
+#: a blocking flush of the recording (default: :func:`flush_recording`)
+Flush = Callable[[], None] | None
 #: (log time, header stamp or None, replay wall clock or None), ns
 Times = tuple[int, int | None, int | None]
 
@@ -31,10 +34,14 @@ Times = tuple[int, int | None, int | None]
 class Emitter:
     """Sends ``(entity, archetype)`` log calls to ``rec`` at the current message's times;
     an archetype may be a :class:`~concurrent.futures.Future` of one (see :meth:`encode`,
-    which runs on ``encoders`` worker threads). Counts rows per entity."""
+    which runs on ``encoders`` worker threads). Counts rows per entity. ``flush`` waits for
+    rerun's writer every :data:`FLUSH_EVERY` calls."""
 
-    def __init__(self, rec: rr.RecordingStream, *, encoders: int = 0) -> None:
+    def __init__(self, rec: rr.RecordingStream, *, encoders: int = 0,
+                 flush: Flush = None) -> None:
         self.rec = rec
+        # a blocking flush that gives up when rerun stalls (see sink.flush_recording)
+        self._flush = flush or (lambda: flush_recording(rec))
         self._pool = ThreadPoolExecutor(encoders, thread_name_prefix="camlog-jpeg") \
             if encoders else None
         self.counts: dict[str, int] = {}  # entity -> logged rows
@@ -70,7 +77,7 @@ class Emitter:
             if self._logged % FLUSH_EVERY == 0:
                 # rerun writes on its own thread; without back-pressure its queue grows with
                 # the log's length whenever logging outpaces writing
-                self.rec.flush()
+                self._flush()
 
     def encode(self, make: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
         """``make(*args, **kwargs)``: an archetype, made on a worker thread when there are

@@ -28,7 +28,7 @@ from ..formats.base import RawMessage
 from ..frames import decode_frame
 from ..messages import CameraInfo, CompressedImage, Image, Message, PointStamped, PoseStamped, Text
 from ..records import ViewResiduals
-from .emitter import Emitter
+from .emitter import Emitter, Flush
 from .frames import CameraFrames
 from .images import encoded_image, rerun_image, still_frame, video_sample
 from .overlays import (
@@ -79,7 +79,7 @@ class SceneLogger:
     """Logs raw messages of the planned topics to ``rec``; counts what it logged."""
 
     def __init__(self, rec: rr.RecordingStream, plan: ScenePlan, options: LoggerOptions,
-                 *, decode: Callable[[RawMessage], Message]) -> None:
+                 *, decode: Callable[[RawMessage], Message], flush: Flush = None) -> None:
         self.rec, self.plan, self.options, self._decode = rec, plan, options, decode
         # rerun's own log_time (wall clock of the export) and log_tick would shadow and
         # clutter the log's timelines
@@ -87,7 +87,8 @@ class SceneLogger:
         rec.set_log_tick_enabled(False)
         self.cameras = {ns: _Camera(cam, frames=CameraFrames(every=options.every))
                         for ns, cam in plan.cameras.items()}
-        self._out = Emitter(rec, encoders=2 if options.jpeg_quality is not None else 0)
+        encoders = 2 if options.jpeg_quality is not None else 0
+        self._out = Emitter(rec, encoders=encoders, flush=flush)  # flush: the sink's
         self.counts = self._out.counts  # entity -> logged rows
         self.warnings: list[str] = []
         self._warned: set[str] = set()

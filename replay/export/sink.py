@@ -7,23 +7,23 @@ name.
 
 from __future__ import annotations
 
-import socket
+import shutil
+import threading
 import uuid
 from collections.abc import Iterable
 from pathlib import Path
 from types import TracebackType
 from typing import Any, Self
-from urllib.parse import urlsplit
 
 import rerun as rr
 
 from ..atomic import AtomicOutput
 from ..errors import ViewerError
+from .viewer import DEFAULT_PORT, LOCALHOST, grpc_url, require_listening, spawn_viewer
 
-__all__ = ["RecordingSink", "default_output", "grpc_url", "require_listening"]
+__all__ = ["RecordingSink", "default_output", "flush_recording"]
 
 APPLICATION_ID = "camlog"
-_SCHEMES = ("rerun://", "rerun+http://", "rerun+https://")
 
 
 def default_output(log: Path) -> Path:
@@ -31,42 +31,86 @@ def default_output(log: Path) -> Path:
     return log.with_name(log.name + ".rrd") if log.is_dir() else log.with_suffix(".rrd")
 
 
-def grpc_url(text: str) -> str:
-    """A viewer address: ``rerun+http://host:port/proxy``, or ``host:port`` for short.
-
-    >>> grpc_url("127.0.0.1:9876")
-    'rerun+http://127.0.0.1:9876/proxy'
-    """
-    if text.startswith(_SCHEMES):
-        return text
-    host, _, port = text.rpartition(":")
-    if host and port.isdigit():
-        return f"rerun+http://{host}:{port}/proxy"
-    raise ViewerError(f"not a viewer address: {text!r} (use rerun+http://HOST:PORT/proxy or "
-                      "HOST:PORT)")
+#: rerun's file sink can hang when its first write fails: refuse a nearly full disk first
+MIN_FREE_BYTES = 1 << 20
 
 
-def require_listening(url: str, *, timeout_s: float = 2.0) -> None:
-    """Fail early, with the address, when no viewer accepts connections at ``url`` (rerun
-    itself would buffer the recording and drop it silently)."""
-    parts = urlsplit(url.replace("rerun+", "", 1).replace("rerun://", "https://", 1))
-    host, port = parts.hostname or "127.0.0.1", parts.port or 9876
+def _require_space(path: Path) -> None:
+    free = shutil.disk_usage(path.parent).free
+    if free < MIN_FREE_BYTES:
+        raise ViewerError(f"cannot write {path.parent}: no space left on device "
+                          f"({free} bytes free)")
+
+
+#: a flush that makes no progress for this long means rerun's file writer, or the viewer
+#: it sends to, is gone: rerun would wait for it forever
+STALL_S = 10.0
+NETWORK_STALL_S = 15.0
+#: how long a recording whose writer failed may take to let go of it
+GIVE_UP_S = 2.0
+
+
+def flush_recording(rec: rr.RecordingStream, watched: Path | None = None, *,
+                    stall_s: float = STALL_S) -> None:
+    """Wait until rerun has sent everything logged so far. Raises ``RuntimeError`` when it
+    makes no progress for ``stall_s`` (a file ``watched`` that grows is progress)."""
+    while True:
+        before = _size(watched)
+        try:
+            rec.flush(timeout_sec=stall_s)
+            return
+        except RuntimeError as err:
+            if "timed out" in str(err) and _size(watched) > before:
+                continue  # slow, not stalled
+            raise
+
+
+def _disconnect(rec: rr.RecordingStream, wait_s: float) -> None:
+    """Drop a recording's sink; after its writer failed, rerun can block here for good, so
+    give it ``wait_s`` and then leave it behind (and skip rerun's flush at exit)."""
+    done = threading.Thread(target=rec.disconnect, name="camlog-rerun-disconnect",
+                            daemon=True)
+    done.start()
+    done.join(wait_s)
+    if done.is_alive():
+        _ABANDONED.append(rec)  # never collected: dropping it would block as well
+        rr.unregister_shutdown()
+
+
+#: recordings whose writer hung; kept alive so that nothing waits for them
+_ABANDONED: list[rr.RecordingStream] = []
+
+
+def _size(path: Path | None) -> int:
     try:
-        socket.create_connection((host, port), timeout=timeout_s).close()
-    except OSError as err:
-        raise ViewerError(f"no rerun viewer is listening at {url} ({err.strerror or err}); "
-                          "start one with `rerun` or use --spawn") from None
+        return path.stat().st_size if path is not None else 0
+    except OSError:
+        return 0
+
+
+def _rerun_failure(err: BaseException, *, to_file: bool) -> str:
+    """rerun's error, with what it usually means."""
+    text = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
+    if "timed out" in text:
+        return (f"rerun's file writer made no progress for {STALL_S:g} s: is the disk full "
+                "or the file too large?") if to_file else \
+            f"the viewer accepted no data for {NETWORK_STALL_S:g} s"
+    if "shut down" in text or "Failed to write" in text:
+        return f"rerun's writer stopped ({text}): is the disk full or the file too large?"
+    return text
 
 
 class RecordingSink:
     """A recording stream attached to exactly one destination; use as a context manager.
 
-    ``output``: an ``.rrd`` path; ``connect``: a viewer URL; ``spawn``: start a viewer.
-    ``inputs``: the logs the recording is made from (an ``.rrd`` over one is refused).
+    ``output``: an ``.rrd`` path; ``connect``: a viewer URL; ``spawn``: start a viewer that
+    listens on ``bind:port`` (default 127.0.0.1:9876). ``inputs``: the logs the recording is
+    made from (an ``.rrd`` over one is refused).
     """
 
     def __init__(self, *, output: Path | None = None, connect: str | None = None,
                  spawn: bool = False, overwrite: bool = False, blueprint: Any = None,
+                 bind: str = LOCALHOST, port: int = DEFAULT_PORT,
                  application_id: str = APPLICATION_ID, inputs: Iterable[Path] = ()) -> None:
         chosen = sum((output is not None, connect is not None, spawn))
         if chosen != 1:
@@ -76,46 +120,76 @@ class RecordingSink:
         self.output = output
         self._url = grpc_url(connect) if connect is not None else None
         self._spawn = spawn
+        self._bind, self._port = bind, port
         self._atomic = AtomicOutput(output, overwrite=overwrite, inputs=inputs,
                                     what="a rerun recording") if output is not None else None
         self._blueprint = blueprint
         self.rec = rr.RecordingStream(application_id, recording_id=uuid.uuid4())
+        self._stalled: RuntimeError | None = None
 
     def __enter__(self) -> Self:
         try:
             if self._atomic is not None:
+                _require_space(self._atomic.temp)
                 self.rec.save(self._atomic.temp, default_blueprint=self._blueprint)
             elif self._url is not None:
                 require_listening(self._url)
                 self.rec.connect_grpc(self._url)
             else:
-                self.rec.spawn(connect=True)
+                self._url = spawn_viewer(bind=self._bind, port=self._port)
+                self.rec.connect_grpc(self._url)
         except ViewerError:
             self._discard()
             raise
         except Exception as err:  # rerun raises RuntimeError/OSError/ValueError from Rust
             self._discard()
-            where = self.output or self._url or "a spawned viewer"
-            raise ViewerError(f"cannot send the recording to {where}: {err}") from None
+            raise ViewerError(f"cannot send the recording to {self._where()}: {err}") from None
         if self._atomic is None and self._blueprint is not None:
             self.rec.send_blueprint(self._blueprint, make_active=True, make_default=True)
         return self
 
-    def _discard(self) -> None:
-        self.rec.disconnect()
+    def _discard(self, *, failed: bool = False) -> None:
+        _disconnect(self.rec, GIVE_UP_S if failed else STALL_S)
         if self._atomic is not None:
             self._atomic.discard()
 
     def __exit__(self, et: type[BaseException] | None, ev: BaseException | None,
                  tb: TracebackType | None) -> None:
         if et is not None:
-            self._discard()
+            self._discard(failed=isinstance(ev, RuntimeError))
+            if isinstance(ev, RuntimeError):  # rerun's writer thread died
+                raise self._failure(_rerun_failure(ev, to_file=self._atomic is not None)) \
+                    from None
             return
         try:
-            self.rec.flush()
+            self.flush()
             self.rec.disconnect()
             if self._atomic is not None:
                 self._atomic.commit()
-        except OSError as err:
-            self._discard()
-            raise ViewerError(f"cannot write {self.output}: {err.strerror or err}") from None
+        except (OSError, RuntimeError) as err:
+            self._discard(failed=True)
+            reason = err.strerror if isinstance(err, OSError) and err.strerror \
+                else _rerun_failure(err, to_file=self._atomic is not None)
+            raise self._failure(reason) from None
+
+    def _failure(self, reason: str) -> ViewerError:
+        if self._atomic is not None:
+            return ViewerError(f"cannot write {self.output}: {reason}")
+        return ViewerError(f"cannot send the recording to {self._where()}: {reason}")
+
+    def flush(self) -> None:
+        """Wait until everything logged so far is written or sent; ``RuntimeError`` when
+        rerun stalls (see :func:`flush_recording`)."""
+        if self._stalled is not None:
+            raise self._stalled  # once is enough
+        try:
+            if self._atomic is not None:
+                flush_recording(self.rec, self._atomic.temp)
+            else:
+                flush_recording(self.rec, stall_s=NETWORK_STALL_S)
+        except RuntimeError as err:
+            self._stalled = err
+            raise
+
+    def _where(self) -> str:
+        return str(self.output or self._url or "a spawned viewer")

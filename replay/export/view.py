@@ -26,6 +26,7 @@ from .logger import LoggerOptions, SceneLogger
 from .scene import ScenePlan, plan_scene
 from .sink import RecordingSink, default_output
 from .survey import survey
+from .viewer import DEFAULT_PORT, LOCALHOST
 
 __all__ = ["ExportSession", "ViewResult", "open_logs", "view_logs"]
 
@@ -104,6 +105,8 @@ def view_logs(
     output: Path | None = None,
     spawn: bool = False,
     connect: str | None = None,
+    bind: str = LOCALHOST,
+    port: int = DEFAULT_PORT,
     overwrite: bool = False,
     topics: Sequence[str] | None = None,
     start_s: float | None = None,
@@ -113,7 +116,8 @@ def view_logs(
     progress: bool | None = None,
 ) -> ViewResult:
     """Export ``paths`` to an ``.rrd`` (default: the first log's name with ``.rrd``) or a
-    viewer. ``progress``: None shows a bar only on a terminal."""
+    viewer (a spawned one listens on ``bind:port``). ``progress``: None shows a bar only on a
+    terminal."""
     started = time.perf_counter()
     options = options or LoggerOptions()
     if output is None and not spawn and connect is None:
@@ -122,12 +126,14 @@ def view_logs(
         session = open_logs(stack, [Path(p) for p in paths], topics=topics, start_s=start_s,
                             end_s=end_s, recover=recover)
         sink = RecordingSink(output=output, connect=connect, spawn=spawn, overwrite=overwrite,
-                             blueprint=make_blueprint(session.plan), inputs=paths)
+                             blueprint=make_blueprint(session.plan), bind=bind,
+                             port=port, inputs=paths)
         bar = stack.enter_context(tqdm(total=session.total, unit="msg", desc="view",
                                        leave=False, disable=None if progress is None
                                        else not progress))
         with sink:
-            logger = SceneLogger(sink.rec, session.plan, options, decode=session.decode)
+            logger = SceneLogger(sink.rec, session.plan, options, decode=session.decode,
+                                 flush=sink.flush)
             logger.log_static()
             count = 0
             try:

@@ -14,7 +14,13 @@ from ..atomic import temp_output_of
 from ..errors import LogFormatError, LogReadError
 from .base import FrameRecord, LogReader, LogWriter, RawMessage, Record, TopicInfo
 from .mcap import MAGIC, McapLogReader, McapLogWriter, is_mcap
-from .rosbags_formats import Ros1LogReader, Ros1LogWriter, Rosbag2LogReader, Rosbag2LogWriter
+from .rosbag2_reindex import lone_storage
+from .rosbags_formats import (
+    Ros1LogReader,
+    Ros1LogWriter,
+    Rosbag2LogReader,
+    Rosbag2LogWriter,
+)
 
 __all__ = [
     "FORMATS",
@@ -54,12 +60,11 @@ def detect_format(path: Path) -> str:
     if path.is_dir():
         if (path / "metadata.yaml").exists():
             return "rosbag2"
-        if _storage_without_metadata(path) is not None:
-            return "mcap"
-        db3 = sorted(path.glob("*.db3")) + sorted(path.glob("*/*.db3"))
-        hint = f" (it holds {db3[0].relative_to(path)}: run `ros2 bag reindex` on it)" \
-            if db3 else ""
-        raise LogFormatError(f"{path} is a directory without rosbag2 metadata.yaml{hint}")
+        storage = lone_storage(path)
+        if storage is not None:
+            return "mcap" if storage.suffix == ".mcap" else "rosbag2"
+        raise LogFormatError(f"{path} is a directory without rosbag2 metadata.yaml or one "
+                             "storage file (.mcap, .db3)")
     try:
         with path.open("rb") as f:
             head = f.read(16)
@@ -74,13 +79,6 @@ def detect_format(path: Path) -> str:
     if not head:
         raise LogReadError(f"{path} is empty")
     raise LogFormatError(f"{path} is not a log camlog can read (MCAP, rosbag2 directory, ROS1 bag)")
-
-
-def _storage_without_metadata(path: Path) -> Path | None:
-    """The one MCAP storage file of a rosbag2 directory that has no metadata.yaml — a
-    recording cut short (camlog's temporary output holds it one folder down)."""
-    mcaps = sorted(path.glob("*.mcap")) or sorted(path.glob("*/*.mcap"))
-    return mcaps[0] if len(mcaps) == 1 else None
 
 
 def open_reader(path: str | Path, *, recover: bool = False) -> LogReader:
@@ -100,7 +98,7 @@ def open_reader(path: str | Path, *, recover: bool = False) -> LogReader:
 def _open(path: Path, *, recover: bool) -> LogReader:
     fmt = detect_format(path)
     if path.is_dir() and fmt == "mcap":
-        inner = _storage_without_metadata(path)
+        inner = lone_storage(path)
         assert inner is not None
         reader = McapLogReader(inner, recover=recover)
         reader.warnings.insert(0, f"{path} has no metadata.yaml (its recording was cut "

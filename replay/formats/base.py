@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import time
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -185,6 +186,11 @@ def is_rosbag2_dir(path: Path) -> bool:
     return (path / "metadata.yaml").is_file()
 
 
+#: a writer hands what it holds to the OS at least this often while messages arrive, so a
+#: process killed mid-way loses at most the last second of messages
+FLUSH_INTERVAL_S = 0.5
+
+
 class LogWriter:
     """Writer base: typed messages are serialized here, formats store raw bytes.
 
@@ -192,6 +198,9 @@ class LogWriter:
     ends without an exception; otherwise the temporary output is removed. ``inputs`` are the
     logs the output is made from: an output that is one of them (or lies inside one) is
     refused.
+    While it is written, every format completes a chunk (or commits) at least every
+    :data:`FLUSH_INTERVAL_S`, so the temporary output of a killed process holds all but its
+    last moments.
     """
 
     format_name: str = ""
@@ -200,6 +209,8 @@ class LogWriter:
     other_serializations: frozenset[str] = frozenset()
     #: ``ros2``, or ``foxglove``: camera records in Foxglove's schemas (MCAP)
     profile: str = "ros2"
+    #: what the output is compressed with, for reports (e.g. "zstd chunks")
+    compression: str = "none"
 
     def __init__(self, path: Path, *, overwrite: bool = False,
                  inputs: Iterable[Path] = ()) -> None:
@@ -213,6 +224,7 @@ class LogWriter:
         self.closed = False
         self.warnings: list[str] = []  # channels the format cannot hold, left out
         self._left_out: set[str] = set()
+        self._flushed_at = time.monotonic()
 
     @property
     def temp_path(self) -> Path:
@@ -234,7 +246,7 @@ class LogWriter:
             return
         msgtype = msgtype_of(message)
         self._check_type(topic, msgtype)
-        self._write(RawMessage(topic, msgtype, log_time_ns,
+        self._store(RawMessage(topic, msgtype, log_time_ns,
                                serialize(message, self.serialization), self.serialization), "")
 
     def writes_foxglove(self, message: Message) -> bool:
@@ -259,7 +271,7 @@ class LogWriter:
                                          "holds ROS messages only; write MCAP to keep it")
                 return
             self._check_type(raw.topic, raw.msgtype)
-            self._write(raw, "")
+            self._store(raw, "")
             return
         self._check_type(raw.topic, raw.msgtype)
         if raw.serialization != self.serialization:
@@ -267,7 +279,28 @@ class LogWriter:
                                          self.serialization)
             raw = RawMessage(raw.topic, raw.msgtype, raw.log_time_ns, data, self.serialization)
             msgdef = ""
-        self._write(raw, msgdef)
+        self._store(raw, msgdef)
+
+    def _store(self, raw: RawMessage, msgdef: str) -> None:
+        """Hand one message to the format, flushing when due; OS errors name the output."""
+        if self.closed:
+            raise LogWriteError(f"{self.path} is closed")
+        try:
+            self._write(raw, msgdef)
+            now = time.monotonic()
+            if now - self._flushed_at >= FLUSH_INTERVAL_S:
+                self._flush()
+                self._flushed_at = now
+        except OSError as err:
+            raise LogWriteError(f"cannot write {self.path}: {err.strerror or err}") from None
+
+    def flush(self) -> None:
+        """Complete the chunk in progress and hand everything written so far to the OS."""
+        try:
+            self._flush()
+        except OSError as err:
+            raise LogWriteError(f"cannot write {self.path}: {err.strerror or err}") from None
+        self._flushed_at = time.monotonic()
 
     def set_metadata(self, name: str, values: dict[str, str]) -> None:
         """Attach named string metadata where the format can hold it."""
@@ -279,6 +312,10 @@ class LogWriter:
 
     def _write(self, raw: RawMessage, msgdef: str) -> None:
         """Store one message of the writer's serialization (or one it holds besides)."""
+        raise NotImplementedError
+
+    def _flush(self) -> None:
+        """Complete the open chunk (or transaction) and write it through to the OS."""
         raise NotImplementedError
 
     def _finish(self) -> None:
@@ -310,6 +347,8 @@ class LogWriter:
         self.closed = True
         try:
             self._abort()
+        except OSError:
+            pass  # e.g. flushing a buffer to a full disk: the output is dropped anyway
         finally:
             self._atomic.discard()
 

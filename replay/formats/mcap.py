@@ -310,11 +310,8 @@ def _describe(err: BaseException) -> str:
     return f"{type(err).__name__}: {text}" if text else type(err).__name__
 
 
-COMPRESSION = {
-    "zstd": CompressionType.ZSTD,
-    "lz4": CompressionType.LZ4,
-    "none": CompressionType.NONE,
-}
+COMPRESSION = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4,
+               "none": CompressionType.NONE}
 
 
 class McapLogWriter(LogWriter):
@@ -330,22 +327,23 @@ class McapLogWriter(LogWriter):
         *,
         overwrite: bool = False,
         inputs: Iterable[Path] = (),
-        compression: str = "zstd",
+        compression: str | None = None,
         chunk_size: int = 4 * 1024 * 1024,
         profile: str = "ros2",
     ) -> None:
-        super().__init__(path, overwrite=overwrite, inputs=inputs)
+        compression = compression or "zstd"
         if compression not in COMPRESSION:
-            raise LogWriteError(f"unknown MCAP compression {compression!r}")
+            raise LogWriteError(f"MCAP files cannot use {compression!r} compression "
+                                "(use zstd, lz4 or none)")
+        super().__init__(path, overwrite=overwrite, inputs=inputs)
+        self.compression = f"{compression} chunks" if compression != "none" else "none"
         try:
             self._file = self.temp_path.open("wb")
         except OSError as err:
             raise LogWriteError(f"cannot write {path}: {err.strerror}") from None
-        self._writer = Writer(
-            self._file,
-            chunk_size=chunk_size,
-            compression=COMPRESSION[compression],
-        )
+        # every chunk carries the CRC of its content (enable_crcs, on by default)
+        self._writer = Writer(self._file, chunk_size=chunk_size,
+                              compression=COMPRESSION[compression])
         if profile not in ("ros2", "foxglove"):
             raise LogWriteError(f"unknown MCAP profile {profile!r} (use ros2 or foxglove)")
         self.profile = profile
@@ -389,6 +387,9 @@ class McapLogWriter(LogWriter):
 
     def set_metadata(self, name: str, values: dict[str, str]) -> None:
         self._writer.add_metadata(name, values)
+
+    def _flush(self) -> None:
+        self._writer.flush()  # type: ignore[no-untyped-call]  # chunk (with CRC) to the file
 
     def _finish(self) -> None:
         self._writer.finish()  # type: ignore[no-untyped-call]

@@ -219,13 +219,6 @@ def test_rosbag2_directory_without_metadata_reads_its_mcap_storage(tmp_path: Pat
             assert any("has no metadata.yaml" in w and str(path) in w for w in reader.warnings)
 
 
-def test_rosbag2_sqlite_directory_without_metadata_says_reindex(tmp_path: Path) -> None:
-    write_log(tmp_path / "bag", [("/text", 5, Text("x"))], fmt="rosbag2-sqlite3")
-    (tmp_path / "bag" / "metadata.yaml").unlink()
-    with pytest.raises(LogFormatError, match="ros2 bag reindex"):
-        open_reader(tmp_path / "bag")
-
-
 def _without_index(bag: bytes) -> bytes:
     """A ROS1 bag as a killed recording leaves it: header index_pos 0, no index at the end."""
     field = bag.index(b"index_pos=") + len(b"index_pos=")

@@ -1,0 +1,51 @@
+"""Ctrl-C at any moment of any command: one line, exit status 130, no output left behind."""
+
+from __future__ import annotations
+
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from tests.camlog.cli.test_record_crash import LAUNCH
+from tests.conftest import REPO_ROOT
+
+#: command -> arguments after the input log (OUT is the output folder)
+COMMANDS = {
+    "info": [],
+    "convert": ["OUT/copy.bag"],
+    "process": ["--topic", "/stereo_camera/left/image_raw", "--edges", "-o", "OUT/p.mcap"],
+    "resync": ["--left", "/stereo_camera/left", "--right", "/stereo_camera/right",
+               "-o", "OUT/r.mcap"],
+    "calibrate": ["--size", "7x6", "--square", "0.01", "--camera", "/stereo_camera/left",
+                  "-o", "OUT/cal"],
+    "view": ["-o", "OUT/v.rrd"],
+    "play": ["--rate", "0.5", "-o", "OUT/played.mcap"],
+}
+
+
+@pytest.mark.parametrize("delay_s", [0.1, 0.7, 1.6])
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+def test_ctrl_c_ends_every_command_cleanly(
+    tmp_path: Path, red_log: Path, command: str, delay_s: float
+) -> None:
+    out = tmp_path / "out"
+    out.mkdir()
+    args = [a.replace("OUT", str(out)) for a in COMMANDS[command]]
+    process = subprocess.Popen([sys.executable, "-c", LAUNCH, command, str(red_log), *args],
+                               cwd=REPO_ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True)
+    assert process.stdout is not None
+    assert process.stdout.readline() == "started\n"
+    time.sleep(delay_s)
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=60)
+    assert "Traceback" not in stderr and "Exception ignored" not in stderr, stderr
+    if process.returncode == 0:  # done before the signal came
+        return
+    assert process.returncode == 130, (process.returncode, stderr)
+    assert stderr.splitlines()[-1] == f"camlog {command}: interrupted", stderr
+    assert list(out.iterdir()) == []

@@ -1,0 +1,144 @@
+"""Live viewers: ``--spawn`` fails in seconds when no viewer can start, a spawned viewer
+listens on 127.0.0.1 unless asked, an existing viewer is reused, and a viewer that stops
+taking data ends the command within a bounded time instead of hanging it.
+
+The real rerun viewer runs in these tests. The machines they run on have no display, so a
+spawned viewer gets as far as listening and then fails to open its window; its own log says
+where it listened.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import socket
+import subprocess
+import sys
+import threading
+import time
+import warnings
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+from rerun.error_utils import RerunWarning
+
+from tests.conftest import REPO_ROOT
+from tests.rrd import Receiver, load_rrd
+
+
+def free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return int(probe.getsockname()[1])
+
+
+def camlog(*args: str, env: dict[str, str]) -> tuple[subprocess.CompletedProcess[str], float]:
+    started = time.monotonic()
+    result = subprocess.run([sys.executable, "-m", "camlog", *args], cwd=REPO_ROOT, env=env,
+                            capture_output=True, text=True, timeout=180, check=False)
+    return result, time.monotonic() - started
+
+
+def without_display() -> dict[str, str]:
+    return {k: v for k, v in os.environ.items() if k not in ("DISPLAY", "WAYLAND_DISPLAY")}
+
+
+def missing_x_display() -> str:
+    """An X display number with no server behind it."""
+    number = next(n for n in range(90, 200) if not Path(f"/tmp/.X11-unix/X{n}").exists())
+    return f":{number}"
+
+
+def test_spawn_without_a_display_fails_at_once(red_log: Path, tmp_path: Path) -> None:
+    result, took_s = camlog("view", str(red_log), "--spawn", "--port", str(free_port()),
+                            env=without_display())
+    assert result.returncode == 1
+    assert result.stderr.splitlines() == [result.stderr.strip()]
+    assert "cannot start a rerun viewer: there is no display" in result.stderr
+    assert took_s < 30
+
+
+@pytest.mark.parametrize(("bind", "listens_on"), [([], "127.0.0.1"),
+                                                   (["--bind", "0.0.0.0"], "0.0.0.0")])
+def test_spawned_viewer_that_cannot_open_a_window(
+    red_log: Path, bind: list[str], listens_on: str
+) -> None:
+    port = free_port()
+    env = without_display() | {"DISPLAY": missing_x_display()}
+    result, took_s = camlog("view", str(red_log), "--spawn", "--port", str(port), *bind,
+                            env=env)
+    assert result.returncode == 1
+    (line,) = result.stderr.splitlines()
+    assert line.startswith("camlog view: error: the rerun viewer stopped at start-up"), line
+    assert took_s < 60
+    found = re.search(r"its log: (\S+)\)$", line)
+    assert found, line
+    log = Path(found.group(1))
+    try:
+        text = re.sub(r"\x1b\[[0-9;]*m", "", log.read_text(errors="replace"))
+    finally:
+        log.unlink()
+    assert f"Listening for gRPC connections on {listens_on}:{port}" in text
+
+
+def test_spawn_uses_a_viewer_already_listening(red_log: Path, tmp_path: Path) -> None:
+    receiver = Receiver(tmp_path)
+    try:
+        result, _ = camlog("view", str(red_log), "--spawn", "--port", str(receiver.port),
+                           "--no-progress", env=without_display())
+        assert result.returncode == 0, result.stderr
+        assert "sent to the viewer" in result.stdout
+        deadline = time.monotonic() + 30
+        images = 0
+        while images < 20 and time.monotonic() < deadline:
+            time.sleep(0.3)
+            with warnings.catch_warnings():  # the file has no footer while it is written
+                warnings.filterwarnings("ignore", "RRD file has no footer", RerunWarning)
+                try:
+                    recording = load_rrd(receiver.path)
+                except (OSError, ValueError):
+                    continue
+            images = recording.count("/world/stereo_camera/left/image", "Image:buffer")
+    finally:
+        receiver.stop()
+    assert images == 20
+
+
+@pytest.fixture
+def silent_server() -> Iterator[int]:
+    """A loopback port that accepts connections and never answers."""
+    server = socket.socket()
+    server.bind(("127.0.0.1", 0))
+    server.listen(16)
+    held: list[socket.socket] = []
+    stop = threading.Event()
+
+    def accept() -> None:
+        server.settimeout(0.2)
+        while not stop.is_set():
+            try:
+                held.append(server.accept()[0])
+            except OSError:
+                continue
+
+    thread = threading.Thread(target=accept, daemon=True)
+    thread.start()
+    yield int(server.getsockname()[1])
+    stop.set()
+    thread.join()
+    for connection in held:
+        connection.close()
+    server.close()
+
+
+@pytest.mark.parametrize("command", [["view"], ["play", "--rate", "20"]])
+def test_connect_to_a_viewer_that_never_answers_times_out(
+    red_log: Path, silent_server: int, command: list[str]
+) -> None:
+    result, took_s = camlog(*command, str(red_log), "--connect", f"127.0.0.1:{silent_server}",
+                            "--no-progress", env=dict(os.environ))
+    assert result.returncode == 1
+    (line,) = result.stderr.splitlines()
+    assert "accepted no data for" in line and f"127.0.0.1:{silent_server}" in line, line
+    assert took_s < 90
