@@ -23,6 +23,7 @@ BENCHMARKS: dict[str, tuple[list[str], list[str]]] = {
     "view_fps": ([], ["--duration", "5"]),
     "batch_speedup": ([], ["--frames", "90"]),
     "batch_ray": ([], ["--frames", "90"]),
+    "demo_time": ([], ["--duration", "2"]),
     "peers": (["--growth", "4,40,400"], ["--runs", "1", "--duration", "1"]),
 }
 
