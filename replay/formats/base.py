@@ -339,6 +339,9 @@ class LogWriter:
         except OSError as err:
             self._atomic.discard()
             raise LogWriteError(f"cannot write {self.path}: {err.strerror or err}") from None
+        except BaseException:  # e.g. SQLite's disk I/O error: nothing half-written stays
+            self._atomic.discard()
+            raise
 
     def abort(self) -> None:
         """Drop the partial output."""

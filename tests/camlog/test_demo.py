@@ -41,7 +41,10 @@ def test_demo_rejects_a_bad_duration_in_one_line(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "demo"
-    assert main(["demo", "-o", str(out), "--duration", "0"]) == 1
+    with pytest.raises(SystemExit) as exit_info:
+        main(["demo", "-o", str(out), "--duration", "0"])
+    assert exit_info.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == ["camlog demo: error: --duration must be positive, got 0"]
+    assert err == ["camlog demo: error: argument --duration: expected a number > 0, got 0 "
+                   "(see camlog demo --help)"]
     assert not out.exists()

@@ -148,8 +148,8 @@ def test_convert_copies_channels_it_does_not_understand(
     bag = tmp_path / "bag"
     assert main(["convert", str(foxglove_log), str(bag)]) == 0
     err = capsys.readouterr().err
-    assert "/scan (foxglove.LaserScan, protobuf) left out: rosbag2 holds ROS messages only" \
-        in err
+    assert ("/scan (foxglove.LaserScan, protobuf) left out: rosbag2 (mcap) holds ROS messages"
+            " only; write MCAP to keep it") in err
 
 
 def test_view_shows_foxglove_images_with_their_calibration(foxglove_log: Path,
