@@ -20,6 +20,7 @@ from .errors import (
     RecordError,
     ReplayError,
     TopicError,
+    UnsupportedEncodingError,
     ViewerError,
 )
 
@@ -99,6 +100,7 @@ __all__ = [
     "Text",
     "TopicError",
     "TopicInfo",
+    "UnsupportedEncodingError",
     "ViewerError",
     "open_reader",
     "open_writer",

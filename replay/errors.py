@@ -27,6 +27,10 @@ class EncodingError(ReplayError):
     """An image encoding is not supported or the pixel buffer does not match it."""
 
 
+class UnsupportedEncodingError(EncodingError):
+    """A whole stream's encoding or format is not supported (not one broken frame)."""
+
+
 class TopicError(ReplayError):
     """A requested topic does not exist in a log or has the wrong type."""
 

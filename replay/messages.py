@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from .errors import EncodingError
+from .errors import EncodingError, UnsupportedEncodingError
 
 F64 = npt.NDArray[np.float64]
 #: image pixels in the layout of their encoding: (H, W) or (H, W, C)
@@ -203,8 +203,8 @@ def check_pixels(encoding: str, pixels: Pixels) -> None:
 
     raw = RAW_ENCODINGS.get(encoding)
     if raw is None:
-        raise EncodingError(f"unsupported image encoding {encoding!r} "
-                            f"(supported: {', '.join(sorted(RAW_ENCODINGS))})")
+        raise UnsupportedEncodingError(f"unsupported image encoding {encoding!r} "
+                                       f"(supported: {', '.join(sorted(RAW_ENCODINGS))})")
     shape_ok = pixels.ndim == 2 if raw.channels == 1 else (
         pixels.ndim == 3 and pixels.shape[2] == raw.channels
     )

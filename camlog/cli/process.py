@@ -13,7 +13,7 @@ from replay.formats import FORMATS
 
 from ..errors import UsageError
 from ..processing.outputs import CHAPTER_NS, COMPRESSIONS
-from .args import bounded_int, name, output_path
+from .args import bounded_int, name, output_path, print_warnings
 from .processor_args import add_processor_arguments, chosen_processors, worded
 
 
@@ -72,4 +72,5 @@ def run(args: argparse.Namespace) -> int:
     for output in result.outputs:
         print(f"  {output.topic}: {output.label}")
     print(f"wrote {result.output}")
+    print_warnings(result.warnings)
     return 0

@@ -28,7 +28,7 @@ from processors.spec import Configured, OptionKind
 from processors.throttle import Throttle
 from replay._version import VERSION
 from replay.atomic import check_not_input
-from replay.errors import ReplayError
+from replay.errors import EncodingError, ReplayError, UnsupportedEncodingError
 from replay.formats import LogReader, LogWriter, RawMessage, open_reader, open_writer
 from replay.frames import Frame, FrameStream, decode_frame, encode_compressed
 from replay.messages import CompressedVideo, Image, Message
@@ -58,6 +58,13 @@ class ProcessResult:
     messages_written: int
     wall_s: float
     outputs: tuple[ProcessedOutput, ...] = ()
+    undecodable: dict[str, int] = field(default_factory=dict)  # topic -> frames copied only
+
+    @property
+    def warnings(self) -> list[str]:
+        """One line per topic with frames that did not decode (copied, not processed)."""
+        return [f"{topic}: {count} frames did not decode (copied, not processed)"
+                for topic, count in sorted(self.undecodable.items())]
 
     @property
     def fps(self) -> float:
@@ -74,12 +81,17 @@ class _Job:
     serialization: str
     where: str  # "LOG: TOPIC" for error messages
 
-    def __call__(self, frame: Message | Frame, log_time_ns: int) -> list[RawMessage]:
+    def __call__(self, frame: Message | Frame, log_time_ns: int) -> list[RawMessage] | None:
         """The serialized outputs of one frame (a still image message is decoded here, on
-        the worker; video arrives decoded, in order)."""
+        the worker; video arrives decoded, in order); None when the frame does not decode."""
         stamp = getattr(frame, "stamp_ns", "?")
         try:
-            image = frame if isinstance(frame, Frame) else FrameStream().decode(frame)
+            try:
+                image = frame if isinstance(frame, Frame) else FrameStream().decode(frame)
+            except UnsupportedEncodingError:
+                raise
+            except EncodingError:
+                return None
             assert image is not None  # still images always give a frame
             raws = []
             for processor, topics in self.stages:
@@ -103,6 +115,7 @@ class _Topic:
     job: _Job
     throttles: list[Throttle]
     read: int = 0
+    undecodable: int = 0
     video: FrameStream = field(default_factory=FrameStream)  # pictures need their past
 
     def keep(self, stamp_ns: int) -> bool:
@@ -115,7 +128,7 @@ class _Counts:
     read: int = 0
     processed: int = 0
     written: int = 0
-    pending: deque[Future[list[RawMessage]]] = field(default_factory=deque)
+    pending: deque[tuple[_Topic, Future[list[RawMessage] | None]]] = field(default_factory=deque)
 
 
 def _check_options(processors: Sequence[Configured], topics: Sequence[str],
@@ -196,14 +209,21 @@ def process_log(
             counts = _stream(reader, writer, jobs, workers=workers, drop_input=drop_input,
                              thin=thin, max_frames=max_frames)
     return ProcessResult(output, counts.read, counts.processed, counts.written + bool(computing),
-                         time.perf_counter() - started, tuple(record.outputs))
+                         time.perf_counter() - started, tuple(record.outputs),
+                         {t: s.undecodable for t, s in jobs.items() if s.undecodable})
 
 
 def _warm_up(reader: LogReader, jobs: Mapping[str, _Topic]) -> None:
-    """Run the first frame of each topic: fail before writing anything, warm serializers."""
+    """Run the first frame of each topic: fail before writing anything, warm serializers
+    (a first frame that does not decode is counted in the pass over the log)."""
     for topic, state in jobs.items():
         for first in reader.raw_messages([topic]):
-            message = reader.decode(first)
+            try:
+                message = reader.decode(first)
+            except UnsupportedEncodingError:
+                raise
+            except EncodingError:
+                break
             if not isinstance(message, CompressedVideo):  # video: decoded in stream order
                 state.job(message, first.log_time_ns)
             break
@@ -217,7 +237,13 @@ def _stream(reader: LogReader, writer: LogWriter, jobs: Mapping[str, _Topic], *,
 
     def flush(keep: int) -> None:
         while len(counts.pending) > keep:
-            for raw in counts.pending.popleft().result():
+            state, future = counts.pending.popleft()
+            raws = future.result()
+            if raws is None:
+                state.undecodable += 1
+                counts.processed -= 1
+                continue
+            for raw in raws:
                 writer.write_raw(raw)
                 counts.written += 1
 
@@ -237,26 +263,34 @@ def _stream(reader: LogReader, writer: LogWriter, jobs: Mapping[str, _Topic], *,
                     continue  # this topic is done; others are not yet
                 state.read += 1
                 counts.read += 1
-                frame: Message | Frame = reader.decode(raw)
-                if isinstance(frame, CompressedVideo):
-                    picture = state.video.decode(frame)  # on this thread: in stream order
-                    if picture is None:
-                        copy(raw)
-                        continue  # no picture before the first keyframe
-                    frame = picture
+                try:
+                    frame: Message | Frame = reader.decode(raw)
+                    if isinstance(frame, CompressedVideo):
+                        # on this thread, in stream order; None before the first keyframe
+                        picture = state.video.decode(frame)
+                        if picture is None:
+                            raise EncodingError("no picture yet")
+                        frame = picture
+                except UnsupportedEncodingError:
+                    raise
+                except EncodingError:  # copied through, counted, not processed
+                    state.undecodable += 1
+                    copy(raw)
+                    continue
                 kept = state.keep(getattr(frame, "stamp_ns", raw.log_time_ns))
                 if kept or not thin:
                     copy(raw)
                 if kept:
                     counts.processed += 1
                     if state.job.stages:
-                        counts.pending.append(pool.submit(state.job, frame, raw.log_time_ns))
+                        counts.pending.append((state, pool.submit(state.job, frame,
+                                                                  raw.log_time_ns)))
                         flush(in_flight)
                 if max_frames is not None and all(s.read >= max_frames for s in jobs.values()):
                     break
             flush(0)
         except BaseException:
-            for future in counts.pending:
+            for _, future in counts.pending:
                 future.cancel()
             raise
     return counts

@@ -7,7 +7,7 @@ import struct
 import cv2
 import numpy as np
 
-from ..errors import EncodingError
+from ..errors import EncodingError, UnsupportedEncodingError
 from ..messages import CompressedImage
 from .frame import Color, Frame
 
@@ -107,7 +107,8 @@ def decode_compressed_depth(message: CompressedImage) -> Frame:
     (int32 format, float32 depthParam[2]) then a 16-bit PNG holding 16UC1 depth as it is
     (millimetres) or 32FC1 depth as quantised inverse depth ``a / depth + b`` (0: none)."""
     if "rvl" in message.format.lower():
-        raise EncodingError("compressedDepth RVL is not supported (compressedDepth PNG is)")
+        raise UnsupportedEncodingError("compressedDepth RVL is not supported "
+                                       "(compressedDepth PNG is)")
     original = original_encoding(message.format) or "16UC1"
     data = message.data
     if len(data) <= DEPTH_HEADER.size:

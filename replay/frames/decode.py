@@ -14,7 +14,7 @@ from typing import Any, cast
 
 import numpy as np
 
-from ..errors import EncodingError
+from ..errors import EncodingError, UnsupportedEncodingError
 from ..messages import CompressedImage, CompressedVideo, Image, Message
 from .compressed import compressed_kind, decode_compressed_depth, decode_still
 from .frame import Frame
@@ -47,8 +47,8 @@ def raw_encoding(encoding: str) -> Raw:
     """The table entry of a raw encoding; :class:`EncodingError` naming the supported ones."""
     decoder = DECODERS.get((Image, encoding))
     if not isinstance(decoder, Raw):
-        raise EncodingError(f"unsupported image encoding {encoding!r} "
-                            f"(supported: {', '.join(sorted(IMAGE_ENCODINGS))})")
+        raise UnsupportedEncodingError(f"unsupported image encoding {encoding!r} "
+                                       f"(supported: {', '.join(sorted(IMAGE_ENCODINGS))})")
     return decoder
 
 
@@ -63,8 +63,8 @@ def decode_frame(message: Image | CompressedImage) -> Frame:
     decoder = DECODERS.get((CompressedImage, kind))
     if decoder is None:
         known = sorted(k for t, k in DECODERS if t is CompressedImage)
-        raise EncodingError(f"unsupported compressed image format {message.format!r} "
-                            f"(supported: {', '.join(known)})")
+        raise UnsupportedEncodingError(f"unsupported compressed image format {message.format!r} "
+                                       f"(supported: {', '.join(known)})")
     frame: Frame = decoder(message)
     return frame
 
@@ -86,8 +86,8 @@ class FrameStream:
             factory = DECODERS.get((CompressedVideo, message.format))
             if factory is None:
                 known = sorted(k for t, k in DECODERS if t is CompressedVideo)
-                raise EncodingError(f"unsupported video format {message.format!r} "
-                                    f"(supported: {', '.join(known)})")
+                raise UnsupportedEncodingError(f"unsupported video format {message.format!r} "
+                                               f"(supported: {', '.join(known)})")
             self._video = cast(Callable[[CompressedVideo], Frame | None],
                                factory(message.format))
         return self._video(message)

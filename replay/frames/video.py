@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import EncodingError
+from ..errors import EncodingError, UnsupportedEncodingError
 from ..messages import CompressedVideo
 from .frame import Color, Frame
 
@@ -26,7 +26,8 @@ def _av() -> Any:
     try:
         import av
     except ImportError:
-        raise EncodingError("CompressedVideo needs PyAV: pip install 'camlog[video]'") from None
+        raise UnsupportedEncodingError("CompressedVideo needs PyAV: "
+                                       "pip install 'camlog[video]'") from None
     return av
 
 
@@ -35,8 +36,8 @@ class VideoDecoder:
 
     def __init__(self, fmt: str) -> None:
         if fmt not in VIDEO_CODECS:
-            raise EncodingError(f"unsupported video format {fmt!r} "
-                                f"(supported: {', '.join(VIDEO_CODECS)})")
+            raise UnsupportedEncodingError(f"unsupported video format {fmt!r} "
+                                           f"(supported: {', '.join(VIDEO_CODECS)})")
         av = _av()
         self._av = av
         self._codec = av.CodecContext.create(VIDEO_CODECS[fmt][0], "r")

@@ -1,0 +1,131 @@
+"""Frames that do not decode (a JPEG cut short, a raw buffer too small for its size, video
+pictures before the first keyframe), made with OpenCV, the mcap libraries and PyAV:
+``process`` copies them through, counts them and says so once per topic."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import av
+import cv2
+import numpy as np
+import pytest
+from foxglove_schemas_protobuf.CompressedVideo_pb2 import CompressedVideo
+from google.protobuf.timestamp_pb2 import Timestamp
+from mcap.reader import make_reader
+from mcap_protobuf.writer import Writer as ProtobufWriter
+from mcap_ros2.writer import Writer as Ros2Writer
+
+from camlog.cli import main
+from replay import PointStamped, open_reader
+from replay.wire import ros2_typestore
+from tests.encodings import HEIGHT, RED_CENTROID, WIDTH, scene_rgb
+
+T0_NS = 3_000_000_000
+PERIOD_NS = 50_000_000
+FRAMES = 6
+BAD_JPEG = {1, 4}  # frames whose JPEG is cut in half
+BAD_RAW = {2}  # frames whose raw buffer lacks its last row
+GOP, DROPPED = 4, 1  # the video's first packet (its keyframe) is left out
+
+
+def _header(t: int, frame_id: str) -> dict[str, object]:
+    return {"stamp": {"sec": t // 10**9, "nanosec": t % 10**9}, "frame_id": frame_id}
+
+
+def _ros_log(path: Path) -> Path:
+    """A JPEG topic and an rgb8 topic with the bad frames above, written with mcap_ros2."""
+    store = ros2_typestore()
+    rgb = scene_rgb()
+    ok, jpeg = cv2.imencode(".jpg", cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
+    assert ok
+    with path.open("wb") as f:
+        writer = Ros2Writer(f)
+        image = writer.register_msgdef("sensor_msgs/msg/Image", store.generate_msgdef(
+            "sensor_msgs/msg/Image", ros_version=2)[0])
+        compressed = writer.register_msgdef("sensor_msgs/msg/CompressedImage",
+                                            store.generate_msgdef(
+                                                "sensor_msgs/msg/CompressedImage",
+                                                ros_version=2)[0])
+        for i in range(FRAMES):
+            t = T0_NS + i * PERIOD_NS
+            data = jpeg.tobytes()
+            writer.write_message("/jpeg/image_raw/compressed", compressed, {
+                "header": _header(t, "jpeg"), "format": "jpeg",
+                "data": data[: len(data) // 2] if i in BAD_JPEG else data}, log_time=t)
+            raw = rgb.tobytes()
+            writer.write_message("/raw/image_raw", image, {
+                "header": _header(t, "raw"), "height": HEIGHT, "width": WIDTH,
+                "encoding": "rgb8", "is_bigendian": 0, "step": WIDTH * 3,
+                "data": raw[: -WIDTH * 3] if i in BAD_RAW else raw}, log_time=t)
+        writer.finish()
+    return path
+
+
+def _video_log(path: Path) -> Path:
+    """foxglove.CompressedVideo H.264 from PyAV's encoder, one picture per message, its
+    first keyframe left out so the stream starts with pictures that cannot decode."""
+    codec = av.CodecContext.create("libx264", "w")
+    codec.width, codec.height, codec.pix_fmt = WIDTH, HEIGHT, "yuv420p"
+    codec.gop_size, codec.max_b_frames = GOP, 0
+    codec.options = {"tune": "zerolatency", "x264-params": "repeat-headers=1"}
+    codec.open()
+    packets = []
+    for i in range(FRAMES + DROPPED):
+        picture = av.VideoFrame.from_ndarray(np.roll(scene_rgb(), i, axis=1), format="rgb24")
+        packets.append(b"".join(bytes(p) for p in codec.encode(picture)))
+    with path.open("wb") as f:
+        writer = ProtobufWriter(f)
+        for i, data in enumerate(packets[DROPPED:]):
+            t = T0_NS + i * PERIOD_NS
+            writer.write_message("/video/image", CompressedVideo(
+                timestamp=Timestamp(seconds=t // 10**9, nanos=t % 10**9), frame_id="video",
+                data=data, format="h264"), log_time=t, publish_time=t)
+        writer.finish()
+    return path
+
+
+def _count(path: Path) -> dict[str, int]:
+    counts: dict[str, int] = {}
+    with path.open("rb") as f:
+        for _, channel, _ in make_reader(f).iter_messages():
+            counts[channel.topic] = counts.get(channel.topic, 0) + 1
+    return counts
+
+
+@pytest.mark.parametrize(("topic", "bad"), [("/jpeg/image_raw/compressed", len(BAD_JPEG)),
+                                            ("/raw/image_raw", len(BAD_RAW))])
+def test_process_counts_undecodable_stills_and_goes_on(
+        topic: str, bad: int, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    log = _ros_log(tmp_path / "bad.mcap")
+    out = tmp_path / "out.mcap"
+    assert main(["process", str(log), "--topic", topic, "--red-pixels",
+                 "--output-ns", "/image_converter", "-o", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert [line for line in err.splitlines() if line.startswith("warning:")] == [
+        f"warning: {topic}: {bad} frames did not decode (copied, not processed)"]
+    counts = _count(out)  # every input message copied, bad frames too
+    assert counts[topic] == FRAMES and counts["/raw/image_raw"] == FRAMES
+    with open_reader(out) as reader:
+        centroids = [r.message for r in reader.messages(["/image_converter/red_centroid"])]
+    assert len(centroids) == FRAMES - bad
+    for centroid in centroids:
+        assert isinstance(centroid, PointStamped)
+        assert tuple(centroid.point[:2]) == pytest.approx(RED_CENTROID, abs=1.0)
+
+
+def test_process_counts_video_pictures_before_the_first_keyframe(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    log = _video_log(tmp_path / "video.mcap")
+    out = tmp_path / "out.mcap"
+    assert main(["process", str(log), "--topic", "/video/image", "--red-pixels",
+                 "--output-ns", "/image_converter", "-o", str(out)]) == 0
+    before_keyframe = GOP - DROPPED
+    err = capsys.readouterr().err
+    assert [line for line in err.splitlines() if line.startswith("warning:")] == [
+        f"warning: /video/image: {before_keyframe} frames did not decode "
+        "(copied, not processed)"]
+    assert _count(out)["/video/image"] == FRAMES
+    with open_reader(out) as reader:
+        centroids = list(reader.messages(["/image_converter/red_centroid"]))
+    assert len(centroids) == FRAMES - before_keyframe
