@@ -17,7 +17,8 @@ from .errors import ReplayError
 from .formats.base import ROS_SERIALIZATIONS, LogReader, RawMessage
 from .frames import FrameStream
 from .messages import CameraInfo, CompressedImage, CompressedVideo, Image
-from .wire import DECODABLE, FRAME_TYPES, RECORD_TYPES
+from .wire import CDR, DECODABLE, FRAME_TYPES, RECORD_TYPES
+from .wire.layout import image_from_buffer
 
 __all__ = ["LogSummary", "TopicSummary", "format_summary", "summarize"]
 
@@ -137,6 +138,11 @@ def _detail(reader: LogReader, raw: RawMessage) -> str | None:
 def describe(reader: LogReader, raw: RawMessage) -> str:
     """Encoding and size of an image / video / camera-info message, or why it cannot be
     decoded (Foxglove channels name their message encoding too)."""
+    return _describe_by_schema(raw) or _describe_decoded(reader, raw)
+
+
+def _describe_decoded(reader: LogReader, raw: RawMessage) -> str:
+    """:func:`describe` through the reader's own decode (every format and schema)."""
     where = "" if raw.serialization in ROS_SERIALIZATIONS else f" ({raw.serialization})"
     try:
         message = reader.decode(raw)
@@ -156,6 +162,32 @@ def describe(reader: LogReader, raw: RawMessage) -> str:
     except ReplayError as err:
         return f"(cannot decode: {err})"
     return ""
+
+
+def _describe_by_schema(raw: RawMessage) -> str | None:
+    """The description of a CDR image or camera info decoded with the ``ros2msg`` definition
+    its MCAP schema carries (``mcap_ros2``), which spares building rosbags' whole ROS 2
+    typestore for one message; None where there is no such schema or that decode fails (the
+    reader's own decode then says why)."""
+    schema = raw.schema
+    if (raw.serialization != CDR or schema is None or schema.encoding != "ros2msg"
+            or raw.msgtype not in ("sensor_msgs/msg/Image", "sensor_msgs/msg/CameraInfo")):
+        return None
+    from mcap_ros2.decoder import DecoderFactory
+
+    try:
+        decode = DecoderFactory().decoder_for(CDR, schema)
+        msg = decode(bytes(raw.data)) if decode is not None else None
+        if msg is None:
+            return None
+        if raw.msgtype == "sensor_msgs/msg/CameraInfo":
+            return f"{int(msg.width)}x{int(msg.height)} {msg.distortion_model}"
+        image = image_from_buffer(0, "", width=int(msg.width), height=int(msg.height),
+                                  encoding=str(msg.encoding), step=int(msg.step),
+                                  data=bytes(msg.data), bigendian=bool(msg.is_bigendian))
+    except Exception:  # any failure of this shortcut: the full decode reports it
+        return None
+    return f"{image.encoding} {image.width}x{image.height}"
 
 
 def size_on_disk(path: Path | str) -> int:

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import struct
 
-import cv2
 import numpy as np
 
 from ..errors import EncodingError, UnsupportedEncodingError
@@ -27,9 +26,9 @@ DEPTH_QUANTIZATION, DEPTH_MAX_M = 100.0, 10.0
 
 #: cv2.imdecode's channel count -> colour order
 _DECODED_COLORS = {1: Color.MONO, 3: Color.BGR, 4: Color.BGRA}
-#: colour order -> OpenCV conversion to BGR (what ``cv2.imencode`` takes; alpha dropped)
-_TO_BGR = {Color.RGB: cv2.COLOR_RGB2BGR, Color.RGBA: cv2.COLOR_RGBA2BGR,
-           Color.BGRA: cv2.COLOR_BGRA2BGR}
+#: colour order -> name of OpenCV's conversion to BGR (what ``cv2.imencode`` takes; alpha
+#: dropped); OpenCV itself is imported by the first decode or encode, not by opening a log
+_TO_BGR = {Color.RGB: "COLOR_RGB2BGR", Color.RGBA: "COLOR_RGBA2BGR", Color.BGRA: "COLOR_BGRA2BGR"}
 
 
 def compressed_kind(message: CompressedImage) -> str:
@@ -65,6 +64,8 @@ def original_encoding(fmt: str) -> str:
 def decode_still(message: CompressedImage) -> Frame:
     """Decode JPEG or PNG bytes to a frame in OpenCV's order (BGR, BGRA or grey; 8 or
     16 bit), without converting colours."""
+    import cv2
+
     buf = np.frombuffer(message.data, dtype=np.uint8)
     array = cv2.imdecode(buf, cv2.IMREAD_UNCHANGED) if buf.size else None
     if array is None:
@@ -81,6 +82,8 @@ def encode_still(frame: Frame, fmt: str, *, original: str = "", jpeg_quality: in
     """JPEG or PNG of a frame; the ``format`` string follows image_transport
     (``rgb8; jpeg compressed bgr8``: the ``original`` raw encoding, default the one
     compressed). 16-bit images (grey, colour, depth) go to PNG only."""
+    import cv2
+
     px = frame.pixels
     if px.dtype not in (np.uint8, np.uint16) or (fmt == "jpeg" and px.dtype != np.uint8):
         raise EncodingError(f"JPEG cannot hold {frame.source or frame.color} {px.dtype} "
@@ -92,7 +95,8 @@ def encode_still(frame: Frame, fmt: str, *, original: str = "", jpeg_quality: in
     elif frame.color is Color.MONO:
         array, kind = px, f"mono{bits}"
     else:
-        array = px if frame.color is Color.BGR else cv2.cvtColor(px, _TO_BGR[frame.color])
+        to_bgr = None if frame.color is Color.BGR else getattr(cv2, _TO_BGR[frame.color])
+        array = px if to_bgr is None else cv2.cvtColor(px, to_bgr)
         kind = f"bgr{bits}"
     params = [cv2.IMWRITE_JPEG_QUALITY, jpeg_quality] if fmt == "jpeg" else []
     ok, buf = cv2.imencode(".jpg" if fmt == "jpeg" else ".png", array, params)
@@ -114,6 +118,8 @@ def decode_compressed_depth(message: CompressedImage) -> Frame:
     if len(data) <= DEPTH_HEADER.size:
         raise EncodingError(f"compressedDepth message of {len(data)} bytes has no image")
     _, quant_a, quant_b = DEPTH_HEADER.unpack_from(data)
+    import cv2
+
     png = cv2.imdecode(np.frombuffer(data, np.uint8, offset=DEPTH_HEADER.size),
                        cv2.IMREAD_UNCHANGED)
     if png is None or png.dtype != np.uint16 or png.ndim != 2:
@@ -146,6 +152,8 @@ def encode_compressed_depth(frame: Frame, *, original: str = "", jpeg_quality: i
         with np.errstate(divide="ignore", invalid="ignore"):
             inverse = np.where(valid, quant_a / depth_m + quant_b, 0.0)
         encoding, png = "32FC1", np.clip(np.round(inverse), 0, 65535).astype(np.uint16)
+    import cv2
+
     ok, buf = cv2.imencode(".png", png)
     if not ok:
         raise EncodingError("cannot encode depth as PNG")

@@ -11,7 +11,6 @@ from collections.abc import Callable
 from functools import partial
 from typing import Any
 
-import cv2
 import numpy as np
 
 from ..errors import EncodingError
@@ -22,18 +21,19 @@ from .frame import Color, Frame, Pixels
 
 __all__ = ["ENCODERS", "decompress", "encode_compressed", "encode_image", "natural_encoding"]
 
-#: (source colour, target colour) -> OpenCV conversion
-_COLOR_CODES: dict[tuple[Color, Color], int] = {
-    (Color.RGB, Color.BGR): cv2.COLOR_RGB2BGR, (Color.BGR, Color.RGB): cv2.COLOR_BGR2RGB,
-    (Color.RGB, Color.RGBA): cv2.COLOR_RGB2RGBA, (Color.RGB, Color.BGRA): cv2.COLOR_RGB2BGRA,
-    (Color.BGR, Color.RGBA): cv2.COLOR_BGR2RGBA, (Color.BGR, Color.BGRA): cv2.COLOR_BGR2BGRA,
-    (Color.RGBA, Color.RGB): cv2.COLOR_RGBA2RGB, (Color.RGBA, Color.BGR): cv2.COLOR_RGBA2BGR,
-    (Color.RGBA, Color.BGRA): cv2.COLOR_RGBA2BGRA, (Color.BGRA, Color.RGB): cv2.COLOR_BGRA2RGB,
-    (Color.BGRA, Color.BGR): cv2.COLOR_BGRA2BGR, (Color.BGRA, Color.RGBA): cv2.COLOR_BGRA2RGBA,
-    (Color.RGB, Color.MONO): cv2.COLOR_RGB2GRAY, (Color.BGR, Color.MONO): cv2.COLOR_BGR2GRAY,
-    (Color.RGBA, Color.MONO): cv2.COLOR_RGBA2GRAY, (Color.BGRA, Color.MONO): cv2.COLOR_BGRA2GRAY,
-    (Color.MONO, Color.RGB): cv2.COLOR_GRAY2RGB, (Color.MONO, Color.BGR): cv2.COLOR_GRAY2BGR,
-    (Color.MONO, Color.RGBA): cv2.COLOR_GRAY2RGBA, (Color.MONO, Color.BGRA): cv2.COLOR_GRAY2BGRA,
+#: (source colour, target colour) -> name of OpenCV's conversion (OpenCV itself is imported by
+#: the first conversion, not by opening a log)
+_COLOR_CODES: dict[tuple[Color, Color], str] = {
+    (Color.RGB, Color.BGR): "COLOR_RGB2BGR", (Color.BGR, Color.RGB): "COLOR_BGR2RGB",
+    (Color.RGB, Color.RGBA): "COLOR_RGB2RGBA", (Color.RGB, Color.BGRA): "COLOR_RGB2BGRA",
+    (Color.BGR, Color.RGBA): "COLOR_BGR2RGBA", (Color.BGR, Color.BGRA): "COLOR_BGR2BGRA",
+    (Color.RGBA, Color.RGB): "COLOR_RGBA2RGB", (Color.RGBA, Color.BGR): "COLOR_RGBA2BGR",
+    (Color.RGBA, Color.BGRA): "COLOR_RGBA2BGRA", (Color.BGRA, Color.RGB): "COLOR_BGRA2RGB",
+    (Color.BGRA, Color.BGR): "COLOR_BGRA2BGR", (Color.BGRA, Color.RGBA): "COLOR_BGRA2RGBA",
+    (Color.RGB, Color.MONO): "COLOR_RGB2GRAY", (Color.BGR, Color.MONO): "COLOR_BGR2GRAY",
+    (Color.RGBA, Color.MONO): "COLOR_RGBA2GRAY", (Color.BGRA, Color.MONO): "COLOR_BGRA2GRAY",
+    (Color.MONO, Color.RGB): "COLOR_GRAY2RGB", (Color.MONO, Color.BGR): "COLOR_GRAY2BGR",
+    (Color.MONO, Color.RGBA): "COLOR_GRAY2RGBA", (Color.MONO, Color.BGRA): "COLOR_GRAY2BGRA",
 }
 
 
@@ -51,7 +51,9 @@ def _pixels_as(frame: Frame, raw: Raw) -> Pixels:
     target = Color.MONO if raw.color is Color.DEPTH else raw.color
     if source is target:
         return px
-    return np.asarray(cv2.cvtColor(px, _COLOR_CODES[source, target]))
+    import cv2
+
+    return np.asarray(cv2.cvtColor(px, getattr(cv2, _COLOR_CODES[source, target])))
 
 
 def _raw_encoder(encoding: str, raw: Raw) -> Callable[[Frame], Image]:

@@ -6,7 +6,6 @@ from dataclasses import dataclass, replace
 from enum import StrEnum
 from typing import Any
 
-import cv2
 import numpy as np
 import numpy.typing as npt
 
@@ -28,14 +27,16 @@ class Color(StrEnum):
     DEPTH = "depth"  # one channel of distances, ``depth_unit_m`` metres per value
 
 
-#: colour -> (channels, OpenCV conversion to RGB, to BGR, to grey); None: no conversion
-_CONVERSIONS: dict[Color, tuple[int, int | None, int | None, int | None]] = {
-    Color.RGB: (3, None, cv2.COLOR_RGB2BGR, cv2.COLOR_RGB2GRAY),
-    Color.BGR: (3, cv2.COLOR_BGR2RGB, None, cv2.COLOR_BGR2GRAY),
-    Color.RGBA: (4, cv2.COLOR_RGBA2RGB, cv2.COLOR_RGBA2BGR, cv2.COLOR_RGBA2GRAY),
-    Color.BGRA: (4, cv2.COLOR_BGRA2RGB, cv2.COLOR_BGRA2BGR, cv2.COLOR_BGRA2GRAY),
-    Color.MONO: (1, cv2.COLOR_GRAY2RGB, cv2.COLOR_GRAY2BGR, None),
-    Color.DEPTH: (1, cv2.COLOR_GRAY2RGB, cv2.COLOR_GRAY2BGR, None),
+#: colour -> (channels, OpenCV conversion to RGB, to BGR, to grey), each the name of its ``cv2``
+#: constant (OpenCV is imported on the first conversion, not by opening a log); None: no
+#: conversion
+_CONVERSIONS: dict[Color, tuple[int, str | None, str | None, str | None]] = {
+    Color.RGB: (3, None, "COLOR_RGB2BGR", "COLOR_RGB2GRAY"),
+    Color.BGR: (3, "COLOR_BGR2RGB", None, "COLOR_BGR2GRAY"),
+    Color.RGBA: (4, "COLOR_RGBA2RGB", "COLOR_RGBA2BGR", "COLOR_RGBA2GRAY"),
+    Color.BGRA: (4, "COLOR_BGRA2RGB", "COLOR_BGRA2BGR", "COLOR_BGRA2GRAY"),
+    Color.MONO: (1, "COLOR_GRAY2RGB", "COLOR_GRAY2BGR", None),
+    Color.DEPTH: (1, "COLOR_GRAY2RGB", "COLOR_GRAY2BGR", None),
 }
 
 
@@ -112,6 +113,8 @@ class Frame:
     def _convert(self, which: int) -> U8:
         code = _CONVERSIONS[self.color][which]
         px = self.to8()
-        if code is None:
+        if code is None or isinstance(code, int):
             return px
-        return np.asarray(cv2.cvtColor(px, code), dtype=np.uint8)
+        import cv2
+
+        return np.asarray(cv2.cvtColor(px, getattr(cv2, code)), dtype=np.uint8)

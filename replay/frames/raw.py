@@ -12,7 +12,6 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-import cv2
 import numpy as np
 
 from .frame import Color, Frame, Pixels
@@ -65,10 +64,13 @@ class Raw:
                      self.depth_unit_m)
 
 
-def _cv(code: int) -> Callable[[Pixels], Pixels]:
-    """An OpenCV colour conversion as a ``convert`` step."""
+def _cv(code: str) -> Callable[[Pixels], Pixels]:
+    """OpenCV's colour conversion named ``code`` (a ``cv2`` constant) as a ``convert`` step;
+    OpenCV is imported by the first conversion, not by opening a log."""
     def convert(pixels: Pixels) -> Pixels:
-        return np.asarray(cv2.cvtColor(pixels, code))
+        import cv2
+
+        return np.asarray(cv2.cvtColor(pixels, getattr(cv2, code)))
     return convert
 
 
@@ -77,8 +79,8 @@ def _first_channel(pixels: Pixels) -> Pixels:
 
 
 #: ROS bayer pattern (the colours of the top-left 2x2 block) -> OpenCV demosaicing to RGB
-_BAYER = {"rggb": cv2.COLOR_BayerRGGB2RGB, "bggr": cv2.COLOR_BayerBGGR2RGB,
-          "gbrg": cv2.COLOR_BayerGBRG2RGB, "grbg": cv2.COLOR_BayerGRBG2RGB}
+_BAYER = {"rggb": "COLOR_BayerRGGB2RGB", "bggr": "COLOR_BayerBGGR2RGB",
+          "gbrg": "COLOR_BayerGBRG2RGB", "grbg": "COLOR_BayerGRBG2RGB"}
 
 #: raw encoding name -> its entry
 RAW_ENCODINGS: dict[str, Raw] = {
@@ -101,8 +103,8 @@ RAW_ENCODINGS: dict[str, Raw] = {
     "32FC1": Raw(F32, 1, Color.DEPTH, depth_unit_m=1.0),
     **{f"bayer_{pattern}{bits}": Raw(dtype, 1, Color.RGB, _cv(code))
        for pattern, code in _BAYER.items() for bits, dtype in ((8, U8), (16, U16))},
-    "yuv422": Raw(U8, 2, Color.RGB, _cv(cv2.COLOR_YUV2RGB_UYVY)),
-    "uyvy": Raw(U8, 2, Color.RGB, _cv(cv2.COLOR_YUV2RGB_UYVY)),
-    "yuv422_yuy2": Raw(U8, 2, Color.RGB, _cv(cv2.COLOR_YUV2RGB_YUY2)),
-    "yuyv": Raw(U8, 2, Color.RGB, _cv(cv2.COLOR_YUV2RGB_YUY2)),
+    "yuv422": Raw(U8, 2, Color.RGB, _cv("COLOR_YUV2RGB_UYVY")),
+    "uyvy": Raw(U8, 2, Color.RGB, _cv("COLOR_YUV2RGB_UYVY")),
+    "yuv422_yuy2": Raw(U8, 2, Color.RGB, _cv("COLOR_YUV2RGB_YUY2")),
+    "yuyv": Raw(U8, 2, Color.RGB, _cv("COLOR_YUV2RGB_YUY2")),
 }

@@ -17,11 +17,9 @@ from collections.abc import Callable
 from typing import Any
 
 import numpy as np
-from google.protobuf.message import DecodeError
 from mcap.decoder import DecoderFactory
 from mcap.exceptions import McapError
 from mcap.records import Schema
-from mcap_protobuf.decoder import DecoderFactory as ProtobufDecoderFactory
 
 from ..errors import ReplayError
 from ..messages import CameraInfo, CompressedImage, CompressedVideo, Image, Message
@@ -76,7 +74,9 @@ FOXGLOVE_TYPES: dict[str, Callable[[Fields], Message]] = {
     "foxglove.CameraCalibration": _calibration,
     "foxglove.CompressedVideo": _video,
 }
-_ERRORS = (DecodeError, McapError, KeyError, TypeError, ValueError, binascii.Error)
+_ERRORS: tuple[type[Exception], ...] = (McapError, KeyError, TypeError, ValueError,
+                                        binascii.Error)
+_JSON_ERRORS: tuple[type[Exception], ...] = (json.JSONDecodeError, *_ERRORS)
 
 
 def _build(name: str, fields: Fields) -> Message:
@@ -97,13 +97,18 @@ class FoxgloveProtobufFactory(DecoderFactory):
         """A decoder for ``protobuf`` channels of the four Foxglove camera schemas."""
         if message_encoding != PROTOBUF or schema is None or schema.name not in FOXGLOVE_TYPES:
             return None
+        # protobuf is imported by the first protobuf channel, not by opening a log
+        from google.protobuf.message import DecodeError
+        from mcap_protobuf.decoder import DecoderFactory as ProtobufDecoderFactory
+
+        errors: tuple[type[Exception], ...] = (DecodeError, *_ERRORS)
         key = (schema.name, schema.data)
         parse = self._classes.get(key)
         if parse is None:
             # mcap_protobuf caches classes by schema id, which differs between files
             try:
                 parse = ProtobufDecoderFactory().decoder_for(message_encoding, schema)
-            except _ERRORS as err:
+            except errors as err:
                 raise ReplayError(f"bad protobuf schema for {schema.name}: {err}") from None
             if parse is None:
                 return None
@@ -113,7 +118,7 @@ class FoxgloveProtobufFactory(DecoderFactory):
         def decode(data: bytes | memoryview) -> Message:
             try:
                 message = parse(bytes(data))
-            except _ERRORS as err:
+            except errors as err:
                 raise ReplayError(f"cannot decode {name}: {err}") from None
             fields = {field.name: getattr(message, field.name)
                       for field in message.DESCRIPTOR.fields if field.name != "timestamp"}
@@ -151,7 +156,7 @@ class FoxgloveJsonFactory(DecoderFactory):
                 fields.setdefault("frame_id", "")
                 if "data" in fields:
                     fields["data"] = base64.b64decode(fields["data"], validate=True)
-            except (*_ERRORS, json.JSONDecodeError) as err:
+            except _JSON_ERRORS as err:
                 raise ReplayError(f"cannot decode {name} JSON: {err}") from None
             return _build(name, fields)
 

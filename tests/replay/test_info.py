@@ -16,6 +16,7 @@ from replay import (
     PoseStamped,
     RawMessage,
     Text,
+    info,
     open_reader,
     open_writer,
 )
@@ -106,13 +107,20 @@ def test_only_the_first_image_of_a_topic_is_decoded(
     path = tmp_path / "log.mcap"
     write_log(path, camera_entries(frames=6))
     decoded: list[str] = []
-    real = LogReader.decode
+    real_decode, real_by_schema = LogReader.decode, info._describe_by_schema
 
     def counting(self: LogReader, raw: RawMessage) -> Message:
         decoded.append(raw.msgtype)
-        return real(self, raw)
+        return real_decode(self, raw)
+
+    def counting_by_schema(raw: RawMessage) -> str | None:
+        described = real_by_schema(raw)
+        if described is not None:  # described without the reader's decode
+            decoded.append(raw.msgtype)
+        return described
 
     monkeypatch.setattr(LogReader, "decode", counting)
+    monkeypatch.setattr(info, "_describe_by_schema", counting_by_schema)
     with open_reader(path) as reader:
         summary = summarize(reader)
     assert sorted(decoded) == ["sensor_msgs/msg/CameraInfo", "sensor_msgs/msg/CompressedImage",

@@ -9,11 +9,15 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
 #: libraries only the commands that compute with them may load
 HEAVY = ("cv2", "numpy", "rerun", "mujoco", "ray", "matplotlib", "scipy")
+#: what opening and summarising a log must not load (no pixel is touched, no protobuf schema)
+LOG_HEAVY = ("cv2", "google", "rerun", "mujoco", "ray", "matplotlib", "scipy")
+GOLDEN = Path(__file__).parents[3] / "datasets" / "golden"
 
 SCRIPT = """
 import json, sys
@@ -55,3 +59,11 @@ def test_the_parser_is_built_without_heavy_libraries() -> None:
     loaded = {name.split(".")[0] for name in done.stdout.split()}
     assert loaded & set(HEAVY) == set()
     assert "camlog" in loaded  # the parser did load camlog's own modules
+
+
+def test_info_on_a_log_loads_no_opencv_protobuf_or_viewer() -> None:
+    log = GOLDEN / "red_block-seed0-640x480-f10.mcap"
+    assert log.is_file()
+    loaded = loaded_by("info", str(log))
+    assert loaded & set(LOG_HEAVY) == set()
+    assert "mcap" in loaded  # the log was read
