@@ -13,7 +13,8 @@ from .. import storage
 from ..atomic import temp_output_of
 from ..errors import LogFormatError, LogReadError
 from .base import FrameRecord, LogReader, LogWriter, RawMessage, Record, TopicInfo
-from .mcap import MAGIC, McapLogReader, McapLogWriter, is_mcap
+from .mcap import MAGIC, McapLogReader, is_mcap
+from .mcap_writer import McapLogWriter
 from .rosbag2_reindex import lone_storage
 from .rosbags_formats import (
     Ros1LogReader,

@@ -1,8 +1,9 @@
 """MCAP files with ROS 2 (CDR) or ROS1 messages, through the ``mcap`` package.
 
 Files are written chunked and zstd-compressed with a summary section so that rerun,
-Foxglove and ``ros2 bag`` open them. A file without summary (a recording that was killed)
-is read by streaming through its records up to the last complete chunk.
+Foxglove and ``ros2 bag`` open them (:mod:`.mcap_writer`). A file without summary (a
+recording that was killed) is read by streaming through its records up to the last complete
+chunk; with ``recover``, past damaged chunks too. A chunk written twice is read once.
 """
 
 from __future__ import annotations
@@ -17,14 +18,12 @@ from typing import IO, Any
 import zstandard
 from mcap.exceptions import McapError
 from mcap.reader import SeekingReader
-from mcap.records import Channel, Chunk, DataEnd, Footer, Message, Schema
+from mcap.records import Channel, Chunk, DataEnd, Footer, Message, MessageIndex, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
-from mcap.writer import CompressionType, Writer
 
-from .._version import VERSION
-from ..errors import LogReadError, LogWriteError
-from ..wire import CDR, JSON, PROTOBUF, ROS1, normalize_msgtype, ros2_typestore
-from .base import LogReader, LogWriter, RawMessage, TopicInfo
+from ..errors import LogReadError
+from ..wire import CDR, ROS1, normalize_msgtype
+from .base import LogReader, RawMessage, TopicInfo
 from .mcap_index import channel_spans
 
 MAGIC = b"\x89MCAP0\r\n"
@@ -165,6 +164,8 @@ class McapLogReader(LogReader):
         schemas: dict[int, Schema] = {}
         records = stream.records
         offset = len(MAGIC)
+        seen: set[tuple[int, int, int, int, int]] = set()  # chunks read: a repeat is skipped
+        lost: list[int] | None = None  # [messages] of a damaged chunk, from its indexes
         while True:
             if self._valid_until is not None and not learn and offset >= self._valid_until:
                 return
@@ -185,19 +186,42 @@ class McapLogReader(LogReader):
                         why = "file ends inside a record" if cut else "file ends before its footer"
                     self._note_damage(offset, why, truncated=at_end)
                 return
-            offset = self._file.tell()
+            start, offset = offset, self._file.tell()
+            if isinstance(record, MessageIndex):
+                if lost is not None:
+                    lost[0] += len(record.records)
+                continue
+            if lost is not None and learn:
+                self.warnings[-1] = self.warnings[-1].replace("? messages", f"{lost[0]} messages")
+            lost = None
             if isinstance(record, Schema):
                 schemas[record.id] = record
             elif isinstance(record, Channel):
                 if learn:
                     self._add_channel(record, schemas)
             elif isinstance(record, Chunk):
+                key = (record.message_start_time, record.message_end_time,
+                       record.uncompressed_size, record.uncompressed_crc, len(record.data))
+                if key in seen:
+                    if learn:
+                        self.warnings.append(f"{self.path}: the chunk at byte {start} repeats "
+                                             "an earlier one; read once")
+                    continue
+                seen.add(key)
                 try:
                     inner = list(breakup_chunk(record, validate_crc=True))
                 except _DAMAGE as err:
+                    if not self._recover:
+                        if learn:
+                            self._note_damage(offset, _describe(err), truncated=False)
+                        return
+                    lost = [0]  # resynchronise: the next record starts after this chunk
                     if learn:
-                        self._note_damage(offset, _describe(err), truncated=False)
-                    return
+                        self.warnings.append(
+                            f"{self.path}: skipped the damaged chunk at byte {start} "
+                            f"({_describe(err)}): ? messages lost, log times "
+                            f"{record.message_start_time} to {record.message_end_time} ns")
+                    continue
                 for sub in inner:
                     if isinstance(sub, Schema):
                         schemas[sub.id] = sub
@@ -308,92 +332,3 @@ def _with_count(info: TopicInfo, count: int) -> TopicInfo:
 def _describe(err: BaseException) -> str:
     text = str(err).strip().splitlines()[0] if str(err).strip() else ""
     return f"{type(err).__name__}: {text}" if text else type(err).__name__
-
-
-COMPRESSION = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4,
-               "none": CompressionType.NONE}
-
-
-class McapLogWriter(LogWriter):
-    """Writer for one MCAP file with ``ros2msg`` schemas and CDR messages."""
-
-    format_name = "mcap"
-    serialization = CDR
-    other_serializations = frozenset({PROTOBUF, JSON, "flatbuffer", "cbor", "msgpack"})
-
-    def __init__(
-        self,
-        path: Path,
-        *,
-        overwrite: bool = False,
-        inputs: Iterable[Path] = (),
-        compression: str | None = None,
-        chunk_size: int = 4 * 1024 * 1024,
-        profile: str = "ros2",
-    ) -> None:
-        compression = compression or "zstd"
-        if compression not in COMPRESSION:
-            raise LogWriteError(f"MCAP files cannot use {compression!r} compression "
-                                "(use zstd, lz4 or none)")
-        super().__init__(path, overwrite=overwrite, inputs=inputs)
-        self.compression = f"{compression} chunks" if compression != "none" else "none"
-        try:
-            self._file = self.temp_path.open("wb")
-        except OSError as err:
-            raise LogWriteError(f"cannot write {path}: {err.strerror}") from None
-        # every chunk carries the CRC of its content (enable_crcs, on by default)
-        self._writer = Writer(self._file, chunk_size=chunk_size,
-                              compression=COMPRESSION[compression])
-        if profile not in ("ros2", "foxglove"):
-            raise LogWriteError(f"unknown MCAP profile {profile!r} (use ros2 or foxglove)")
-        self.profile = profile
-        self._writer.start(profile="ros2" if profile == "ros2" else "",
-                           library=f"camlog {VERSION}")
-        self._schemas: dict[str, int] = {}
-        self._channels: dict[str, int] = {}
-        self._sequence: dict[int, int] = {}
-
-    def _channel(self, raw: RawMessage, msgdef: str) -> int:
-        channel = self._channels.get(raw.topic)
-        if channel is not None:
-            return channel
-        foreign = raw.serialization != CDR  # protobuf, JSON...: the schema as it came
-        key = f"{raw.serialization}:{raw.msgtype}" if foreign else raw.msgtype
-        schema = self._schemas.get(key)
-        if schema is None:
-            if foreign:
-                source = raw.schema
-                schema = 0 if source is None else self._writer.register_schema(
-                    source.name, source.encoding, source.data)
-            else:
-                if not msgdef:
-                    try:
-                        msgdef, _ = ros2_typestore().generate_msgdef(raw.msgtype, ros_version=2)
-                    except Exception as err:  # rosbags raises several types for unknown names
-                        raise LogWriteError(f"{raw.topic}: no message definition for "
-                                            f"{raw.msgtype}") from err
-                schema = self._writer.register_schema(raw.msgtype, "ros2msg", msgdef.encode())
-            self._schemas[key] = schema
-        channel = self._writer.register_channel(raw.topic, raw.serialization, schema)
-        self._channels[raw.topic] = channel
-        return channel
-
-    def _write(self, raw: RawMessage, msgdef: str) -> None:
-        channel = self._channel(raw, msgdef)
-        sequence = self._sequence.get(channel, 0)
-        self._sequence[channel] = sequence + 1
-        self._writer.add_message(channel, raw.log_time_ns, bytes(raw.data), raw.log_time_ns,
-                                 sequence)
-
-    def set_metadata(self, name: str, values: dict[str, str]) -> None:
-        self._writer.add_metadata(name, values)
-
-    def _flush(self) -> None:
-        self._writer.flush()  # type: ignore[no-untyped-call]  # chunk (with CRC) to the file
-
-    def _finish(self) -> None:
-        self._writer.finish()  # type: ignore[no-untyped-call]
-        self._file.close()
-
-    def _abort(self) -> None:
-        self._file.close()

@@ -152,6 +152,10 @@ def _corrupt_middle_chunk(tmp_path: Path) -> tuple[Path, list[Entry], int]:
     return path, entries, first_ns
 
 
+def _next_chunk_ns(path: Path, first_ns: int) -> int:
+    return min(ns for _, _, ns in chunk_starts(path) if ns > first_ns)
+
+
 def test_corrupt_chunk_raises(tmp_path: Path) -> None:
     path, _, _ = _corrupt_middle_chunk(tmp_path)
     with (
@@ -163,13 +167,31 @@ def test_corrupt_chunk_raises(tmp_path: Path) -> None:
     assert str(path) in str(raised.value)
 
 
-def test_recover_reads_up_to_the_damage(tmp_path: Path) -> None:
+def test_recover_skips_the_damaged_chunk_and_reads_on(tmp_path: Path) -> None:
     path, entries, damaged_from_ns = _corrupt_middle_chunk(tmp_path)
+    damaged_to_ns = _next_chunk_ns(path, damaged_from_ns)
+    lost = [e for e in entries if damaged_from_ns <= e[1] < damaged_to_ns]
     with open_reader(path, recover=True) as reader:
-        assert reader.warnings and "incomplete" in reader.warnings[0]
+        (warning,) = [w for w in reader.warnings if "skipped the damaged chunk" in w]
         got = [(r.topic, r.log_time_ns, r.message) for r in reader.messages()]
-    assert got == [entry for entry in entries if entry[1] < damaged_from_ns]
-    assert len(got) > 0
+    assert got == [e for e in entries if e not in lost]
+    assert 0 < len(lost) < len(entries) // 2
+    assert f"{len(lost)} messages lost, log times {lost[0][1]} to {lost[-1][1]} ns" in warning
+
+
+def test_a_chunk_written_twice_is_read_once(tmp_path: Path) -> None:
+    entries = numbered_images(20)
+    path = tmp_path / "twice.mcap"
+    write_log(path, entries, chunk_size=20_000)
+    chunks = chunk_starts(path)
+    assert len(chunks) >= 3
+    start, end = chunks[1][0], chunks[2][0]  # a chunk and its message indexes
+    data = path.read_bytes()
+    path.write_bytes(data[:end] + data[start:end] + data[end:])
+    with open_reader(path, recover=True) as reader:
+        got = [(r.topic, r.log_time_ns, r.message) for r in reader.messages()]
+        assert any("repeats an earlier one" in w for w in reader.warnings), reader.warnings
+    assert got == entries
 
 
 def test_reading_a_long_log_keeps_memory_flat(tmp_path: Path) -> None:
