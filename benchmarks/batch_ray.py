@@ -10,38 +10,20 @@ process wall; target <= 1.25) and each engine's time to its first finished log.
 
 from __future__ import annotations
 
-import argparse
-import tempfile
-from pathlib import Path
-
-from camlog.batch.pipeline import parse_pipeline
 from camlog.batch.run import BatchResult, run_batch
-from recorder.record import record
-from recorder.scenario import load_scenario
 
-from .batch_speedup import PIPELINE
+from .batch_speedup import batch_inputs
 from .report import emit
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--logs", type=int, default=6)
-    parser.add_argument("--frames", type=int, default=450, help="frames per camera per log")
-    args = parser.parse_args()
-    pipeline = parse_pipeline(PIPELINE, "batch_ray")
-    with tempfile.TemporaryDirectory() as tmp_name:
-        tmp = Path(tmp_name)
-        logs: list[str | Path] = []
-        for seed in range(args.logs):
-            path = tmp / f"unsynced_{seed}.mcap"
-            record(load_scenario("stereo_unsynced", {"frames": args.frames, "seed": seed}), path,
-                   progress=False)
-            logs.append(path)
+    with batch_inputs(__doc__, "batch_ray") as inputs:
         runs: dict[str, BatchResult] = {}
         for engine in ("process", "ray"):
-            runs[engine] = run_batch(pipeline, logs, tmp / f"out_{engine}", jobs=2,
-                                     engine=engine, progress=False)
+            runs[engine] = run_batch(inputs.pipeline, inputs.logs, inputs.folder / f"out_{engine}",
+                                     jobs=2, engine=engine, progress=False)
             assert not runs[engine].failed, runs[engine].failed
+    args = inputs.args
     process, ray = runs["process"], runs["ray"]
     emit(f"batch {args.logs} logs -j 2, Ray vs processes", baseline="processes",
          baseline_value=process.wall_s, measured="ray", measured_value=ray.wall_s, unit="s",

@@ -11,9 +11,12 @@ from __future__ import annotations
 
 import argparse
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 
-from camlog.batch.pipeline import parse_pipeline
+from camlog.batch.pipeline import Pipeline, parse_pipeline
 from camlog.batch.run import run_batch
 from recorder.record import record
 from recorder.scenario import load_scenario
@@ -30,25 +33,46 @@ PIPELINE = {
 }
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+@dataclass(frozen=True)
+class BatchInputs:
+    """A batch benchmark's command line, its pipeline, and the logs recorded for it in a
+    temporary ``folder``."""
+
+    args: argparse.Namespace
+    pipeline: Pipeline
+    folder: Path
+    logs: list[str | Path]
+
+
+@contextmanager
+def batch_inputs(doc: str | None, name: str) -> Iterator[BatchInputs]:
+    """Parse ``--logs``/``--frames``, record that many stereo_unsynced logs (seeds 0, 1, ...)
+    into a temporary folder, and remove it afterwards."""
+    parser = argparse.ArgumentParser(description=(doc or "").splitlines()[0])
     parser.add_argument("--logs", type=int, default=6)
     parser.add_argument("--frames", type=int, default=450, help="frames per camera per log")
     args = parser.parse_args()
-    pipeline = parse_pipeline(PIPELINE, "batch_speedup")
+    pipeline = parse_pipeline(PIPELINE, name)
     with tempfile.TemporaryDirectory() as tmp_name:
-        tmp = Path(tmp_name)
-        logs = []
+        folder = Path(tmp_name)
+        logs: list[str | Path] = []
         for seed in range(args.logs):
-            path = tmp / f"unsynced_{seed}.mcap"
-            record(load_scenario("stereo_unsynced", {"frames": args.frames, "seed": seed}), path,
-                   progress=False)
+            path = folder / f"unsynced_{seed}.mcap"
+            record(load_scenario("stereo_unsynced", {"frames": args.frames, "seed": seed}),
+                   path, progress=False)
             logs.append(path)
+        yield BatchInputs(args, pipeline, folder, logs)
+
+
+def main() -> None:
+    with batch_inputs(__doc__, "batch_speedup") as inputs:
         walls = {}
         for jobs in (1, 2):
-            result = run_batch(pipeline, logs, tmp / f"out_j{jobs}", jobs=jobs, progress=False)
+            result = run_batch(inputs.pipeline, inputs.logs, inputs.folder / f"out_j{jobs}",
+                               jobs=jobs, progress=False)
             assert not result.failed, result.failed
             walls[jobs] = result.wall_s
+    args = inputs.args
     emit(f"batch {args.logs} logs, -j 2 vs -j 1", baseline="-j 1", baseline_value=walls[1],
          measured="-j 2", measured_value=walls[2], unit="s", ratio=walls[1] / walls[2],
          target=">= 1.6 (speed-up)")

@@ -21,6 +21,7 @@ import numpy as np
 from .atomic import write_text_atomic
 from .errors import OutputError, ReplayError
 from .messages import F64, CameraInfo
+from .storage import read_local_text
 
 __all__ = [
     "Calibration",
@@ -123,12 +124,7 @@ def calibration_to_yaml(info: CameraInfo, *, camera_name: str) -> str:
 def load_calibration(path: str | Path) -> Calibration:
     """Read a calibration file; errors name the path."""
     path = Path(path)
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise CalibrationFileError(f"{path} does not exist") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise CalibrationFileError(f"cannot read {path}: {err}") from None
+    text = read_local_text(path, CalibrationFileError)
     try:
         return calibration_from_yaml(text)
     except (CalibrationFileError, ValueError) as err:

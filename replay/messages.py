@@ -7,19 +7,18 @@ Pixels and matrices are numpy arrays with their shape documented on the field.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
+from .arrays import ArrayFields, Pixels, PixelShape
 from .errors import EncodingError, UnsupportedEncodingError
 
 F64 = npt.NDArray[np.float64]
-#: image pixels in the layout of their encoding: (H, W) or (H, W, C)
-Pixels = npt.NDArray[Any]
 
-@dataclass(frozen=True, slots=True)
-class Image:
+
+@dataclass(frozen=True, slots=True, eq=False)
+class Image(PixelShape, ArrayFields):
     """Raw image (``sensor_msgs/msg/Image``).
 
     ``pixels`` is ``(H, W)`` for one-channel encodings and ``(H, W, C)`` otherwise, with the
@@ -33,28 +32,6 @@ class Image:
 
     def __post_init__(self) -> None:
         check_pixels(self.encoding, self.pixels)
-
-    @property
-    def width(self) -> int:
-        """Image width in pixels."""
-        return int(self.pixels.shape[1])
-
-    @property
-    def height(self) -> int:
-        """Image height in pixels."""
-        return int(self.pixels.shape[0])
-
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, Image):
-            return NotImplemented
-        return (
-            (self.stamp_ns, self.frame_id, self.encoding)
-            == (other.stamp_ns, other.frame_id, other.encoding)
-            and self.pixels.dtype == other.pixels.dtype
-            and np.array_equal(self.pixels, other.pixels)
-        )
-
-    __hash__ = None  # type: ignore[assignment]
 
 
 @dataclass(frozen=True, slots=True)
@@ -78,8 +55,8 @@ class CompressedVideo:
     data: bytes
 
 
-@dataclass(frozen=True, slots=True)
-class CameraInfo:
+@dataclass(frozen=True, slots=True, eq=False)
+class CameraInfo(ArrayFields):
     """Camera model (``sensor_msgs/msg/CameraInfo``), OpenCV conventions.
 
     ``k`` (3, 3) intrinsics, ``d`` (N,) distortion for ``distortion_model``, ``r`` (3, 3)
@@ -107,24 +84,9 @@ class CameraInfo:
             object.__setattr__(self, name, value)
         object.__setattr__(self, "d", np.asarray(self.d, dtype=np.float64).reshape(-1))
 
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, CameraInfo):
-            return NotImplemented
-        return (
-            (self.stamp_ns, self.frame_id, self.width, self.height, self.distortion_model)
-            == (other.stamp_ns, other.frame_id, other.width, other.height, other.distortion_model)
-            and all(
-                np.array_equal(getattr(self, n), getattr(other, n)) for n in ("d", "k", "r", "p")
-            )
-            and (self.binning_x, self.binning_y, tuple(self.roi))
-            == (other.binning_x, other.binning_y, tuple(other.roi))
-        )
 
-    __hash__ = None  # type: ignore[assignment]
-
-
-@dataclass(frozen=True, slots=True)
-class PoseStamped:
+@dataclass(frozen=True, slots=True, eq=False)
+class PoseStamped(ArrayFields):
     """Pose (``geometry_msgs/msg/PoseStamped``) of a child frame in ``frame_id``.
 
     ``position_m`` (3,); ``orientation_xyzw`` (4,) unit quaternion in ROS order.
@@ -141,20 +103,9 @@ class PoseStamped:
             self, "orientation_xyzw", np.asarray(self.orientation_xyzw, dtype=np.float64)
         )
 
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, PoseStamped):
-            return NotImplemented
-        return (
-            (self.stamp_ns, self.frame_id) == (other.stamp_ns, other.frame_id)
-            and np.array_equal(self.position_m, other.position_m)
-            and np.array_equal(self.orientation_xyzw, other.orientation_xyzw)
-        )
 
-    __hash__ = None  # type: ignore[assignment]
-
-
-@dataclass(frozen=True, slots=True)
-class PointStamped:
+@dataclass(frozen=True, slots=True, eq=False)
+class PointStamped(ArrayFields):
     """Point (``geometry_msgs/msg/PointStamped``); ``point`` (3,) in ``frame_id`` units."""
 
     stamp_ns: int
@@ -163,15 +114,6 @@ class PointStamped:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "point", np.asarray(self.point, dtype=np.float64))
-
-    def __eq__(self, other: object) -> bool:
-        if not isinstance(other, PointStamped):
-            return NotImplemented
-        return (self.stamp_ns, self.frame_id) == (other.stamp_ns, other.frame_id) and bool(
-            np.array_equal(self.point, other.point)
-        )
-
-    __hash__ = None  # type: ignore[assignment]
 
 
 @dataclass(frozen=True, slots=True)

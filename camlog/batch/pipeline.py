@@ -44,7 +44,7 @@ from processors.errors import OptionValueError
 from processors.registry import SPECS, spec_of
 from processors.spec import Configured, ProcessorSpec
 from replay.atomic import write_text_atomic
-from replay.storage import Location
+from replay.storage import Location, read_local_text
 from replay.topics import RESYNC_PREFIX
 
 from ..errors import PipelineError
@@ -316,12 +316,7 @@ def parse_pipeline(raw: Any, source: str) -> Pipeline:
 
 def load_pipeline(path: Path) -> Pipeline:
     """Read a pipeline from a .toml, .yaml or .yml file."""
-    try:
-        text = path.read_text()
-    except FileNotFoundError:
-        raise PipelineError(f"pipeline file {path} does not exist") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise PipelineError(f"cannot read pipeline {path}: {err}") from None
+    text = read_local_text(path, PipelineError, what="pipeline file")
     if path.suffix in (".yaml", ".yml"):
         from ruamel.yaml import YAML
         from ruamel.yaml.error import YAMLError

@@ -15,22 +15,7 @@ from processors.calibration.solve import (
     max_projection_difference,
 )
 from processors.calibration.validation import projection_difference
-from replay.records import (
-    BoardSummary,
-    CalibrationSummary,
-    CameraSummary,
-    CoverageSummary,
-    EvidenceSummary,
-    OptionsSummary,
-    ParameterEstimate,
-    RangeProgress,
-    RejectedJointView,
-    RejectedView,
-    StereoSummary,
-    StereoTruth,
-    TangentialSummary,
-    UncertaintySummary,
-)
+from replay.records import calibration as records
 from replay.records.scenario import Scenario
 
 from .solving import CalibratedCamera, RigSolution, StereoSolution
@@ -38,48 +23,48 @@ from .solving import CalibratedCamera, RigSolution, StereoSolution
 __all__ = ["build_summary"]
 
 
-def _parameters(camera: CalibratedCamera) -> dict[str, ParameterEstimate]:
+def _parameters(camera: CalibratedCamera) -> dict[str, records.ParameterEstimate]:
     result = camera.solution.result
     truth = camera.truth.parameters() if camera.truth is not None else {}
     table = {}
     for name, value in result.parameters().items():
-        estimate = ParameterEstimate(float(value), float(result.std.get(name, 0.0)))
+        estimate = records.ParameterEstimate(float(value), float(result.std.get(name, 0.0)))
         if name in truth:
-            estimate = ParameterEstimate(estimate.value, estimate.std, truth[name],
+            estimate = records.ParameterEstimate(estimate.value, estimate.std, truth[name],
                                          float(value - truth[name]))
         table[name] = estimate
     return table
 
 
-def _tangential(result: MonoResult) -> TangentialSummary:
+def _tangential(result: MonoResult) -> records.TangentialSummary:
     test = result.tangential_test
     estimated = result.options.tangential == "estimate"
     if test is None:
-        return TangentialSummary(estimated)
-    return TangentialSummary(estimated, test.chi2, test.p_value, test.describe())
+        return records.TangentialSummary(estimated)
+    return records.TangentialSummary(estimated, test.chi2, test.p_value, test.describe())
 
 
-def _rejected(camera: CalibratedCamera) -> list[RejectedView]:
+def _rejected(camera: CalibratedCamera) -> list[records.RejectedView]:
     """Frames rejected at detection or by the speed limit (in frame order), then the views
     the solver left out."""
     views, result = camera.views, camera.solution.result
     rejected = []
     for f in views.distinct():
         if f.detection is not None and not f.detection.accepted:
-            rejected.append(RejectedView(f.stamp_ns, f.detection.reason))
+            rejected.append(records.RejectedView(f.stamp_ns, f.detection.reason))
         elif f.reason:
-            rejected.append(RejectedView(f.stamp_ns, f.reason))
-    rejected += [RejectedView(views.frames[index].stamp_ns, why)
+            rejected.append(records.RejectedView(f.stamp_ns, f.reason))
+    rejected += [records.RejectedView(views.frames[index].stamp_ns, why)
                  for index, why in sorted(result.rejected.items())]
     return rejected
 
 
-def _evidence(camera: CalibratedCamera, index: int, solved: RigSolution) -> EvidenceSummary:
+def _evidence(camera: CalibratedCamera, index: int, solved: RigSolution) -> records.EvidenceSummary:
     solution, joint = camera.solution, solved.joint
     used = solution.result.view_ids
     mine = [i for i, v in enumerate(solved.rig.views) if v.camera == index]
     reasons = [joint.rejected[i] for i in mine if i in joint.rejected]
-    return EvidenceSummary(
+    return records.EvidenceSummary(
         frames_used=sum(solution.frames_in_view[name] for name in used),
         views=len(used), held_views=sum(solution.frames_in_view[name] > 1 for name in used),
         outlier_views=sum("outlier" in r for r in reasons),
@@ -89,7 +74,7 @@ def _evidence(camera: CalibratedCamera, index: int, solved: RigSolution) -> Evid
         blur=joint.blur.describe() if joint.blur is not None else None)
 
 
-def _uncertainty(camera: CalibratedCamera) -> UncertaintySummary:
+def _uncertainty(camera: CalibratedCamera) -> records.UncertaintySummary:
     solution = camera.solution
     u, validation = solution.uncertainty, solution.cross_validation
     true_median = true_worst = None
@@ -97,7 +82,7 @@ def _uncertainty(camera: CalibratedCamera) -> UncertaintySummary:
         error = projection_difference(solution.result.model, camera.truth.model(), u.pixels)
         true_median, true_worst = float(np.nanmedian(error)), float(np.nanmax(error))
     far = solution.rays_uncertainty
-    return UncertaintySummary(
+    return records.UncertaintySummary(
         range_m=u.range_m, median_px=u.median_px, worst_px=u.worst_px,
         rays_median_px=far.median_px, rays_worst_px=far.worst_px,
         cross_validation_median_px=validation.median_px if validation is not None else None,
@@ -105,7 +90,7 @@ def _uncertainty(camera: CalibratedCamera) -> UncertaintySummary:
         true_error_median_px=true_median, true_error_worst_px=true_worst)
 
 
-def _camera(camera: CalibratedCamera, index: int, solved: RigSolution) -> CameraSummary:
+def _camera(camera: CalibratedCamera, index: int, solved: RigSolution) -> records.CameraSummary:
     solution, views = camera.solution, camera.views
     result = solution.result
     distinct = list(views.distinct())
@@ -119,7 +104,7 @@ def _camera(camera: CalibratedCamera, index: int, solved: RigSolution) -> Camera
             differences[f"max_projection_difference_vs_truth{key}_aligned_px"] = \
                 max_projection_difference(result.model, true_model, within=within,
                                           align_rotation=True)
-    return CameraSummary(
+    return records.CameraSummary(
         namespace=views.source.namespace, image_topic=views.source.image_topic,
         width=views.size[0], height=views.size[1], frames=len(views.frames),
         distinct_frames=len(distinct),
@@ -128,8 +113,8 @@ def _camera(camera: CalibratedCamera, index: int, solved: RigSolution) -> Camera
         used_views=len(result.view_ids), rejected=_rejected(camera), rms_px=result.rms_px,
         distortion_model=result.model.distortion_model, parameters=_parameters(camera),
         cross_validation_px=solution.cross_validation_px, tangential=_tangential(result),
-        coverage=CoverageSummary(
-            {name: RangeProgress(lo, hi, p)
+        coverage=records.CoverageSummary(
+            {name: records.RangeProgress(lo, hi, p)
              for name, (lo, hi, p) in solution.coverage.ranges.items()},
             solution.coverage.image_cells),
         **differences,
@@ -137,7 +122,7 @@ def _camera(camera: CalibratedCamera, index: int, solved: RigSolution) -> Camera
     )
 
 
-def _stereo(cameras: list[CalibratedCamera], stereo: StereoSolution) -> StereoSummary:
+def _stereo(cameras: list[CalibratedCamera], stereo: StereoSolution) -> records.StereoSummary:
     s = stereo.result
     left, right = cameras
     truth = None
@@ -145,14 +130,14 @@ def _stereo(cameras: list[CalibratedCamera], stereo: StereoSolution) -> StereoSu
         right_from_left = np.linalg.inv(right.truth.world_from_camera) @ \
             left.truth.world_from_camera
         true_baseline = float(np.linalg.norm(right_from_left[:3, 3]))
-        truth = StereoTruth(true_baseline,
+        truth = records.StereoTruth(true_baseline,
                             100 * (s.baseline_m - true_baseline) / true_baseline)
-    return StereoSummary(
+    return records.StereoSummary(
         rms_px=s.rms_px, epipolar_rms_px=s.epipolar_rms_px, baseline_m=s.baseline_m,
         baseline_std_m=s.baseline_std_m, square_m=s.square_m, rotation_deg=s.rotation_deg,
         translation_m=s.right_from_left[:3, 3].tolist(), joint_views=len(s.view_epipolar_px),
         rotation_std_deg=s.rotation_std_deg,
-        rejected=[RejectedJointView(left.views.frames[li].stamp_ns,
+        rejected=[records.RejectedJointView(left.views.frames[li].stamp_ns,
                                     right.views.frames[ri].stamp_ns, why)
                   for (li, ri), why in stereo.rejected],
         truth=truth)
@@ -160,12 +145,12 @@ def _stereo(cameras: list[CalibratedCamera], stereo: StereoSolution) -> StereoSu
 
 def build_summary(cameras: list[CalibratedCamera], solved: RigSolution, *,
                   board: Board, options: CalibrationOptions,
-                  scenario: Scenario | None) -> CalibrationSummary:
+                  scenario: Scenario | None) -> records.CalibrationSummary:
     """The summary of a run; ``scenario``: the simulator's record, when the log has one."""
     stereo = solved.stereo
-    return CalibrationSummary(
-        board=BoardSummary(board.pattern, board.cols, board.rows, board.square_m),
-        options=OptionsSummary(options.fix_principal_point, options.fix_aspect_ratio,
+    return records.CalibrationSummary(
+        board=records.BoardSummary(board.pattern, board.cols, board.rows, board.square_m),
+        options=records.OptionsSummary(options.fix_principal_point, options.fix_aspect_ratio,
                                options.tangential, options.radial_count,
                                options.distortion_model),
         cameras=[_camera(c, i, solved) for i, c in enumerate(cameras)],

@@ -46,12 +46,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fix-principal-point", action="store_true",
                    help="hold the principal point at the image centre")
     p.add_argument("--fix-aspect-ratio", action="store_true", help="force fx = fy")
-    p.add_argument("--zero-tangent-dist", action="store_true",
-                   help="hold tangential distortion p1 = p2 = 0")
-    p.add_argument("--tangent-dist", action="store_true",
-                   help="always estimate tangential distortion p1, p2 (camera_calibration's "
-                        "default; by default they are estimated only when the views show "
-                        "them, by a likelihood-ratio test)")
+    tangential = p.add_mutually_exclusive_group()
+    tangential.add_argument("--zero-tangent-dist", action="store_true",
+                            help="hold tangential distortion p1 = p2 = 0")
+    tangential.add_argument("--tangent-dist", action="store_true",
+                            help="always estimate tangential distortion p1, p2 "
+                                 "(camera_calibration's default; by default they are estimated "
+                                 "only when the views show them, by a likelihood-ratio test)")
     p.add_argument("--model", choices=MODELS, metavar="MODEL",
                    help="lens model: plumb_bob (default), rational_polynomial or equidistant "
                         "(OpenCV's fisheye; 'fisheye' is accepted for it)")

@@ -113,7 +113,7 @@ def make_board(size: str, square_m: float, pattern: str = "chessboard", *,
     if pattern not in PATTERNS:
         raise ProcessorError(f"unsupported pattern {pattern!r} (supported: {', '.join(PATTERNS)})")
     if not square_m > 0:
-        raise ProcessorError(f"--square must be > 0 metres, got {square_m}")
+        raise ProcessorError(f"the square size must be > 0 metres, got {square_m}")
     cols, rows = parse_size(size)
     if pattern == "charuco":
         import cv2
@@ -121,7 +121,7 @@ def make_board(size: str, square_m: float, pattern: str = "chessboard", *,
         if cols < 3 or rows < 3:
             raise ProcessorError(f"a ChArUco board needs at least 3x3 squares, got {size!r}")
         if marker_m is None or not 0 < marker_m < square_m:
-            raise ProcessorError(f"a ChArUco board needs --marker between 0 and the square "
+            raise ProcessorError(f"a ChArUco board needs a marker size between 0 and the square "
                                  f"({square_m:g} m), got {marker_m}")
         name = dictionary or DEFAULT_DICTIONARY
         if not name.startswith("DICT_") or not hasattr(cv2.aruco, name):
@@ -136,5 +136,5 @@ def make_board(size: str, square_m: float, pattern: str = "chessboard", *,
                                  f"{name} has {available}")
         return board
     if dictionary is not None or marker_m is not None:
-        raise ProcessorError("--marker and --dictionary are for --pattern charuco")
+        raise ProcessorError("a marker size and an ArUco dictionary belong to the charuco pattern only")
     return Board(cols, rows, square_m, pattern)

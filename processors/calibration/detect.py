@@ -142,7 +142,7 @@ def check_detection(gray: np.ndarray, corners_px: F64, board: Board) -> Detectio
         if extra.mean() >= 0.8:
             return Detection(corners_px, False,
                              f"the board goes on beyond this {board.cols}x{board.rows} grid "
-                             "(--size too small?)")
+                             "(board size too small?)")
     return Detection(corners_px, True)
 
 

@@ -4,15 +4,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from enum import StrEnum
-from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["Color", "Frame"]
+from ..arrays import Pixels, PixelShape
 
-#: frame pixels: (H, W) or (H, W, C); uint8, uint16 or float32
-Pixels = npt.NDArray[Any]
+__all__ = ["Color", "Frame", "Pixels"]
+
 U8 = npt.NDArray[np.uint8]
 
 
@@ -41,7 +40,7 @@ _CONVERSIONS: dict[Color, tuple[int, str | None, str | None, str | None]] = {
 
 
 @dataclass(frozen=True, slots=True, eq=False)
-class Frame:
+class Frame(PixelShape):
     """One camera image decoded from any message kind and encoding.
 
     ``pixels`` is ``(H, W)`` for ``MONO`` and ``DEPTH``, ``(H, W, C)`` otherwise, channels in
@@ -66,16 +65,6 @@ class Frame:
                              f"{px.dtype}{list(px.shape)}")
         if (self.color is Color.DEPTH) != (self.depth_unit_m is not None):
             raise ValueError("a depth frame, and only a depth frame, has a depth unit")
-
-    @property
-    def width(self) -> int:
-        """Columns of the image."""
-        return int(self.pixels.shape[1])
-
-    @property
-    def height(self) -> int:
-        """Rows of the image."""
-        return int(self.pixels.shape[0])
 
     def with_pixels(self, pixels: Pixels) -> Frame:
         """The same frame (stamp, colour order, unit) holding other pixels, e.g. rectified."""
