@@ -136,5 +136,6 @@ def make_board(size: str, square_m: float, pattern: str = "chessboard", *,
                                  f"{name} has {available}")
         return board
     if dictionary is not None or marker_m is not None:
-        raise ProcessorError("a marker size and an ArUco dictionary belong to the charuco pattern only")
+        raise ProcessorError("a marker size and an ArUco dictionary belong to the charuco "
+                             "pattern only")
     return Board(cols, rows, square_m, pattern)

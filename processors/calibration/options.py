@@ -40,7 +40,8 @@ def tangential_mode(zero_tangent_dist: bool, tangent_dist: bool) -> str:
     """The tangential mode of camera_calibration-style flags: --zero-tangent-dist holds
     p1 = p2 = 0, --tangent-dist always estimates them, neither lets the views decide."""
     if zero_tangent_dist and tangent_dist:
-        raise ProcessorError("holding tangential distortion at zero and always estimating it contradict each other")
+        raise ProcessorError("holding tangential distortion at zero and always estimating it "
+                             "contradict each other")
     return "zero" if zero_tangent_dist else "estimate" if tangent_dist else "auto"
 
 
@@ -63,8 +64,9 @@ class CalibrationOptions:
             object.__setattr__(self, "model", model)
         k = self.k_coefficients
         if k is not None and not 0 <= k <= MAX_K[self.distortion_model]:
-            raise ProcessorError(f"the number of radial coefficients must be 0..{MAX_K[self.distortion_model]} "
-                                 f"for {self.distortion_model}, got {k}")
+            most = MAX_K[self.distortion_model]
+            raise ProcessorError(f"the number of radial coefficients must be 0..{most} for "
+                                 f"{self.distortion_model}, got {k}")
         if self.tangential not in TANGENTIAL_MODES:
             raise ProcessorError(f"tangential distortion must be one of "
                                  f"{', '.join(TANGENTIAL_MODES)}, got {self.tangential!r}")
