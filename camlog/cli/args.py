@@ -10,6 +10,8 @@ import sys
 from collections.abc import Callable, Iterable
 from pathlib import Path
 
+from replay.format_names import WRITE_FORMATS
+
 #: bytes a file name may have on common file systems (ext4, xfs, btrfs, tmpfs, APFS)
 NAME_MAX = 255
 #: bytes camlog adds to an output's name for its temporary sibling
@@ -112,3 +114,9 @@ def print_warnings(warnings: Iterable[str]) -> None:
     """One ``warning:`` line per warning on stderr."""
     for warning in warnings:
         print(f"warning: {warning}", file=sys.stderr)
+
+
+def add_format_argument(parser: argparse.ArgumentParser, *, default_from: str) -> None:
+    """``--format``: the output log format, by default told from ``default_from``'s name."""
+    parser.add_argument("--format", choices=sorted(WRITE_FORMATS),
+                        help=f"output format (default: from {default_from})")

@@ -6,9 +6,8 @@ import argparse
 from pathlib import Path
 
 from replay.convert import COMPRESSIONS, convert_log
-from replay.formats import FORMATS
 
-from .args import add_selection, output_path, print_warnings
+from .args import add_format_argument, add_selection, output_path, print_warnings
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -25,7 +24,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("input", metavar="IN", type=Path, help="MCAP file, rosbag2 directory or .bag")
     p.add_argument("output", metavar="OUT", type=output_path,
                    help="output log: .mcap, .bag or a directory name (rosbag2)")
-    p.add_argument("--format", choices=sorted(FORMATS), help="output format (default: from OUT)")
+    add_format_argument(p, default_from="OUT")
     add_selection(p)
     codec = p.add_mutually_exclusive_group()
     codec.add_argument("--compress", choices=COMPRESSIONS,

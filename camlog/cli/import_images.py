@@ -5,10 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from replay.formats import FORMATS
 from replay.importer import DEFAULT_START_NS, import_images
 
-from .args import bounded_int, name, number, output_path, print_warnings
+from .args import add_format_argument, bounded_int, name, number, output_path, print_warnings
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -37,7 +36,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--frame-id", type=name, metavar="ID",
                    help="header frame_id (default from the namespace, e.g. "
                         "camera_optical_frame; with --stereo ID_left / ID_right)")
-    p.add_argument("--format", choices=sorted(FORMATS), help="output format (default: from LOG)")
+    add_format_argument(p, default_from="LOG")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 

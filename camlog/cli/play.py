@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from replay.formats import FORMATS
+from replay.format_names import WRITE_FORMATS
 from replay.play import LOG_TIMES, play_log
 
 from .args import add_selection, add_viewer_destination, bounded_int, number, print_warnings
@@ -31,7 +31,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_viewer_destination(p, what="replay (.rrd: rerun recording; else a log)")
     p.add_argument("--log-time", choices=LOG_TIMES, default="replay",
                    help="log time written to a log output (default: replay wall clock)")
-    p.add_argument("--format", choices=sorted(FORMATS),
+    p.add_argument("--format", choices=sorted(WRITE_FORMATS),
                    help="log output format (default: from OUT)")
     p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
     p.add_argument("--no-progress", action="store_true", help="hide the progress bar")

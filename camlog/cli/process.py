@@ -9,11 +9,10 @@ import argparse
 from pathlib import Path
 
 from processors.registry import SPECS
-from replay.formats import FORMATS
 
 from ..errors import UsageError
 from ..processing.outputs import CHAPTER_NS, COMPRESSIONS
-from .args import bounded_int, name, output_path, print_warnings
+from .args import add_format_argument, bounded_int, name, output_path, print_warnings
 from .processor_args import add_processor_arguments, chosen_processors, worded
 
 
@@ -45,7 +44,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="stop after N frames of each topic (quick runs)")
     p.add_argument("--workers", type=bounded_int(1, 256), metavar="N",
                    help="processing threads (default: cores)")
-    p.add_argument("--format", choices=sorted(FORMATS), help="output format (default: from OUT)")
+    add_format_argument(p, default_from="OUT")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output")
     p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
 

@@ -9,7 +9,7 @@ from typing import Any
 
 from recorder.scenario import DEFAULT_SCENARIO, MAX_FRAMES, builtin_names
 from replay.camera import CAMERA_MODELS
-from replay.formats import FORMATS
+from replay.format_names import WRITE_FORMATS
 
 from .args import bounded_int, non_negative, number, output_path, positive
 
@@ -74,7 +74,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--output", type=output_path,
                    help="output log: NAME.mcap (default), NAME.bag (ROS1) or a directory name "
                         "(rosbag2); default: recordings/SCENARIO.mcap")
-    p.add_argument("--format", choices=sorted(FORMATS),
+    p.add_argument("--format", choices=sorted(WRITE_FORMATS),
                    help="output format (default: from the output name; .mcap when none)")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output")
     p.add_argument("--seed", type=bounded_int(0, 2**63 - 1),

@@ -5,11 +5,9 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from replay.formats import FORMATS
 from replay.topics import RESYNC_PREFIX
 
-from ..processing.resync_log import resync_log
-from .args import name, number, output_path
+from .args import add_format_argument, name, number, output_path
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -35,7 +33,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "(default: half the median frame period)")
     p.add_argument("--out-prefix", type=name, default=RESYNC_PREFIX, metavar="NS",
                    help=f"namespace of the re-stamped topics (default {RESYNC_PREFIX})")
-    p.add_argument("--format", choices=sorted(FORMATS), help="output format (default: from OUT)")
+    add_format_argument(p, default_from="OUT")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output")
     p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
 
@@ -46,7 +44,10 @@ def _stamps(values: list[int]) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Call :func:`resync_log` and print its pairing statistics."""
+    """Call :func:`camlog.processing.resync_log.resync_log` and print its pairing
+    statistics."""
+    from ..processing.resync_log import resync_log
+
     result = resync_log(
         args.log, args.output, left=args.left, right=args.right, out_prefix=args.out_prefix,
         slop_s=args.slop, fmt=args.format, overwrite=args.overwrite, recover=args.recover,

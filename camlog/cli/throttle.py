@@ -10,8 +10,8 @@ import argparse
 from pathlib import Path
 
 from processors.registry import spec_of
-from replay.formats import FORMATS
 
+from .args import add_format_argument
 from .processor_args import add_processor_arguments, chosen_processors, worded
 
 
@@ -24,7 +24,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="topic to thin (images, camera_info or other stamped messages); "
                         "repeat it for several (each is thinned by its own stamps)")
     add_processor_arguments(p, [spec_of("throttle")], required=True)
-    p.add_argument("--format", choices=sorted(FORMATS), help="output format (default: from OUT)")
+    add_format_argument(p, default_from="OUT")
     p.add_argument("--overwrite", action="store_true", help="replace an existing output")
     p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
 

@@ -12,16 +12,10 @@ from typing import Any
 from .. import storage
 from ..atomic import temp_output_of
 from ..errors import LogFormatError, LogReadError
+from ..format_names import WRITE_FORMATS
 from .base import FrameRecord, LogReader, LogWriter, RawMessage, Record, TopicInfo
 from .mcap import MAGIC, McapLogReader, is_mcap
-from .mcap_writer import McapLogWriter
 from .rosbag2_reindex import lone_storage
-from .rosbags_formats import (
-    Ros1LogReader,
-    Ros1LogWriter,
-    Rosbag2LogReader,
-    Rosbag2LogWriter,
-)
 
 __all__ = [
     "FORMATS",
@@ -39,18 +33,55 @@ __all__ = [
 
 ROS1_MAGIC = b"#ROSBAG V2.0"
 
+# Each format's library (rosbags, the MCAP writer) is imported when the format is first used,
+# so that reading an MCAP file or parsing arguments does not load the others.
+
+
+def _mcap_writer(path: Path, **options: Any) -> LogWriter:
+    from .mcap_writer import McapLogWriter
+
+    return McapLogWriter(path, **options)
+
+
+def _rosbag2_writer(storage_name: str) -> Callable[..., LogWriter]:
+    def create(path: Path, **options: Any) -> LogWriter:
+        from .rosbags_formats import Rosbag2LogWriter
+
+        return Rosbag2LogWriter(path, storage=storage_name, **options)
+    return create
+
+
+def _ros1_writer(path: Path, **options: Any) -> LogWriter:
+    from .rosbags_formats import Ros1LogWriter
+
+    return Ros1LogWriter(path, **options)
+
+
+def _rosbag2_reader(path: Path, **options: Any) -> LogReader:
+    from .rosbags_formats import Rosbag2LogReader
+
+    return Rosbag2LogReader(path, **options)
+
+
+def _ros1_reader(path: Path, **options: Any) -> LogReader:
+    from .rosbags_formats import Ros1LogReader
+
+    return Ros1LogReader(path, **options)
+
+
 #: format name -> writer factory
 FORMATS: dict[str, Callable[..., LogWriter]] = {
-    "mcap": McapLogWriter,
-    "rosbag2": lambda path, **kw: Rosbag2LogWriter(path, storage="mcap", **kw),
-    "rosbag2-sqlite3": lambda path, **kw: Rosbag2LogWriter(path, storage="sqlite3", **kw),
-    "ros1": Ros1LogWriter,
+    "mcap": _mcap_writer,
+    "rosbag2": _rosbag2_writer("mcap"),
+    "rosbag2-sqlite3": _rosbag2_writer("sqlite3"),
+    "ros1": _ros1_writer,
 }
+assert tuple(FORMATS) == WRITE_FORMATS
 
 READERS: dict[str, Callable[..., LogReader]] = {
     "mcap": McapLogReader,
-    "rosbag2": Rosbag2LogReader,
-    "ros1": Ros1LogReader,
+    "rosbag2": _rosbag2_reader,
+    "ros1": _ros1_reader,
 }
 
 

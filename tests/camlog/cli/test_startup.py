@@ -46,6 +46,9 @@ def loaded_by(*argv: str) -> set[str]:
     ["info"],
     ["info", "--help"],
     ["golden", "--no-such-option"],
+    ["process", "--help"],
+    ["resync", "--help"],
+    ["throttle", "--help"],
 ], ids=" ".join)
 def test_help_and_argument_errors_load_no_heavy_library(argv: list[str]) -> None:
     assert loaded_by(*argv) & set(HEAVY) == set()
@@ -67,3 +70,10 @@ def test_info_on_a_log_loads_no_opencv_protobuf_or_viewer() -> None:
     loaded = loaded_by("info", str(log))
     assert loaded & set(LOG_HEAVY) == set()
     assert "mcap" in loaded  # the log was read
+
+
+def test_reading_an_mcap_log_loads_no_other_format_library() -> None:
+    log = GOLDEN / "red_block-seed0-640x480-f10.mcap"
+    loaded = loaded_by("info", str(log))
+    assert "mcap" in loaded
+    assert "ruamel" not in loaded  # rosbag2's metadata reader (rosbags' bag formats)
