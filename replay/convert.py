@@ -145,9 +145,8 @@ def convert_log(
                 if codec is not None:
                     try:
                         out = codec(reader.decode(raw))
-                    except ReplayError:  # e.g. an encoding the wire layer cannot cut
-                        codec.undecodable += 1
-                        out = None
+                    except ReplayError as err:  # e.g. a buffer too short for its size
+                        out = codec.failed(err)
                 if out is None:
                     continue
                 if out is False and profile == "foxglove" and \

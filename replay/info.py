@@ -20,7 +20,7 @@ from .messages import CameraInfo, CompressedImage, CompressedVideo, Image
 from .wire import CDR, DECODABLE, FRAME_TYPES, RECORD_TYPES
 from .wire.layout import image_from_buffer
 
-__all__ = ["LogSummary", "TopicSummary", "format_summary", "summarize"]
+__all__ = ["FrameCheck", "LogSummary", "TopicSummary", "format_summary", "summarize"]
 
 #: topics whose first message is decoded to describe the stream (ROS and Foxglove types)
 DESCRIBED_TYPES = FRAME_TYPES | {t for t, kind in RECORD_TYPES.items() if kind is CameraInfo}
@@ -51,6 +51,22 @@ class TopicSummary:
 
 
 @dataclass(frozen=True, slots=True)
+class FrameCheck:
+    """Every image frame of a log decoded (``info --verify``): how many were read, and per
+    topic how many did not decode (a cut JPEG, a buffer too small, video before its first
+    keyframe, an encoding camlog does not read)."""
+
+    frames: int
+    undecodable: dict[str, int]
+
+    @property
+    def warnings(self) -> tuple[str, ...]:
+        """One line per topic with frames that did not decode."""
+        return tuple(f"{topic}: {count} frames did not decode"
+                     for topic, count in sorted(self.undecodable.items()))
+
+
+@dataclass(frozen=True, slots=True)
 class LogSummary:
     """Everything ``camlog info`` prints about one log."""
 
@@ -62,6 +78,7 @@ class LogSummary:
     message_count: int
     topics: tuple[TopicSummary, ...]
     warnings: tuple[str, ...] = ()
+    frames: FrameCheck | None = None  # None: frames not decoded (only ``verify`` does)
 
     @property
     def duration_s(self) -> float:
@@ -73,12 +90,14 @@ class LogSummary:
 
 def summarize(reader: LogReader, *, verify: bool = False) -> LogSummary:
     """Summary of an open log; reads the index, or (``verify``, or a log without one) every
-    raw message once, which finds damage anywhere in the log; decodes few."""
+    raw message once, which finds damage anywhere in the log; ``verify`` also decodes every
+    image frame and counts those that do not decode, else few messages are decoded."""
     counts: dict[str, int] = {}
     first_ns: dict[str, int] = {}
     last_ns: dict[str, int] = {}
     details: dict[str, str] = {}
     spans = None if verify else reader.topic_spans()
+    check = _FrameChecker() if verify else None
     if spans is not None:
         counts = {name: info.count for name, info in reader.topics.items() if name in spans}
         first_ns = {name: first for name, (first, _last) in spans.items()}
@@ -102,6 +121,8 @@ def summarize(reader: LogReader, *, verify: bool = False) -> LogSummary:
                 if detail is not None:
                     details[topic] = detail
             last_ns[topic] = raw.log_time_ns
+            if check is not None and raw.msgtype in FRAME_TYPES:
+                check(reader, raw)
     msgtypes = {name: info.msgtype for name, info in reader.topics.items()}
     topics = tuple(
         TopicSummary(
@@ -122,8 +143,34 @@ def summarize(reader: LogReader, *, verify: bool = False) -> LogSummary:
         end_ns=max(last_ns.values(), default=None),
         message_count=sum(counts.values()),
         topics=topics,
-        warnings=tuple(reader.warnings),
+        warnings=tuple(reader.warnings) + (() if check is None else check.result.warnings),
+        frames=None if check is None else check.result,
     )
+
+
+class _FrameChecker:
+    """Decodes the image messages of a log in order, one stream per topic, counting the
+    frames that do not decode."""
+
+    def __init__(self) -> None:
+        self._streams: dict[str, FrameStream] = {}
+        self.frames = 0
+        self.undecodable: dict[str, int] = {}
+
+    def __call__(self, reader: LogReader, raw: RawMessage) -> None:
+        self.frames += 1
+        stream = self._streams.setdefault(raw.topic, FrameStream())
+        try:
+            frame = stream.decode(reader.decode(raw))
+        except ReplayError:
+            frame = None
+        if frame is None:  # video: a picture before the stream's first keyframe
+            self.undecodable[raw.topic] = self.undecodable.get(raw.topic, 0) + 1
+
+    @property
+    def result(self) -> FrameCheck:
+        """What was found so far."""
+        return FrameCheck(self.frames, dict(self.undecodable))
 
 
 def _detail(reader: LogReader, raw: RawMessage) -> str | None:
@@ -199,6 +246,16 @@ def size_on_disk(path: Path | str) -> int:
     return path.stat().st_size
 
 
+def _frames_line(check: FrameCheck | None) -> str:
+    """What the summary says about the image frames' decoding."""
+    if check is None:
+        return "not decoded (--verify decodes every one)"
+    bad = sum(check.undecodable.values())
+    if not bad:
+        return f"all {check.frames} decoded"
+    return f"{check.frames - bad} of {check.frames} decoded, {bad} did not (see the warnings)"
+
+
 def format_stamp(stamp_ns: int | None) -> str:
     """``2019-03-21T14:57:04.368061647Z (1553180224368061647 ns)``; ``-`` for None."""
     if stamp_ns is None:
@@ -231,6 +288,8 @@ def format_summary(summary: LogSummary) -> str:
         f"messages:  {summary.message_count}",
         f"topics:    {len(summary.topics)}",
     ]
+    if any(topic.msgtype in FRAME_TYPES for topic in summary.topics):
+        lines.append(f"frames:    {_frames_line(summary.frames)}")
     rows = [("topic", "type", "count", "rate_hz", "detail")]
     for topic in summary.topics:
         rate = "" if topic.rate_hz is None else f"{topic.rate_hz:.2f}"

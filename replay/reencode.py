@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .errors import EncodingError
+from .errors import EncodingError, ReplayError, UnsupportedEncodingError
 from .frames import (
     Color,
     Frame,
@@ -58,6 +58,7 @@ class TopicReencoder:
     chosen: str | None = None
     decided: bool = False
     undecodable: int = 0
+    unsupported: str = ""  # why the topic's frames cannot be decoded at all
     psnr_sum_db: float = 0.0
     psnr_count: int = 0
     _stream: FrameStream = field(default_factory=FrameStream)
@@ -69,16 +70,27 @@ class TopicReencoder:
         picture not decodable yet); False when the topic is copied unchanged."""
         try:
             frame = self._stream.decode(message)
-        except EncodingError:
+        except EncodingError as err:
+            return self.failed(err)
+        if frame is None:  # a video picture before the stream's first keyframe
             self.undecodable += 1
-            return None
-        if frame is None:
             return None
         if not self.decided:
             self.decided = True
             self.chosen = "raw" if self.compress is None else \
                 compressed_format_for(frame, self.compress)
         return False if self.chosen is None else self._encode(message, frame, self.chosen)
+
+    def failed(self, error: ReplayError) -> bool | None:
+        """What becomes of a message that did not decode: copied unchanged (False) with the
+        rest of its topic when the topic's encoding is one camlog does not read, else
+        counted and left out (None)."""
+        if isinstance(error, UnsupportedEncodingError) and not self.decided:
+            self.decided, self.chosen, self.unsupported = True, None, str(error)
+        if self.decided and self.chosen is None:
+            return False
+        self.undecodable += 1
+        return None
 
     def _encode(self, message: Message, frame: Frame, chosen: str) -> Message:
         if chosen == "raw":
@@ -111,7 +123,9 @@ class TopicReencoder:
         lines = []
         if self.undecodable:
             lines.append(f"{self.topic}: {self.undecodable} frames did not decode (left out)")
-        if self.decided and self.compress is not None and self.chosen != self.compress:
+        if self.unsupported:
+            lines.append(f"{self.topic}: {self.unsupported}; copied unchanged")
+        elif self.decided and self.compress is not None and self.chosen != self.compress:
             what = "copied unchanged" if self.chosen is None else f"stored as {self.chosen}"
             lines.append(f"{self.topic}: {self.compress} cannot hold its images losslessly; "
                          f"{what}")

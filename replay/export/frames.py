@@ -24,6 +24,7 @@ class CameraFrames:
     recent: deque[int] = field(default_factory=lambda: deque(maxlen=RECENT))
     dropped: deque[int] = field(default_factory=lambda: deque(maxlen=RECENT))
     live: dict[str, int] = field(default_factory=dict)  # overlay entity -> its frame stamp
+    keyframed: bool = False  # the camera's video stream has had a keyframe
 
     def take(self, stamp_ns: int) -> bool:
         """Count an image; True when it is kept.

@@ -18,7 +18,7 @@ from ..errors import EncodingError
 from ..frames import Color, Frame, decode_frame
 from ..messages import CompressedImage, CompressedVideo, Image, Message
 
-__all__ = ["COLOR_MODELS", "encoded_image", "is_keyframe", "media_type", "rerun_image",
+__all__ = ["COLOR_MODELS", "complete", "encoded_image", "is_keyframe", "media_type", "rerun_image",
            "still_frame", "video_sample"]
 
 #: CompressedVideo format -> rerun's codec
@@ -40,10 +40,25 @@ def media_type(data: bytes) -> str | None:
     return None
 
 
+def complete(data: bytes, kind: str) -> bool:
+    """Whether JPEG or PNG bytes end as their format requires (a file cut short does not:
+    JPEG's EOI marker, PNG's empty IEND chunk with its CRC).
+
+    >>> complete(b"\\xff\\xd8\\xff\\xe0\\xff\\xd9", "image/jpeg")
+    True
+    >>> complete(b"\\xff\\xd8\\xff\\xe0", "image/jpeg")
+    False
+    """
+    if kind == "image/jpeg":
+        return data.rstrip(b"\x00").endswith(b"\xff\xd9")
+    return data[-12:-4] == b"\x00\x00\x00\x00IEND"
+
+
 def encoded_image(message: CompressedImage, *, draw_order: float | None = None) -> Any:
-    """``rr.EncodedImage`` holding the compressed bytes as they are (None: unknown format)."""
+    """``rr.EncodedImage`` holding the compressed bytes as they are (None: unknown format,
+    or bytes cut short, which the caller decodes to find out)."""
     kind = media_type(message.data)
-    if kind is None:
+    if kind is None or not complete(message.data, kind):
         return None
     return rr.EncodedImage(contents=message.data, media_type=kind, draw_order=draw_order)
 
@@ -74,8 +89,11 @@ def still_frame(message: Message) -> Frame:
     return decode_frame(message)
 
 
-def is_keyframe(message: CompressedVideo) -> bool:
-    """Whether an Annex B sample holds an IDR picture (H.264 NAL type 5, H.265 16-21)."""
+def is_keyframe(message: Message) -> bool:
+    """Whether a message is a video sample holding an IDR picture (Annex B: H.264 NAL type
+    5, H.265 16-21)."""
+    if not isinstance(message, CompressedVideo):
+        return False
     data = message.data
     start = data.find(b"\x00\x00\x01")
     while start >= 0 and start + 3 < len(data):

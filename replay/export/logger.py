@@ -9,8 +9,8 @@ message for every image of their camera (ground truth, processed every frame) ne
 clearing: the next frame's message replaces them.
 Camera_info is decoded only when its bytes (minus the stamp) change. With a JPEG quality,
 images are encoded on worker threads (OpenCV releases the GIL) while the next messages are
-read; every log call still reaches rerun in message order.
-"""
+read; every log call still reaches rerun in message order. Frames that do not decode (a cut
+JPEG, video before its first keyframe) are counted per topic and reported."""
 
 from __future__ import annotations
 
@@ -23,14 +23,14 @@ import numpy as np
 import rerun as rr
 
 from ..camera import CameraModel
-from ..errors import ReplayError
+from ..errors import EncodingError, ReplayError
 from ..formats.base import RawMessage
 from ..frames import decode_frame
 from ..messages import CameraInfo, CompressedImage, Image, Message, PointStamped, PoseStamped, Text
 from ..records import ViewResiduals
 from .emitter import Emitter, Flush
 from .frames import CameraFrames
-from .images import encoded_image, rerun_image, still_frame, video_sample
+from .images import encoded_image, is_keyframe, rerun_image, still_frame, video_sample
 from .overlays import (
     CLASSES,
     edge_classes,
@@ -81,8 +81,7 @@ class SceneLogger:
     def __init__(self, rec: rr.RecordingStream, plan: ScenePlan, options: LoggerOptions,
                  *, decode: Callable[[RawMessage], Message], flush: Flush = None) -> None:
         self.rec, self.plan, self.options, self._decode = rec, plan, options, decode
-        # rerun's own log_time (wall clock of the export) and log_tick would shadow and
-        # clutter the log's timelines
+        # rerun's own log_time (the export's wall clock) and log_tick would clutter timelines
         rec.set_log_time_enabled(False)
         rec.set_log_tick_enabled(False)
         self.cameras = {ns: _Camera(cam, frames=CameraFrames(every=options.every))
@@ -144,8 +143,10 @@ class SceneLogger:
         try:
             handler(raw, route)
         except (ReplayError, ValueError) as err:
-            count, first = self._failed.get(raw.topic, (0, f"first at log time "
-                                                           f"{raw.log_time_ns}: {err}"))
+            what = "frames did not decode (not shown; " if isinstance(err, EncodingError) \
+                else "messages not shown ("
+            count, first = self._failed.get(raw.topic, (0, f"{what}first at log time "
+                                                           f"{raw.log_time_ns}: {err})"))
             self._failed[raw.topic] = (count + 1, first)
 
     # --- helpers ---------------------------------------------------------------------------
@@ -165,7 +166,7 @@ class SceneLogger:
         """Send what is still pending and stop the encoding threads."""
         self._out.close()
         for topic, (count, why) in sorted(self._failed.items()):
-            self.warnings.append(f"{topic}: {count} messages not shown ({why})")
+            self.warnings.append(f"{topic}: {count} {why}")
 
     def _camera_of(self, route: Route, message: Any) -> _Camera | None:
         """The camera a message draws on: named by its route, or found by frame and stamp."""
@@ -180,9 +181,6 @@ class SceneLogger:
         stamp = getattr(message, "stamp_ns", None)
         seen = [ns for ns in names if self.cameras[ns].frames.saw(stamp)]
         return self.cameras[(seen or names)[0]]
-
-    def _shows(self, cam: _Camera, stamp_ns: int) -> bool:
-        return cam.frames.shows(stamp_ns)
 
     def _overlay(self, raw: RawMessage, cam: _Camera, entity: str, stamp_ns: int,
                  archetype: Any) -> None:
@@ -200,7 +198,10 @@ class SceneLogger:
             return
         message = self._decode(raw)
         sample = video_sample(message)  # rerun decodes video itself: every sample is kept
-        if sample is not None:
+        if sample is not None:  # once its stream has had a keyframe
+            cam.frames.keyframed = cam.frames.keyframed or is_keyframe(message)
+            if not cam.frames.keyframed:
+                raise EncodingError("a video picture before the stream's first keyframe")
             self._times(raw, getattr(message, "stamp_ns", None))
             self._emit(f"{cam.plan.entity}/video", sample)
             return
@@ -255,7 +256,7 @@ class SceneLogger:
         message = self._decode(raw)
         assert isinstance(message, Image | CompressedImage)
         cam = self._camera_of(route, message)
-        if cam is not None and not self._shows(cam, message.stamp_ns):
+        if cam is not None and not cam.frames.shows(message.stamp_ns):
             return
         self._times(raw, message.stamp_ns)
         entity = image_entity(route.kind, raw.topic)
@@ -267,8 +268,7 @@ class SceneLogger:
     def _guide_rows(self, entity: str, message: Image | CompressedImage) -> None:
         """Horizontal lines every 1/12 of the height: matching rows of a rectified pair."""
         image = still_frame(message)
-        width, height = image.width, image.height
-        rows = [[[0.0, v], [float(width), v]] for v in np.linspace(0, height, 13)[1:-1]]
+        rows = [[[0.0, v], [float(image.width), v]] for v in np.linspace(0, image.height, 13)[1:-1]]
         self.rec.log(entity + "/rows", rr.LineStrips2D(rows, colors=[CYAN], radii=GUIDE_RADIUS),
                      static=True)
 
@@ -277,7 +277,7 @@ class SceneLogger:
         assert isinstance(message, Image | CompressedImage)
         cam = self.cameras[route.namespace]
         stamp = message.stamp_ns
-        if not self._shows(cam, stamp):
+        if not cam.frames.shows(stamp):
             return
         self._times(raw, stamp)
         self._overlay(raw, cam, f"{cam.plan.entity}/calibration/detections", stamp,
@@ -294,7 +294,7 @@ class SceneLogger:
         assert isinstance(message, Text)
         view = ViewResiduals.from_message(message)
         cam = self.cameras[route.namespace]
-        if not self._shows(cam, view.stamp_ns):
+        if not cam.frames.shows(view.stamp_ns):
             return
         self._times(raw, view.stamp_ns)
         base, scale = f"{cam.plan.entity}/calibration", self.options.residual_scale
@@ -331,7 +331,7 @@ class SceneLogger:
         message = self._decode(raw)
         assert isinstance(message, Image | CompressedImage)
         cam = self._camera_of(route, message)
-        if cam is None or not self._shows(cam, message.stamp_ns):
+        if cam is None or not cam.frames.shows(message.stamp_ns):
             return
         image = still_frame(message)
         if route.kind is Kind.MASK:
@@ -346,7 +346,7 @@ class SceneLogger:
         message = self._decode(raw)
         assert isinstance(message, PointStamped)
         cam = self._camera_of(route, message)
-        if cam is None or not self._shows(cam, message.stamp_ns):
+        if cam is None or not cam.frames.shows(message.stamp_ns):
             return
         self._times(raw, message.stamp_ns)
         entity = f"{cam.plan.entity}/{route.entity}"
@@ -373,7 +373,7 @@ class SceneLogger:
                 points, position_m=message.position_m, orientation_xyzw=message.orientation_xyzw,
                 model=model), model.width, model.height)
             self._truth[raw.topic] = (key, model, uv)
-        if not self._shows(cam, stamp):
+        if not cam.frames.shows(stamp):
             return
         self._times(raw, stamp)
         entity = f"{cam.plan.entity}/ground_truth/{route.detail}"

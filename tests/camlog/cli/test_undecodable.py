@@ -1,6 +1,7 @@
 """Frames that do not decode (a JPEG cut short, a raw buffer too small for its size, video
 pictures before the first keyframe), made with OpenCV, the mcap libraries and PyAV:
-``process`` copies them through, counts them and says so once per topic."""
+``process`` copies them through, ``convert`` leaves them out, ``view`` does not show them and
+``info --verify`` finds them; each counts them and says so once per topic."""
 
 from __future__ import annotations
 
@@ -17,9 +18,10 @@ from mcap_protobuf.writer import Writer as ProtobufWriter
 from mcap_ros2.writer import Writer as Ros2Writer
 
 from camlog.cli import main
-from replay import PointStamped, open_reader
+from replay import Image, PointStamped, open_reader
 from replay.wire import ros2_typestore
 from tests.encodings import HEIGHT, RED_CENTROID, WIDTH, scene_rgb
+from tests.rrd import load_rrd
 
 T0_NS = 3_000_000_000
 PERIOD_NS = 50_000_000
@@ -129,3 +131,104 @@ def test_process_counts_video_pictures_before_the_first_keyframe(
     with open_reader(out) as reader:
         centroids = list(reader.messages(["/image_converter/red_centroid"]))
     assert len(centroids) == FRAMES - before_keyframe
+
+
+def _warnings(err: str) -> list[str]:
+    return [line for line in err.splitlines() if line.startswith("warning:")]
+
+
+def test_info_verify_decodes_every_frame_and_counts_the_bad_ones(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    log = _ros_log(tmp_path / "bad.mcap")
+    assert main(["info", str(log)]) == 0
+    out, err = capsys.readouterr()
+    assert "frames:    not decoded (--verify decodes every one)" in out.splitlines()
+    assert _warnings(err) == []  # the index alone sees nothing wrong
+    assert main(["info", "--verify", str(log)]) == 0
+    out, err = capsys.readouterr()
+    bad = len(BAD_JPEG) + len(BAD_RAW)
+    assert f"frames:    {2 * FRAMES - bad} of {2 * FRAMES} decoded, {bad} did not " \
+           "(see the warnings)" in out.splitlines()
+    assert _warnings(err) == [
+        f"warning: /jpeg/image_raw/compressed: {len(BAD_JPEG)} frames did not decode",
+        f"warning: /raw/image_raw: {len(BAD_RAW)} frames did not decode"]
+
+
+def test_info_verify_counts_video_pictures_before_the_first_keyframe(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    log = _video_log(tmp_path / "video.mcap")
+    assert main(["info", "--verify", str(log)]) == 0
+    out, err = capsys.readouterr()
+    assert _warnings(err) == [f"warning: /video/image: {GOP - DROPPED} frames did not decode"]
+    assert f"frames:    {FRAMES - GOP + DROPPED} of {FRAMES} decoded" in out
+
+
+def test_convert_leaves_out_and_counts_undecodable_frames(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    log = _ros_log(tmp_path / "bad.mcap")
+    out = tmp_path / "png.mcap"
+    assert main(["convert", str(log), str(out), "--compress", "png", "--no-progress"]) == 0
+    assert _warnings(capsys.readouterr().err) == [
+        f"warning: /raw/image_raw: {len(BAD_RAW)} frames did not decode (left out)"]
+    counts = _count(out)
+    assert counts["/raw/image_raw/compressed"] == FRAMES - len(BAD_RAW)
+    assert counts["/jpeg/image_raw/compressed"] == FRAMES  # not re-encoded: copied as stored
+    back = tmp_path / "raw.mcap"
+    assert main(["convert", str(log), str(back), "--decompress", "--no-progress"]) == 0
+    assert _warnings(capsys.readouterr().err) == [
+        f"warning: /jpeg/image_raw/compressed: {len(BAD_JPEG)} frames did not decode "
+        "(left out)"]
+    with open_reader(back) as reader:
+        images = [r.message for r in reader.messages(["/jpeg/image_raw"])]
+    assert len(images) == FRAMES - len(BAD_JPEG)
+    assert all(isinstance(i, Image) and i.encoding == "bgr8" for i in images)
+
+
+def test_convert_copies_a_topic_whose_encoding_camlog_does_not_read(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    store = ros2_typestore()
+    log = tmp_path / "yuv411.mcap"
+    with log.open("wb") as f:
+        writer = Ros2Writer(f)
+        image = writer.register_msgdef("sensor_msgs/msg/Image", store.generate_msgdef(
+            "sensor_msgs/msg/Image", ros_version=2)[0])
+        for i in range(3):
+            t = T0_NS + i * PERIOD_NS
+            writer.write_message("/cam/image_raw", image, {
+                "header": _header(t, "cam"), "height": 4, "width": 4, "encoding": "yuv411",
+                "is_bigendian": 0, "step": 6, "data": bytes(24)}, log_time=t)
+        writer.finish()
+    out = tmp_path / "out.mcap"
+    assert main(["convert", str(log), str(out), "--compress", "jpeg", "--no-progress"]) == 0
+    (warning,) = _warnings(capsys.readouterr().err)
+    assert warning.startswith("warning: /cam/image_raw: ")
+    assert "unsupported image encoding 'yuv411'" in warning
+    assert warning.endswith("; copied unchanged")
+    assert _count(out) == {"/cam/image_raw": 3}
+
+
+def test_view_counts_undecodable_frames_and_shows_the_rest(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    log = _ros_log(tmp_path / "bad.mcap")
+    rrd = tmp_path / "bad.rrd"
+    assert main(["view", str(log), "-o", str(rrd), "--no-progress"]) == 0
+    warnings = _warnings(capsys.readouterr().err)
+    assert [w.split(" (")[0] for w in warnings] == [
+        f"warning: /jpeg/image_raw/compressed: {len(BAD_JPEG)} frames did not decode",
+        f"warning: /raw/image_raw: {len(BAD_RAW)} frames did not decode"]
+    assert all("(not shown; first at log time" in w for w in warnings)
+    rec = load_rrd(rrd)
+    assert rec.count("/world/jpeg/image", "EncodedImage:blob") == FRAMES - len(BAD_JPEG)
+    assert rec.count("/world/raw/image", "Image:buffer") == FRAMES - len(BAD_RAW)
+
+
+def test_view_counts_video_pictures_before_the_first_keyframe(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    log = _video_log(tmp_path / "video.mcap")
+    rrd = tmp_path / "video.rrd"
+    assert main(["view", str(log), "-o", str(rrd), "--no-progress"]) == 0
+    (warning,) = _warnings(capsys.readouterr().err)
+    assert warning.startswith(f"warning: /video/image: {GOP - DROPPED} frames did not decode "
+                              "(not shown; ")
+    assert load_rrd(rrd).count("/world/video/video", "VideoStream:sample") == \
+        FRAMES - GOP + DROPPED
