@@ -2,7 +2,7 @@
 
 Pure state, no rerun: the logger asks a camera's :class:`CameraFrames` whether to keep an
 image, whether an overlay's frame was kept, which camera saw a stamp, and which overlays
-belong to older frames and must be cleared when a new image arrives.
+belong to older frames and must be cleared when a new image (not a repeat) arrives.
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ class CameraFrames:
     dropped: deque[int] = field(default_factory=lambda: deque(maxlen=RECENT))
     live: dict[str, int] = field(default_factory=dict)  # overlay entity -> its frame stamp
     keyframed: bool = False  # the camera's video stream has had a keyframe
+    image_key: bytes | None = None  # the last image's content (bytes without the stamp)
 
     def take(self, stamp_ns: int) -> bool:
         """Count an image; True when it is kept.
@@ -52,14 +53,24 @@ class CameraFrames:
         """Note an overlay that must go when a later frame arrives."""
         self.live[entity] = stamp_ns
 
-    def stale(self, stamp_ns: int) -> list[str]:
-        """Overlays of frames older than ``stamp_ns``; forgotten once returned.
+    def stale(self, stamp_ns: int, image_key: bytes | None = None) -> list[str]:
+        """Overlays of frames older than ``stamp_ns``; forgotten once returned. An image
+        whose ``image_key`` (content) repeats the last one's is the same view (a held pose):
+        the overlays drawn on it stay.
 
         >>> frames = CameraFrames()
         >>> frames.drawn("corners", 10); frames.drawn("mask", 20)
         >>> frames.stale(20), frames.stale(30)
         (['corners'], ['mask'])
+        >>> frames.drawn("corners", 40); frames.stale(40, b"board")
+        []
+        >>> frames.stale(50, b"board"), frames.stale(60, b"moved")
+        ([], ['corners'])
         """
+        repeated = image_key is not None and image_key == self.image_key
+        self.image_key = image_key
+        if repeated:
+            return []
         old = [entity for entity, shown in self.live.items() if shown < stamp_ns]
         for entity in old:
             del self.live[entity]

@@ -3,10 +3,10 @@
 Every message is logged on two timelines: ``log_time`` (when it was stored) and
 ``header_stamp`` (its header, absent for messages without one). Images are decimated per
 camera (``every``); an overlay is dropped with the frame it belongs to (same stamp).
-Overlays are per frame: when a camera's next image arrives, overlays of older frames are
-cleared, so a corner set never lingers on a frame without a board. Overlay topics with a
-message for every image of their camera (ground truth, processed every frame) need no
-clearing: the next frame's message replaces them.
+Overlays are per frame: a camera's next image clears those of older frames, unless it
+repeats the last image byte for byte (a held pose keeps its corners on all its frames).
+Overlay topics with a message for every image of their camera (ground truth, processed
+every frame) need no clearing: the next frame's message replaces them.
 Camera_info is decoded only when its bytes (minus the stamp) change. With a JPEG quality,
 images are encoded on worker threads (OpenCV releases the GIL) while the next messages are
 read; every log call still reaches rerun in message order. Frames that do not decode (a cut
@@ -210,7 +210,7 @@ class SceneLogger:
         if not cam.frames.take(stamp):
             return
         self._times(raw, stamp)
-        for entity in cam.frames.stale(stamp):
+        for entity in cam.frames.stale(stamp, stamp_free_key(raw.data)):
             self._emit(entity, rr.Clear(recursive=False), count=False)
         if isinstance(message, Image):
             cam.size = (message.width, message.height)

@@ -30,3 +30,14 @@ def test_stale_overlays_are_returned_once() -> None:
     assert frames.stale(10) == []  # overlays of the current frame stay
     assert sorted(frames.stale(20)) == ["corners", "status"]
     assert frames.stale(20) == [] and frames.stale(30) == ["mask"]
+
+
+def test_a_repeated_image_keeps_its_overlays() -> None:
+    frames = CameraFrames()
+    assert frames.stale(10, b"board at pose A") == []
+    frames.drawn("corners", 10)
+    assert frames.stale(20, b"board at pose A") == []  # the same view: corners stay
+    assert frames.stale(30, b"board at pose A") == []
+    assert frames.stale(40, b"board at pose B") == ["corners"]
+    frames.drawn("corners", 40)
+    assert frames.stale(50) == ["corners"]  # without a key every new frame clears

@@ -119,7 +119,7 @@ def test_calibration_corners_residuals_and_errors(mono_calibration_log: Path,
     assert labels[0][0].startswith(f"used: view RMS {views[0]['rms_px']:.3f} px")
     detections = len(messages(mono_calibration_log, "/simple_camera/calibration/detections"))
     assert rec.count(f"{cam}/calibration/detections", "Image:buffer") == detections
-    # corners of a used view are cleared on the next frame: they never linger
+    # corners of a used view are cleared when the board moves: they never linger
     assert rec.count(f"{cam}/calibration/corners", "Clear:is_recursive") >= len(views) - 1
     assert rec.entities_with(PINHOLE) == [cam]
     verify = rerun_cli("rrd", "verify", str(out), cwd=tmp_path)
