@@ -17,8 +17,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "Canny edges and projected ground truth are drawn on the images they belong to "
         "(processor outputs by frame_id); rectified images, per-view errors, red-pixel "
         "counts and stereo offsets get views of their own. Timelines: log_time and "
-        "header_stamp. Several logs are merged in log time (a topic from the first log that "
-        "has it). Default output: the first LOG with .rrd (LOG.rrd beside a rosbag2 folder)."
+        "header_stamp. Related logs (overlapping in time, feeding the same camera: a log and "
+        "its processed outputs) are merged in log time (a topic from the first log that has "
+        "it); unrelated logs get a recording each (same application id, own timelines), all "
+        "in one .rrd. Before writing, view prints the size of the images and suggests "
+        "--jpeg-quality when raw ones pass 1 GB. Default output: the first LOG with .rrd "
+        "(LOG.rrd beside a rosbag2 folder)."
     )
     p.add_argument("logs", metavar="LOG", type=Path, nargs="+",
                    help="MCAP file, rosbag2 directory or ROS1 .bag")
@@ -47,10 +51,14 @@ def run(args: argparse.Namespace) -> int:
         args.logs, output=args.output, spawn=args.spawn, connect=args.connect,
         bind=args.bind, port=args.port,
         overwrite=args.overwrite, topics=args.topics, start_s=args.start, end_s=args.end,
-        options=options, recover=args.recover, progress=False if args.no_progress else None)
+        options=options, recover=args.recover, progress=False if args.no_progress else None,
+        say=print)
     images = sum(n for entity, n in result.counts.items() if entity.endswith("/image"))
     print(f"logged {result.messages} messages ({images} images, {len(result.cameras)} cameras: "
           f"{', '.join(result.cameras) or 'none'}) in {result.wall_s:.2f} s")
+    if result.recordings > 1:
+        print(f"{result.recordings} recordings: the logs are unrelated (no shared camera at a "
+              "shared time), each keeps its own timeline")
     for topic, why in sorted(result.skipped.items()):
         print(f"not shown: {topic}: {why}")
     if result.duplicates:

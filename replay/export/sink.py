@@ -8,6 +8,8 @@ name.
 from __future__ import annotations
 
 import shutil
+import subprocess
+import sys
 import threading
 import uuid
 from collections.abc import Iterable
@@ -21,7 +23,7 @@ from ..atomic import AtomicOutput
 from ..errors import ViewerError
 from .viewer import DEFAULT_PORT, LOCALHOST, grpc_url, require_listening, spawn_viewer
 
-__all__ = ["RecordingSink", "default_output", "flush_recording"]
+__all__ = ["Destination", "RecordingSink", "default_output", "flush_recording"]
 
 APPLICATION_ID = "camlog"
 
@@ -191,5 +193,79 @@ class RecordingSink:
             self._stalled = err
             raise
 
+    @property
+    def url(self) -> str | None:
+        """The viewer this sink sends to (known once entered), None for a file."""
+        return self._url
+
     def _where(self) -> str:
         return str(self.output or self._url or "a spawned viewer")
+
+
+class Destination:
+    """Where the recordings of one export go; use as a context manager and take a
+    :meth:`sink` per recording. One recording goes where :class:`RecordingSink` sends it.
+    Several (unrelated logs) share the application id, each with its own recording id: to
+    a viewer one after the other (the first started with ``spawn``), or into one ``.rrd``
+    that holds them all, combined from one file per recording by ``rerun rrd merge`` (which
+    keeps recordings apart). The layout goes with the first recording."""
+
+    def __init__(self, *, count: int, blueprint: Any, output: Path | None = None,
+                 connect: str | None = None, spawn: bool = False, overwrite: bool = False,
+                 bind: str = LOCALHOST, port: int = DEFAULT_PORT,
+                 inputs: Iterable[Path] = ()) -> None:
+        self._count = count
+        self._output, self._connect, self._spawn = output, connect, spawn
+        self._overwrite, self._blueprint = overwrite, blueprint
+        self._bind, self._port, self._inputs = bind, port, list(inputs)
+        self._parts: list[Path] = []
+        self._made = 0
+        self._first: RecordingSink | None = None
+        self._atomic: AtomicOutput | None = None
+        if count > 1 and output is not None:
+            if output.suffix != ".rrd":
+                raise ViewerError(f"{output}: a rerun recording must end in .rrd")
+            self._atomic = AtomicOutput(output, overwrite=overwrite, inputs=self._inputs,
+                                        what="a rerun recording")
+
+    def __enter__(self) -> Self:
+        if self._atomic is not None:
+            self._atomic.temp.mkdir()
+        return self
+
+    def sink(self) -> RecordingSink:
+        """The sink of the next recording (enter it to send)."""
+        index, self._made = self._made, self._made + 1
+        blueprint = self._blueprint if index == 0 else None  # one per application id
+        if self._atomic is not None:
+            part = self._atomic.temp / f"{index}.rrd"
+            self._parts.append(part)
+            return RecordingSink(output=part, blueprint=blueprint)
+        if index > 0 and self._first is not None and self._first.url is not None:
+            # the viewer the first recording started (or connected to)
+            return RecordingSink(connect=self._first.url, blueprint=blueprint)
+        sink = RecordingSink(
+            output=self._output, connect=self._connect, spawn=self._spawn,
+            overwrite=self._overwrite, blueprint=self._blueprint, bind=self._bind,
+            port=self._port, inputs=self._inputs)
+        self._first = self._first or sink
+        return sink
+
+    def __exit__(self, et: type[BaseException] | None, ev: BaseException | None,
+                 tb: TracebackType | None) -> None:
+        if self._atomic is None:
+            return
+        if et is not None:
+            self._atomic.discard()
+            return
+        combined = self._atomic.temp / "combined.rrd"
+        merge = subprocess.run(
+            [sys.executable, "-m", "rerun", "rrd", "merge", *map(str, self._parts),
+             "-o", str(combined)], capture_output=True, text=True, check=False)
+        if merge.returncode != 0 or not combined.is_file():
+            self._atomic.discard()
+            lines = [line for line in merge.stderr.splitlines() if line.strip()]
+            reason = next((line for line in lines if "error" in line.lower()),
+                          lines[-1] if lines else "no output")
+            raise ViewerError(f"cannot write {self._output}: rerun rrd merge failed: {reason}")
+        self._atomic.commit(combined)

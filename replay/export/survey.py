@@ -13,7 +13,7 @@ from typing import Any, TypeVar
 
 from ..errors import ReplayError
 from ..formats.base import LogReader, RawMessage, TopicInfo
-from ..messages import CameraInfo
+from ..messages import CameraInfo, CompressedImage, Image
 from ..records import (
     CalibrationSummary,
     JsonRecord,
@@ -48,6 +48,8 @@ class Survey:
     calibration_summary: CalibrationSummary | None = None
     outputs: dict[str, ProcessedOutput] = field(default_factory=dict)  # recorded outputs
     duplicates: list[str] = field(default_factory=list)  # topics left out: an earlier log has them
+    image_bytes: dict[str, tuple[int, bool]] = field(default_factory=dict)  # topic -> first
+    # image's bytes as stored in a recording, and whether raw (a JPEG quality shrinks it)
 
 
 def _first(reader: LogReader, topic: str, start_ns: int | None, end_ns: int | None) -> Any:
@@ -109,7 +111,11 @@ def survey(
                 if message is None:
                     continue
                 result.frame_ids[name] = getattr(message, "frame_id", "")
-                if isinstance(message, CameraInfo):
+                if isinstance(message, Image):
+                    result.image_bytes[name] = (message.pixels.nbytes, True)
+                elif isinstance(message, CompressedImage):
+                    result.image_bytes[name] = (len(message.data), False)
+                elif isinstance(message, CameraInfo):
                     result.camera_infos[name] = message
             elif name == SCENARIO and result.scenario is None:
                 result.scenario = _record(_first(reader, name, None, None), Scenario)

@@ -1,16 +1,19 @@
-"""``camlog view``: one or more logs as one rerun recording with a ready-made layout.
+"""``camlog view``: one or more logs as rerun recordings with a ready-made layout.
 
-Several logs are merged in log time into one recording (e.g. a log and the outputs that
-``camlog process --drop-input`` wrote for it); a topic present in several logs is taken from
-the first. Messages stream from the readers to rerun one at a time, so memory does not grow
-with the length of the logs.
+Related logs are merged in log time into one recording (e.g. a log and the outputs that
+``camlog process --drop-input`` wrote for it); a topic present in several of them is taken
+from the first. Unrelated logs (:mod:`replay.export.groups`) get a recording each, under the
+same application id and layout. Messages stream from the readers to rerun one at a time, so
+memory does not grow with the length of the logs.
 """
 
 from __future__ import annotations
 
 import contextlib
+import math
 import time
-from collections.abc import Iterable, Sequence
+from collections import Counter
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -22,13 +25,14 @@ from ..formats import LogReader, open_reader
 from ..formats.base import RawMessage, TopicInfo
 from ..selection import merge_in_time, select_topics, window_ns
 from .blueprint import make_blueprint
+from .groups import related_groups
 from .logger import LoggerOptions, SceneLogger
 from .scene import ScenePlan, plan_scene
-from .sink import RecordingSink, default_output
-from .survey import survey
+from .sink import Destination, RecordingSink, default_output
+from .survey import Survey, survey
 from .viewer import DEFAULT_PORT, LOCALHOST
 
-__all__ = ["ExportSession", "ViewResult", "open_logs", "view_logs"]
+__all__ = ["ExportSession", "ViewResult", "image_bytes", "open_logs", "size_note", "view_logs"]
 
 
 @dataclass(frozen=True)
@@ -44,6 +48,7 @@ class ViewResult:
     warnings: list[str] = field(default_factory=list)
     duplicates: list[str] = field(default_factory=list)
     wall_s: float = 0.0
+    recordings: int = 1  # unrelated logs get a recording each (see replay.export.groups)
 
 
 @dataclass
@@ -61,6 +66,7 @@ class ExportSession:
     plan: ScenePlan
     total: int  # messages of the chosen topics (before the time window)
     duplicates: list[str] = field(default_factory=list)  # "topic (log)" read from an earlier log
+    found: Survey | None = None  # the survey the plan was made from
 
     def messages(self) -> Iterable[RawMessage]:
         """Raw messages of every log in log-time order."""
@@ -75,20 +81,37 @@ def open_logs(stack: contextlib.ExitStack, paths: Sequence[Path], *,
               topics: Sequence[str] | None, start_s: float | None, end_s: float | None,
               recover: bool) -> ExportSession:
     """Open ``paths`` in ``stack``, choose topics and window, survey and plan the scene."""
+    readers = _open_readers(stack, paths, recover=recover)
+    where = str(paths[0]) if len(paths) == 1 else f"{len(paths)} logs"
+    return _session(readers, _chosen(readers, topics, where), start_s, end_s)
+
+
+def _open_readers(stack: contextlib.ExitStack, paths: Sequence[Path], *,
+                  recover: bool) -> list[LogReader]:
     if not paths:
         raise LogReadError("no log given")
     readers = [stack.enter_context(open_reader(path, recover=recover)) for path in paths]
     for reader in readers:
         if reader.message_count == 0:
             raise LogReadError(f"{reader.path} is empty (no messages)")
+    return readers
+
+
+def _chosen(readers: Sequence[LogReader], topics: Sequence[str] | None,
+            where: str) -> list[list[str]]:
+    """The topics of each log that match ``topics`` (all of them for None)."""
     union: dict[str, TopicInfo] = {}
     for reader in readers:
         for name, info in reader.topics.items():
             union.setdefault(name, info)
-    where = str(paths[0]) if len(paths) == 1 else f"{len(paths)} logs"
     wanted = select_topics(union, topics, where=where)
-    chosen = [None if wanted is None else [t for t in wanted if t in reader.topics]
-              for reader in readers]
+    return [sorted(reader.topics) if wanted is None else
+            [t for t in wanted if t in reader.topics] for reader in readers]
+
+
+def _session(readers: list[LogReader], chosen: list[list[str]], start_s: float | None,
+             end_s: float | None) -> ExportSession:
+    """Survey and plan ``readers``; the time window counts from the earliest of them."""
     origin = min(r.start_ns for r in readers if r.start_ns is not None)
     start_ns, end_ns = window_ns(origin, start_s, end_s)
     found = survey(readers, chosen, start_ns, end_ns)
@@ -96,7 +119,7 @@ def open_logs(stack: contextlib.ExitStack, paths: Sequence[Path], *,
     owned = [[t for t in found.topics if found.owner[t] == i] for i in range(len(readers))]
     total = sum(info.count for info in found.topics.values())
     return ExportSession(readers, owned, dict(found.owner), start_ns, end_ns, plan, total,
-                         found.duplicates)
+                         found.duplicates, found)
 
 
 def view_logs(
@@ -114,36 +137,115 @@ def view_logs(
     options: LoggerOptions | None = None,
     recover: bool = False,
     progress: bool | None = None,
+    say: Callable[[str], None] | None = None,
 ) -> ViewResult:
     """Export ``paths`` to an ``.rrd`` (default: the first log's name with ``.rrd``) or a
     viewer (a spawned one listens on ``bind:port``). ``progress``: None shows a bar only on a
-    terminal."""
+    terminal. ``say`` is told, before anything is written, how large the images will be."""
     started = time.perf_counter()
     options = options or LoggerOptions()
     if output is None and not spawn and connect is None:
         output = default_output(Path(paths[0])) if paths else None
+    paths = [Path(p) for p in paths]
     with contextlib.ExitStack() as stack:
-        session = open_logs(stack, [Path(p) for p in paths], topics=topics, start_s=start_s,
-                            end_s=end_s, recover=recover)
-        sink = RecordingSink(output=output, connect=connect, spawn=spawn, overwrite=overwrite,
-                             blueprint=make_blueprint(session.plan), bind=bind,
-                             port=port, inputs=paths)
-        bar = stack.enter_context(tqdm(total=session.total, unit="msg", desc="view",
-                                       leave=False, disable=None if progress is None
-                                       else not progress))
-        with sink:
-            logger = SceneLogger(sink.rec, session.plan, options, decode=session.decode,
-                                 flush=sink.flush)
-            logger.log_static()
-            count = 0
-            try:
-                for raw in session.messages():
-                    logger.log(raw)
-                    count += 1
-                    bar.update()
-            finally:
-                logger.close()
-        warnings = [w for r in session.readers for w in r.warnings] + logger.warnings
-    plan = session.plan
-    return ViewResult(output, count, dict(logger.counts), list(plan.cameras), dict(plan.skipped),
-                      warnings, session.duplicates, time.perf_counter() - started)
+        readers = _open_readers(stack, paths, recover=recover)
+        where = str(paths[0]) if len(paths) == 1 else f"{len(paths)} logs"
+        chosen = _chosen(readers, topics, where)
+        whole = _session(readers, chosen, start_s, end_s)
+        assert whole.found is not None
+        groups = related_groups(readers, chosen, whole.found) if len(readers) > 1 else [[0]]
+        sessions = [whole] if len(groups) == 1 else [
+            _session([readers[i] for i in group], [chosen[i] for i in group], start_s, end_s)
+            for group in groups if any(chosen[i] for i in group)]
+        # one layout for every recording: they share the application id
+        if say is not None:
+            say(size_note(sessions, options))
+        destination = Destination(count=len(sessions), blueprint=make_blueprint(whole.plan),
+                                  output=output, connect=connect, spawn=spawn, bind=bind,
+                                  port=port, overwrite=overwrite, inputs=paths)
+        bar = stack.enter_context(tqdm(total=sum(s.total for s in sessions), unit="msg",
+                                       desc="view", leave=False, disable=None
+                                       if progress is None else not progress))
+        loggers: list[tuple[SceneLogger, int]] = []
+        with destination:
+            for session in sessions:
+                with destination.sink() as sink:
+                    loggers.append(_log_session(session, sink, options, bar))
+        warnings = [w for r in readers for w in r.warnings]
+        warnings += [w for logger, _ in loggers for w in logger.warnings]
+    counts: Counter[str] = Counter()
+    for logger, _ in loggers:
+        counts.update(logger.counts)
+    cameras = [c for session in sessions for c in session.plan.cameras]
+    skipped = {t: why for session in sessions for t, why in session.plan.skipped.items()}
+    duplicates = [d for session in sessions for d in session.duplicates]
+    return ViewResult(output, sum(n for _, n in loggers), dict(counts),
+                      cameras, skipped, warnings, duplicates, time.perf_counter() - started,
+                      recordings=len(sessions))
+
+
+#: raw images above this size make a JPEG quality worth suggesting
+LARGE_BYTES = 1_000_000_000
+
+
+def image_bytes(session: ExportSession, every: int = 1) -> tuple[int, int]:
+    """(all, raw) bytes of the images ``session`` will log, estimated from each image
+    topic's first message, its count, the time window and ``every``."""
+    found = session.found
+    if found is None:
+        return 0, 0
+    total = raw = 0
+    for topic, (size, is_raw) in found.image_bytes.items():
+        if topic in session.plan.skipped:
+            continue
+        reader = session.readers[found.owner[topic]]
+        count = math.ceil(found.topics[topic].count * _window_share(session, reader) / every)
+        total += count * size
+        raw += count * size if is_raw else 0
+    return total, raw
+
+
+def _window_share(session: ExportSession, reader: LogReader) -> float:
+    """The share of ``reader``'s time range inside the session's window."""
+    first, last = reader.start_ns, reader.end_ns
+    if first is None or last is None or last <= first:
+        return 1.0
+    start = max(first, session.start_ns if session.start_ns is not None else first)
+    end = min(last, session.end_ns if session.end_ns is not None else last)
+    return max(0.0, min(1.0, (end - start) / (last - first)))
+
+
+def size_note(sessions: Sequence[ExportSession], options: LoggerOptions) -> str:
+    """One line: about how many bytes of images a recording of ``sessions`` holds, and a
+    hint at ``--jpeg-quality`` when raw images would pass :data:`LARGE_BYTES`."""
+    total, raw = (sum(pair) for pair in zip(*(image_bytes(s, options.every) for s in sessions),
+                                            strict=True))
+    note = f"images to write: about {_size(total)}"
+    if options.jpeg_quality is not None and raw:
+        note += f" before the raw ones are encoded as JPEG (quality {options.jpeg_quality})"
+    elif raw > LARGE_BYTES:
+        note += (f" ({_size(raw)} raw images: --jpeg-quality 90 stores them as JPEG, "
+                 "several times smaller; --every N keeps every N-th frame)")
+    return note
+
+
+def _size(n: int) -> str:
+    return f"{n / 1e9:.1f} GB" if n >= 1e9 else f"{n / 1e6:.0f} MB"
+
+
+def _log_session(session: ExportSession, sink: RecordingSink, options: LoggerOptions,
+                 bar: tqdm[Any]) -> tuple[SceneLogger, int]:
+    """Log every message of ``session`` into ``sink``'s recording; the logger and how many
+    messages it was given."""
+    logger = SceneLogger(sink.rec, session.plan, options, decode=session.decode,
+                         flush=sink.flush)
+    logger.log_static()
+    count = 0
+    try:
+        for raw in session.messages():
+            logger.log(raw)
+            count += 1
+            bar.update()
+    finally:
+        logger.close()
+    return logger, count
