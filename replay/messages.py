@@ -33,6 +33,13 @@ class Image(PixelShape, ArrayFields):
     def __post_init__(self) -> None:
         check_pixels(self.encoding, self.pixels)
 
+    @property
+    def height(self) -> int:
+        """Image height in pixels (a semi-planar YUV buffer has more rows than that)."""
+        from .frames.raw import RAW_ENCODINGS
+
+        return RAW_ENCODINGS[self.encoding].image_rows(int(self.pixels.shape[0]))
+
 
 @dataclass(frozen=True, slots=True)
 class CompressedImage:
@@ -155,3 +162,4 @@ def check_pixels(encoding: str, pixels: Pixels) -> None:
             f"pixels {pixels.dtype}{list(pixels.shape)} do not match encoding {encoding!r} "
             f"({raw.dtype}, {raw.channels} channel(s))"
         )
+    raw.image_rows(int(pixels.shape[0]))

@@ -1,5 +1,5 @@
 """Image buffers of every encoding camlog reads, made from one known RGB scene with OpenCV
-(and numpy for the layouts OpenCV has no writer for: bayer mosaics, depth).
+(and numpy for the layouts OpenCV has no writer for: bayer mosaics, semi-planar YUV, depth).
 
 The scene is a pure red square on grey; its red pixels' centroid is ``RED_CENTROID`` in
 every colour encoding, so a swapped channel order or a wrong bayer pattern loses the red.
@@ -44,6 +44,27 @@ def mosaic(rgb: np.ndarray, pattern: str) -> np.ndarray:
     return out
 
 
+def nv21(rgb: np.ndarray) -> np.ndarray:
+    """V4L2's NV21 of an RGB image from OpenCV's RGB -> YUV 4:2:0 (I420: planes Y, U, V):
+    the Y plane, then one plane of V, U pairs for each 2x2 block."""
+    height, width = rgb.shape[:2]
+    i420 = cv2.cvtColor(rgb, cv2.COLOR_RGB2YUV_I420)
+    quarter = height // 4
+    u = i420[height:height + quarter].reshape(height // 2, width // 2)
+    v = i420[height + quarter:].reshape(height // 2, width // 2)
+    return np.vstack([i420[:height], np.dstack([v, u]).reshape(height // 2, width)])
+
+
+def nv24(rgb: np.ndarray) -> np.ndarray:
+    """V4L2's NV24 of an RGB image: the Y plane, then a plane of U, V pairs, one per pixel.
+    OpenCV has no 4:4:4 writer; its RGB -> UYVY of the image with every pixel doubled
+    gives each pixel's own U and V (a pair of equal pixels shares exact chroma)."""
+    height, width = rgb.shape[:2]
+    uyvy = cv2.cvtColor(np.repeat(rgb, 2, axis=1), cv2.COLOR_RGB2YUV_UYVY)
+    y, u, v = uyvy[:, 0::2, 1], uyvy[:, 0::2, 0], uyvy[:, 1::2, 0]
+    return np.vstack([y, np.dstack([u, v]).reshape(2 * height, width)])
+
+
 @dataclass(frozen=True)
 class Case:
     """One encoding: its buffer, what ``rgb8()`` must give and how closely (levels; the
@@ -77,6 +98,8 @@ def colour_cases() -> list[Case]:
         Case("8UC2", np.dstack([grey, np.zeros_like(grey)]), colour=False),
         Case("yuv422", cv2.cvtColor(rgb, cv2.COLOR_RGB2YUV_UYVY), tolerance=3),
         Case("yuv422_yuy2", cv2.cvtColor(rgb, cv2.COLOR_RGB2YUV_YUY2), tolerance=3),
+        Case("nv21", nv21(rgb), tolerance=3),
+        Case("nv24", nv24(rgb), tolerance=3),
     ]
     for pattern in ("rggb", "bggr", "gbrg", "grbg"):
         cases.append(Case(f"bayer_{pattern}8", mosaic(rgb, pattern), margin=2))

@@ -6,9 +6,10 @@ import struct
 
 import numpy as np
 
-from ..errors import EncodingError, UnsupportedEncodingError
+from ..errors import EncodingError
 from ..messages import CompressedImage
-from .frame import Color, Frame
+from .frame import Color, Frame, Pixels
+from .rvl import decode_rvl
 
 __all__ = [
     "compressed_kind",
@@ -21,6 +22,8 @@ __all__ = [
 
 #: compressed_depth_image_transport's ConfigHeader: int32 format, float32 depthParam[2]
 DEPTH_HEADER = struct.Struct("<iff")
+#: what follows that header in the RVL variant, before the stream: uint32 width, height
+RVL_SIZE = struct.Struct("<II")
 #: its defaults for 32FC1: depth_quantization 100, depth_max 10 m
 DEPTH_QUANTIZATION, DEPTH_MAX_M = 100.0, 10.0
 
@@ -108,31 +111,44 @@ def encode_still(frame: Frame, fmt: str, *, original: str = "", jpeg_quality: in
 
 def decode_compressed_depth(message: CompressedImage) -> Frame:
     """compressed_depth_image_transport's ``compressedDepth`` format: a 12-byte header
-    (int32 format, float32 depthParam[2]) then a 16-bit PNG holding 16UC1 depth as it is
-    (millimetres) or 32FC1 depth as quantised inverse depth ``a / depth + b`` (0: none)."""
-    if "rvl" in message.format.lower():
-        raise UnsupportedEncodingError("compressedDepth RVL is not supported "
-                                       "(compressedDepth PNG is)")
+    (int32 format, float32 depthParam[2]) then a 16-bit PNG, or (``compressedDepth rvl``)
+    uint32 width and height and an RVL stream, holding 16UC1 depth as it is (millimetres)
+    or 32FC1 depth as quantised inverse depth ``a / depth + b`` (0: none)."""
     original = original_encoding(message.format) or "16UC1"
     data = message.data
     if len(data) <= DEPTH_HEADER.size:
         raise EncodingError(f"compressedDepth message of {len(data)} bytes has no image")
     _, quant_a, quant_b = DEPTH_HEADER.unpack_from(data)
-    import cv2
-
-    png = cv2.imdecode(np.frombuffer(data, np.uint8, offset=DEPTH_HEADER.size),
-                       cv2.IMREAD_UNCHANGED)
-    if png is None or png.dtype != np.uint16 or png.ndim != 2:
-        raise EncodingError(f"cannot decode compressedDepth image (format {message.format!r})")
+    image = _depth_rvl(message) if "rvl" in message.format.lower() else _depth_png(message)
     if original == "16UC1":
-        return Frame(message.stamp_ns, message.frame_id, png, Color.DEPTH, "compressedDepth",
+        return Frame(message.stamp_ns, message.frame_id, image, Color.DEPTH, "compressedDepth",
                      0.001)
     if original != "32FC1":
         raise EncodingError(f"compressedDepth of {original!r} (16UC1 or 32FC1 expected)")
     with np.errstate(divide="ignore"):
-        depth = quant_a / (png.astype(np.float32) - np.float32(quant_b))
-    depth = np.where(png > 0, depth, np.nan).astype(np.float32)
+        depth = quant_a / (image.astype(np.float32) - np.float32(quant_b))
+    depth = np.where(image > 0, depth, np.nan).astype(np.float32)
     return Frame(message.stamp_ns, message.frame_id, depth, Color.DEPTH, "compressedDepth", 1.0)
+
+
+def _depth_png(message: CompressedImage) -> Pixels:
+    """The 16-bit image of a compressedDepth PNG message."""
+    import cv2
+
+    image = cv2.imdecode(np.frombuffer(message.data, np.uint8, offset=DEPTH_HEADER.size),
+                         cv2.IMREAD_UNCHANGED)
+    if image is None or image.dtype != np.uint16 or image.ndim != 2:
+        raise EncodingError(f"cannot decode compressedDepth image (format {message.format!r})")
+    return image
+
+
+def _depth_rvl(message: CompressedImage) -> Pixels:
+    """The 16-bit image of a compressedDepth RVL message."""
+    data = message.data
+    if len(data) < DEPTH_HEADER.size + RVL_SIZE.size:
+        raise EncodingError(f"compressedDepth RVL message of {len(data)} bytes has no size")
+    width, height = RVL_SIZE.unpack_from(data, DEPTH_HEADER.size)
+    return decode_rvl(data[DEPTH_HEADER.size + RVL_SIZE.size:], width, height)
 
 
 def encode_compressed_depth(frame: Frame, *, original: str = "", jpeg_quality: int = 90

@@ -2,7 +2,8 @@
 buffer and the frame it makes. A new raw encoding is one :data:`RAW_ENCODINGS` entry.
 
 The entries say how ROS's image_encodings.hpp and cv_bridge read the encodings: 3- and
-4-channel 8UC are BGR(A), 16UC1 is depth in millimetres and 32FC1 depth in metres (REP 118).
+4-channel 8UC are BGR(A), 16UC1 is depth in millimetres and 32FC1 depth in metres (REP 118);
+nv21 and nv24 are V4L2's semi-planar YUV 4:2:0 and 4:4:4 (image_encodings.hpp links there).
 This module knows no message type (the typed records check their pixels against it).
 """
 
@@ -10,10 +11,12 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from fractions import Fraction
 from typing import Any, Protocol
 
 import numpy as np
 
+from ..errors import EncodingError
 from .frame import Color, Frame, Pixels
 
 __all__ = ["RAW_ENCODINGS", "Raw", "RawImage"]
@@ -49,13 +52,26 @@ U8, U16, I16, F32 = (np.dtype(t) for t in (np.uint8, np.uint16, np.int16, np.flo
 @dataclass(frozen=True, slots=True)
 class Raw:
     """One raw image encoding: ``channels`` values of ``dtype`` per pixel, decoded to a
-    ``color`` frame by ``convert`` (None: the pixels as they are)."""
+    ``color`` frame by ``convert`` (None: the pixels as they are).
+
+    Semi-planar YUV (nv21, nv24) holds its chroma plane below the luma plane: its buffer
+    has ``rows`` times as many rows of ``width`` values as the image has rows."""
 
     dtype: np.dtype[Any]
     channels: int
     color: Color
     convert: Callable[[Pixels], Pixels] | None = None
     depth_unit_m: float | None = None
+    rows: Fraction = Fraction(1)
+
+    def image_rows(self, buffer_rows: int) -> int:
+        """Rows of the image held in ``buffer_rows`` rows of this encoding's buffer
+        (:class:`EncodingError` when they hold no whole image)."""
+        height = buffer_rows / self.rows
+        if height.denominator != 1 or (self.rows.denominator > 1 and height % 2):
+            raise EncodingError(f"{buffer_rows} buffer rows hold no whole image "
+                                f"({self.rows} rows per image row, even heights)")
+        return int(height)
 
     def __call__(self, image: RawImage) -> Frame:
         """The frame of one image message of this encoding."""
@@ -70,8 +86,24 @@ def _cv(code: str) -> Callable[[Pixels], Pixels]:
     def convert(pixels: Pixels) -> Pixels:
         import cv2
 
-        return np.asarray(cv2.cvtColor(pixels, getattr(cv2, code)))
+        try:
+            return np.asarray(cv2.cvtColor(pixels, getattr(cv2, code)))
+        except cv2.error as err:  # e.g. an odd size where chroma is shared by pixel pairs
+            raise EncodingError(f"cannot convert {pixels.shape[1]}x{pixels.shape[0]} pixels "
+                                f"with OpenCV's {code}: {err.err}") from None
     return convert
+
+
+def _nv24_to_rgb(pixels: Pixels) -> Pixels:
+    """NV24 (a luma plane, then a plane of interleaved U, V for every pixel) to RGB with
+    the BT.601 limited-range formula OpenCV uses for nv21 and UYVY: each pixel becomes a
+    UYVY pair of two equal pixels, which OpenCV converts."""
+    height = pixels.shape[0] // 3
+    luma, chroma = pixels[:height], pixels[height:].reshape(height, -1, 2)
+    pairs = np.empty((height, 2 * luma.shape[1], 2), np.uint8)
+    pairs[:, 0::2, 0], pairs[:, 1::2, 0] = chroma[:, :, 0], chroma[:, :, 1]  # U, V
+    pairs[:, 0::2, 1] = pairs[:, 1::2, 1] = luma
+    return np.ascontiguousarray(_cv("COLOR_YUV2RGB_UYVY")(pairs)[:, 0::2])
 
 
 def _first_channel(pixels: Pixels) -> Pixels:
@@ -107,4 +139,6 @@ RAW_ENCODINGS: dict[str, Raw] = {
     "uyvy": Raw(U8, 2, Color.RGB, _cv("COLOR_YUV2RGB_UYVY")),
     "yuv422_yuy2": Raw(U8, 2, Color.RGB, _cv("COLOR_YUV2RGB_YUY2")),
     "yuyv": Raw(U8, 2, Color.RGB, _cv("COLOR_YUV2RGB_YUY2")),
+    "nv21": Raw(U8, 1, Color.RGB, _cv("COLOR_YUV2RGB_NV21"), rows=Fraction(3, 2)),
+    "nv24": Raw(U8, 1, Color.RGB, _nv24_to_rgb, rows=Fraction(3)),
 }

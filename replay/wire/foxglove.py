@@ -183,7 +183,7 @@ def to_foxglove(message: Message) -> Any:
             return raw_pb2.RawImage(
                 timestamp=_timestamp(message.stamp_ns), frame_id=message.frame_id,
                 width=message.width, height=message.height, encoding=message.encoding,
-                step=pixels.nbytes // max(message.height, 1), data=pixels.tobytes())
+                step=pixels.nbytes // max(pixels.shape[0], 1), data=pixels.tobytes())
         case CompressedImage():
             return compressed_pb2.CompressedImage(
                 timestamp=_timestamp(message.stamp_ns), frame_id=message.frame_id,

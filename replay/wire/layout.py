@@ -23,15 +23,22 @@ def image_from_buffer(stamp_ns: int, frame_id: str, *, width: int, height: int, 
     row = width * channels * dtype.itemsize
     buf = np.frombuffer(data, dtype=np.uint8) if not isinstance(data, np.ndarray) else \
         data.view(np.uint8).reshape(-1)
-    if width < 0 or height < 0 or step < row or buf.size < step * height:
+    # semi-planar YUV: chroma rows below the luma rows; nv24's chroma rows are two luma
+    # rows long, which only unpadded rows (step == width) cut right
+    planes = height * raw.rows
+    if planes.denominator != 1 or (raw.rows.denominator == 1 < raw.rows and step != row):
+        raise EncodingError(f"{encoding} of {width}x{height} with step {step}: nv21 needs an "
+                            "even height, nv24 unpadded rows")
+    buffer_rows = int(planes)
+    if width < 0 or height < 0 or step < row or buf.size < step * buffer_rows:
         raise EncodingError(
             f"image buffer of {buf.size} bytes too small for {width}x{height} {encoding} "
             f"(step {step})"
         )
-    rows = buf[: step * height].reshape(height, step)[:, :row]
+    rows = buf[: step * buffer_rows].reshape(buffer_rows, step)[:, :row]
     order: Literal["<", ">"] = ">" if bigendian else "<"
     pixels = np.ascontiguousarray(rows).view(dtype.newbyteorder(order))
     if order == ">":
         pixels = pixels.astype(dtype)
-    shape = (height, width) if channels == 1 else (height, width, channels)
+    shape = (buffer_rows, width) if channels == 1 else (buffer_rows, width, channels)
     return Image(stamp_ns, frame_id, encoding, pixels.reshape(shape))

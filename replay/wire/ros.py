@@ -79,7 +79,7 @@ def to_ros(message: Message) -> Any:
             big = pixels.dtype.itemsize > 1 and pixels.dtype.byteorder == ">"
             return types["sensor_msgs/msg/Image"](
                 header=_header(ts, message.stamp_ns, message.frame_id),
-                height=pixels.shape[0],
+                height=message.height,  # semi-planar YUV: fewer than the buffer's rows
                 width=pixels.shape[1],
                 encoding=message.encoding,
                 is_bigendian=int(big),

@@ -21,6 +21,7 @@ from processors import PROCESSORS, ConfigError, OptionValueError, configure, mak
 from processors.spec import Option, OptionKind, ProcessorSpec
 from replay import IMAGE_ENCODINGS, CameraInfo, Image
 from replay.frames import Frame, decode_frame
+from replay.frames.raw import RAW_ENCODINGS
 from replay.wire import msgtype_of
 
 W, H = 32, 24
@@ -67,7 +68,8 @@ def test_every_processor_writes_what_it_declares(name: str) -> None:
 @pytest.mark.parametrize("name", COMPUTING)
 def test_every_encoding_the_log_layer_supports(name: str, encoding: str) -> None:
     dtype, channels = IMAGE_ENCODINGS[encoding]
-    shape = (H, W) if channels == 1 else (H, W, channels)
+    rows = int(H * RAW_ENCODINGS[encoding].rows)  # semi-planar YUV: chroma rows below
+    shape = (rows, W) if channels == 1 else (rows, W, channels)
     top = 10.0 if dtype.kind == "f" else np.iinfo(dtype).max
     pixels = (np.random.default_rng(0).uniform(0, 1, shape) * top).astype(dtype)
     processor = make_processor(name, **sample_options(PROCESSORS[name]))

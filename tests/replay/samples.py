@@ -21,6 +21,7 @@ from replay import (
     open_writer,
 )
 from replay.frames import decode_frame, encode_compressed
+from replay.frames.raw import RAW_ENCODINGS
 
 #: writer format name -> output name it is written under
 OUTPUT_NAMES = {
@@ -39,9 +40,11 @@ Entry = tuple[str, int, Message]
 
 
 def random_pixels(encoding: str, *, height: int = 6, width: int = 8, seed: int = 0) -> np.ndarray:
-    """Pixels over the full value range of ``encoding``: ``(H, W)`` or ``(H, W, C)``."""
+    """Pixels over the full value range of ``encoding``: ``(H, W)`` or ``(H, W, C)``
+    (semi-planar YUV: its buffer's rows, e.g. ``(H * 3 / 2, W)`` for nv21)."""
     dtype, channels = IMAGE_ENCODINGS[encoding]
-    shape = (height, width) if channels == 1 else (height, width, channels)
+    rows = int(height * RAW_ENCODINGS[encoding].rows)
+    shape = (rows, width) if channels == 1 else (rows, width, channels)
     rng = np.random.default_rng(seed)
     if dtype.kind == "f":
         return rng.uniform(0.0, 10.0, size=shape).astype(dtype)

@@ -241,3 +241,80 @@ def test_every_decoder_key_is_a_record_kind_and_a_name() -> None:
 def test_docstring_examples() -> None:
     result = doctest.testmod(replay.frames.compressed)
     assert result.attempted > 0 and result.failed == 0
+
+
+def _rvl(depth: np.ndarray) -> bytes:
+    """RVL as Wilson's paper ("Fast Lossless Depth Image Compression", 2017) and
+    compressed_depth_image_transport's RvlCodec write it, one value at a time: a count of
+    zeros, a count of non-zero pixels, their zigzag-coded differences from the previous
+    non-zero pixel; each value in 3-bit nibbles (low first, 8 = another follows), eight
+    nibbles to a little-endian 32-bit word, the first in its top bits."""
+    words: list[int] = []
+    word = count = 0
+
+    def put(value: int) -> None:
+        nonlocal word, count
+        while True:
+            nibble, value = value & 7, value >> 3
+            word = (word << 4 | nibble | (8 if value else 0)) & 0xFFFFFFFF
+            count += 1
+            if count == 8:
+                words.append(word)
+                word = count = 0
+            if not value:
+                return
+
+    flat, i, previous = [int(v) for v in depth.reshape(-1)], 0, 0
+    while i < len(flat):
+        zeros = 0
+        while i < len(flat) and flat[i] == 0:
+            zeros, i = zeros + 1, i + 1
+        put(zeros)
+        run = 0
+        while i + run < len(flat) and flat[i + run]:
+            run += 1
+        put(run)
+        for current in flat[i:i + run]:
+            delta = current - previous
+            put((delta << 1) ^ (delta >> 31))
+            previous = current
+        i += run
+    if count:
+        words.append((word << 4 * (8 - count)) & 0xFFFFFFFF)
+    return struct.pack(f"<{len(words)}I", *words)
+
+
+def _rvl_message(encoding: str, image: np.ndarray, quant: tuple[float, float]) -> CompressedImage:
+    """compressedDepth RVL: the transport's header, uint32 width and height, the stream."""
+    height, width = image.shape
+    data = struct.pack("<iffII", 0, *quant, width, height) + _rvl(image)
+    return CompressedImage(3, "d", f"{encoding}; compressedDepth rvl", data)
+
+
+def test_compressed_depth_rvl_round_trips_exactly() -> None:
+    depth = scene_depth_m()
+    mm = np.round(depth * 1000).astype(np.uint16)
+    frame = decode_frame(_rvl_message("16UC1", mm, (0.0, 0.0)))
+    assert frame.depth_unit_m == 0.001 and np.array_equal(frame.pixels, mm)
+    # every difference size, wrap-around included, and zero runs at both ends
+    rng = np.random.default_rng(5)
+    values = rng.integers(0, 65536, (48, 64), dtype=np.uint16)
+    values[rng.random((48, 64)) < 0.3] = 0
+    values[0, :5] = values[-1, -7:] = 0
+    frame = decode_frame(_rvl_message("16UC1", values, (0.0, 0.0)))
+    assert np.array_equal(frame.pixels, values)
+    a = 100.0 * 101.0
+    b = 1.0 - a / 10.0
+    inverse = np.where(depth > 0, np.round(a / np.maximum(depth, 1e-6) + b), 0).astype(np.uint16)
+    frame = decode_frame(_rvl_message("32FC1", inverse, (a, b)))
+    measured = depth > 0
+    assert np.isnan(frame.pixels[~measured]).all()
+    np.testing.assert_allclose(frame.pixels[measured], depth[measured], atol=1e-3)
+
+
+def test_a_cut_rvl_stream_does_not_decode() -> None:
+    message = _rvl_message("16UC1", np.round(scene_depth_m() * 1000).astype(np.uint16),
+                           (0.0, 0.0))
+    cut = CompressedImage(3, "d", message.format, message.data[: len(message.data) // 2])
+    with pytest.raises(EncodingError, match="RVL stream"):
+        decode_frame(cut)

@@ -14,7 +14,7 @@ from camlog.cli import main
 from replay import CompressedImage, PointStamped, open_reader
 from replay.frames import decode_frame
 from replay.wire import ros2_typestore
-from tests.encodings import RED_CENTROID, Case, colour_cases, depth_cases
+from tests.encodings import HEIGHT, RED_CENTROID, WIDTH, Case, colour_cases, depth_cases
 from tests.rrd import load_rrd, rerun_cli
 
 CASES = colour_cases() + depth_cases()
@@ -44,7 +44,7 @@ def encodings_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
                 writer.write_message(topic_of(case), schema, {
                     "header": {"stamp": {"sec": stamp // 10**9, "nanosec": stamp % 10**9},
                                "frame_id": case.encoding},
-                    "height": px.shape[0], "width": px.shape[1], "encoding": case.encoding,
+                    "height": HEIGHT, "width": WIDTH, "encoding": case.encoding,
                     "is_bigendian": 0, "step": px.nbytes // px.shape[0],
                     "data": px.tobytes()}, log_time=stamp)
         writer.finish()
