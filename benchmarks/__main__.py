@@ -19,6 +19,7 @@ BENCHMARKS: dict[str, tuple[list[str], list[str]]] = {
     "record_fps": ([], ["--frames", "150", "--repeats", "1"]),
     "process_fps": ([], ["--frames", "100", "--repeats", "1"]),
     "decode_fps": ([], ["--frames", "10", "--repeats", "1"]),
+    "video_size": ([], ["--duration", "1"]),
     "calibrate_speed": ([], ["--quick"]),
     "view_fps": ([], ["--duration", "5"]),
     "batch_speedup": ([], ["--frames", "90"]),

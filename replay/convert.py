@@ -22,7 +22,7 @@ from .atomic import check_not_input
 from .errors import LogReadError, OptionError, ReplayError, TopicError
 from .formats import format_for_output, open_reader, open_writer
 from .formats.base import LogReader
-from .frames.video import VIDEO_CODECS
+from .frames.video import DEFAULT_CRF, VIDEO_CODECS
 from .messages import MSGTYPES, CameraInfo, CompressedImage, CompressedVideo, Image, Message
 from .reencode import STILLS, TopicReencoder
 from .selection import select_topics, window_ns
@@ -107,12 +107,14 @@ def convert_log(
     overwrite: bool = False,
     recover: bool = False,
     progress: bool | None = None,
+    crf: int = DEFAULT_CRF,
 ) -> ConvertResult:
     """Write the chosen topics and time window of ``input_path`` to ``output`` atomically.
 
     ``fmt`` defaults from the output name (``.mcap``, ``.bag``, a directory for rosbag2).
     ``profile="foxglove"`` (MCAP only) stores images, camera models and video in
-    Foxglove's schemas, so that Foxglove shows them in its own panels.
+    Foxglove's schemas, so that Foxglove shows them in its own panels. ``crf`` is the
+    video encoder's constant rate factor (``compress`` h264 or h265).
     """
     started = time.perf_counter()
     check_not_input(Path(output), [Path(input_path)])
@@ -130,7 +132,7 @@ def convert_log(
         start_ns, end_ns = window_ns(reader.start_ns, start_s, end_s)
         total = sum(reader.topics[t].count for t in names)
         options = {"profile": profile} if fmt == "mcap" else {}
-        codecs = {t: TopicReencoder(t, compress) for t in renamed}
+        codecs = {t: TopicReencoder(t, compress, crf) for t in renamed}
         written = reencoded = 0
         with open_writer(output, fmt=fmt, overwrite=overwrite, inputs=[input_path],
                          **options) as writer, \

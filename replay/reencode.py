@@ -26,7 +26,7 @@ from .frames import (
     encode_image,
     psnr_db,
 )
-from .frames.video import VIDEO_CODECS
+from .frames.video import DEFAULT_CRF, VIDEO_CODECS
 from .messages import CompressedImage, CompressedVideo, Message
 
 __all__ = ["STILLS", "TopicReencoder", "compressed_format_for"]
@@ -55,6 +55,7 @@ class TopicReencoder:
 
     topic: str
     compress: str | None
+    crf: int = DEFAULT_CRF  # video only
     chosen: str | None = None
     decided: bool = False
     undecodable: int = 0
@@ -103,7 +104,7 @@ class TopicReencoder:
 
     def _encode_video(self, frame: Frame) -> CompressedVideo:
         if self._video is None:
-            self._video = VideoEncoder(self.chosen or "h264")
+            self._video = VideoEncoder(self.chosen or "h264", crf=self.crf)
             self._check = VideoDecoder(self.chosen or "h264")
         assert self._check is not None
         message = self._video(frame)

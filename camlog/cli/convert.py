@@ -6,8 +6,9 @@ import argparse
 from pathlib import Path
 
 from replay.convert import COMPRESSIONS, convert_log
+from replay.frames.video import DEFAULT_CRF
 
-from .args import add_format_argument, add_selection, output_path, print_warnings
+from .args import add_format_argument, add_selection, bounded_int, output_path, print_warnings
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -31,6 +32,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                        help="store raw images compressed on TOPIC/compressed")
     codec.add_argument("--decompress", action="store_true",
                        help="store compressed images raw (TOPIC/compressed -> TOPIC)")
+    p.add_argument("--crf", type=bounded_int(0, 51), default=DEFAULT_CRF, metavar="N",
+                   help="h264/h265: the encoder's constant rate factor, 0-51, lower is better "
+                        f"and larger (default {DEFAULT_CRF})")
     p.add_argument("--profile", choices=("ros2", "foxglove"), default="ros2",
                    help="MCAP: store images, camera models and video in Foxglove's schemas "
                         "(foxglove) or ROS 2 messages (ros2, default)")
@@ -45,7 +49,7 @@ def run(args: argparse.Namespace) -> int:
         args.input, args.output, fmt=args.format, topics=args.topics, start_s=args.start,
         end_s=args.end, compress=args.compress, decompress=args.decompress,
         profile=args.profile, overwrite=args.overwrite, recover=args.recover,
-        progress=False if args.no_progress else None)
+        progress=False if args.no_progress else None, crf=args.crf)
     print(f"converted {result.messages} messages ({result.reencoded} images re-encoded) to "
           f"{result.format_name} in {result.wall_s:.2f} s")
     for before, after in sorted(result.renamed.items()):

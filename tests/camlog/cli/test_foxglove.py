@@ -234,3 +234,21 @@ def test_h264_video_through_convert_process_and_view(
     assert load_rrd(rrd).count("/world/cam/video", "VideoStream:sample") == frames
     converted = rerun_cli("mcap", "convert", str(video), "-o", "v.rrd", cwd=tmp_path)
     assert converted.returncode == 0, converted.stderr
+
+
+def test_crf_trades_size_for_quality(tmp_path: Path,
+                                     capsys: pytest.CaptureFixture[str]) -> None:
+    source = _moving_square_log(tmp_path / "raw.mcap", frames=6)
+    sizes, psnr = {}, {}
+    for crf in (10, 40):
+        out = tmp_path / f"crf{crf}.mcap"
+        assert main(["convert", str(source), str(out), "--compress", "h264", "--crf",
+                     str(crf), "--no-progress"]) == 0
+        printed = capsys.readouterr().out
+        psnr[crf] = float(printed.split("h264 PSNR ")[1].split(" dB")[0])
+        sizes[crf] = sum(len(data) for _, _, data in _messages(out, "/cam/image_raw/video"))
+    assert sizes[40] < sizes[10] and psnr[40] < psnr[10]
+    with pytest.raises(SystemExit):
+        main(["convert", str(source), str(tmp_path / "x.mcap"), "--compress", "h264",
+              "--crf", "52"])
+    assert "--crf: expected" in capsys.readouterr().err
