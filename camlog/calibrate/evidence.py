@@ -26,7 +26,7 @@ from replay.messages import CameraInfo, Image, PointStamped
 from replay.records import CalibrationSummary, ViewResiduals
 from replay.topics import CALIBRATION_SUMMARY, CameraTopics
 
-from .pixels import as_frame
+from .pixels import TopicFrames
 from .solving import CalibratedCamera, StereoSolution
 
 __all__ = ["Evidence", "write_evidence"]
@@ -61,6 +61,7 @@ def write_evidence(reader: LogReader, path: Path, cameras: list[CalibratedCamera
     rectified_shown: dict[int, np.ndarray] = {}
     bar = tqdm(total=reader.message_count, unit="msg", desc="write", leave=False,
                disable=None if progress is None else not progress)
+    to_frame = TopicFrames()
     with open_writer(path) as writer, bar:
         for raw in reader.raw_messages():
             writer.write_raw(raw)
@@ -68,9 +69,12 @@ def write_evidence(reader: LogReader, path: Path, cameras: list[CalibratedCamera
             camera = by_topic.get(raw.topic)
             if camera is None:
                 continue
+            image = to_frame(reader.decode(raw), topic=raw.topic,
+                             where=f"{reader.path}: {raw.topic}")
+            if image is None:  # video before its first keyframe: no frame in the views
+                continue
             frame = camera.views.frames[counters[raw.topic]]
             counters[raw.topic] += 1
-            image = as_frame(reader.decode(raw), where=f"{reader.path}: {raw.topic}")
             ns, stamp, log_time = camera.views.source.namespace, image.stamp_ns, raw.log_time_ns
             topics = CameraTopics(ns)
             info = camera.camera_info

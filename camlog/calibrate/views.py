@@ -33,7 +33,7 @@ from replay.topics import SCENARIO, CameraTopics
 
 from ..errors import InputError
 from ..processing.checks import IMAGE_SUFFIXES, IMAGE_TYPES, camera_info_topic
-from .pixels import as_frame
+from .pixels import TopicFrames
 
 #: frames kept per camera to suggest another board size when none is found
 HINT_SAMPLES = 12
@@ -236,6 +236,7 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
             done, at, future = pending.popleft()
             done.detections.update(zip(at, future.result(), strict=True))
 
+    to_frame = TopicFrames()
     with ThreadPoolExecutor(max_workers=workers) as pool, bar:
         for raw in reader.raw_messages(wanted):
             message = reader.decode(raw)
@@ -248,7 +249,10 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
                     camera.log_info = message
                 continue
             camera = by_image[raw.topic]
-            image = as_frame(message, where=f"{reader.path}: {raw.topic}")
+            image = to_frame(message, topic=raw.topic, where=f"{reader.path}: {raw.topic}")
+            if image is None:  # video before its first keyframe: no frame, no view
+                bar.update()
+                continue
             gray = image.mono8()
             index, duplicate = camera.add(gray, image.stamp_ns, f"{reader.path}: {raw.topic}")
             if not duplicate:

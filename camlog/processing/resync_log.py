@@ -6,6 +6,8 @@ decompressed; a raw image decodes to a view of its buffer). The stamps are paire
 the members of a pair arrive, writes both images and their camera_info (matched by identical
 stamp) under ``OUT_PREFIX/{left,right}/...`` with the pair's common stamp. Only the members
 of pairs not yet complete are held, so memory is bounded by the slop, not the log length.
+A video camera's pictures are decoded in order and its paired ones encoded again as a video
+stream of their own (a picture cannot be left out of a stream the next ones refer to).
 """
 
 from __future__ import annotations
@@ -20,7 +22,15 @@ import numpy as np
 from processors.resync import default_slop_ns, pair_stamp_ns, pair_stamps, pairing_stats
 from replay.atomic import check_not_input
 from replay.formats import LogReader, LogWriter, open_reader, open_writer
-from replay.messages import CameraInfo, CompressedImage, Image, Message, PointStamped
+from replay.frames import Frame, FrameStream, VideoEncoder
+from replay.messages import (
+    CameraInfo,
+    CompressedImage,
+    CompressedVideo,
+    Image,
+    Message,
+    PointStamped,
+)
 from replay.records import ResyncStats
 from replay.storage import Location, local_paths
 from replay.topics import RESYNC_PREFIX, ResyncTopics
@@ -57,6 +67,14 @@ class _Side:
     out_info: str
     image_stamps: list[int] = field(default_factory=list)
     info_stamps: set[int] = field(default_factory=set)
+    video: FrameStream = field(default_factory=FrameStream)  # pictures need their past
+    encoder: VideoEncoder | None = None  # the re-stamped video: its paired pictures only
+
+    def encode(self, frame: Frame) -> CompressedVideo:
+        """A paired picture of a video camera in a video stream of its own."""
+        if self.encoder is None:
+            self.encoder = VideoEncoder(frame.source)
+        return self.encoder(frame)
 
 
 def _side(reader: LogReader, name: str, namespace: str, prefix: str) -> _Side:
@@ -87,7 +105,7 @@ def _read_stamps(reader: LogReader, sides: list[_Side]) -> None:
             infos[raw.topic].info_stamps.add(stamp)
 
 
-def _stamp(message: Message) -> int:
+def _stamp(message: Message | Frame) -> int:
     stamp = getattr(message, "stamp_ns", None)
     assert stamp is not None, "image and camera_info messages have a header"
     return int(stamp)
@@ -197,7 +215,7 @@ def _write_pairs(
         if side.info_topic:
             roles[side.info_topic] = (index, "info")
     occurrences: list[dict[int, int]] = [{}, {}]
-    pending: dict[int, dict[tuple[int, str], tuple[int, Message]]] = {}
+    pending: dict[int, dict[tuple[int, str], tuple[int, Message | Frame]]] = {}
     info_used: list[set[int]] = [set(), set()]
     buffered = peak = 0
     for raw in reader.raw_messages():
@@ -206,8 +224,8 @@ def _write_pairs(
         if role is None:
             continue
         index, kind = role
-        message = reader.decode(raw)
-        stamp = _stamp(message)
+        decoded = reader.decode(raw)
+        stamp = _stamp(decoded)
         if kind == "image":
             seen = occurrences[index][stamp] = occurrences[index].get(stamp, -1) + 1
             pair = pair_of[index].get((stamp, seen))
@@ -216,7 +234,10 @@ def _write_pairs(
                 continue  # a second camera_info with the same stamp: the first one is used
             info_used[index].add(stamp)
             pair = pair_of[index].get((stamp, 0))
-        if pair is None:
+        message: Message | Frame | None = decoded
+        if isinstance(decoded, CompressedVideo):  # every picture decoded, in order
+            message = sides[index].video.decode(decoded)  # None before the first keyframe
+        if pair is None or message is None:
             continue
         members = pending.setdefault(pair, {})
         members[(index, kind)] = (raw.log_time_ns, message)
@@ -232,15 +253,19 @@ def _write_pairs(
 def _write_pair(
     writer: LogWriter,
     sides: list[_Side],
-    members: dict[tuple[int, str], tuple[int, Message]],
+    members: dict[tuple[int, str], tuple[int, Message | Frame]],
     stamp_ns: int,
     offset_topic: str,
 ) -> None:
     log_time = max(t for t, _ in members.values())
     for (index, kind), (_, message) in sorted(members.items()):
-        assert isinstance(message, Image | CompressedImage | CameraInfo)
         topic = sides[index].out_image if kind == "image" else sides[index].out_info
-        writer.write(topic, dataclasses.replace(message, stamp_ns=stamp_ns), log_time_ns=log_time)
+        if isinstance(message, Frame):  # video: re-encoded (its pictures need their past)
+            out: Message = sides[index].encode(dataclasses.replace(message, stamp_ns=stamp_ns))
+        else:
+            assert isinstance(message, Image | CompressedImage | CameraInfo)
+            out = dataclasses.replace(message, stamp_ns=stamp_ns)
+        writer.write(topic, out, log_time_ns=log_time)
     left, right = (members[(i, "image")][1] for i in range(2))
     offset_s = (_stamp(right) - _stamp(left)) / 1e9
     frame_id = getattr(left, "frame_id", "")

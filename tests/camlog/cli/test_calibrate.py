@@ -242,6 +242,30 @@ def test_foxglove_camera_calibrates_like_the_ros_one(mono: Path, rig_log: Path,
                                    atol=1e-9)
 
 
+def test_h264_camera_calibrates_close_to_the_raw_one(mono: Path, rig_log: Path,
+                                                     out_dir: Path) -> None:
+    """The left camera stored as foxglove.CompressedVideo H.264 (``convert --compress h264``)
+    calibrates to the raw images' result within its uncertainty: the codec moves corners
+    by small fractions of a pixel."""
+    video = out_dir / "video.mcap"
+    with open_reader(rig_log) as reader:
+        topics = [t for t in reader.topics if t.startswith(LEFT) or t == "/camlog/scenario"]
+    assert main(["convert", str(rig_log), str(video), "--compress", "h264", "--no-progress",
+                 "--topics", *topics]) == 0
+    with open_reader(video) as reader:
+        assert reader.topics[f"{LEFT}/image_raw/video"].msgtype == "foxglove.CompressedVideo"
+        assert f"{LEFT}/image_raw" not in reader.topics
+    folder = calibrate(video, out_dir / "video", "--camera", LEFT)
+    raw, coded = camera_summary(mono, LEFT), camera_summary(folder, LEFT)
+    assert coded["image_topic"] == f"{LEFT}/image_raw/video"
+    assert coded["frames"] == raw["frames"]  # every picture decoded
+    assert coded["used_views"] == pytest.approx(raw["used_views"], abs=2)
+    for name, p in raw["parameters"].items():
+        if p["std"] > 0:
+            assert abs(coded["parameters"][name]["value"] - p["value"]) < 3 * p["std"], name
+    assert_within_3_sigma(coded["parameters"], true_parameters(true_model(rig_log, LEFT)))
+
+
 def test_yaml_matches_the_summary(mono: Path) -> None:
     info = load_calibration(mono / "ost.yaml").camera_info
     p = camera_summary(mono, LEFT)["parameters"]

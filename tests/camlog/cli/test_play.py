@@ -11,6 +11,7 @@ from rerun.error_utils import RerunWarning
 from rosbags.highlevel import AnyReader
 
 from camlog.cli import main
+from tests.recordings import RED_FRAMES
 from tests.rrd import Receiver, load_rrd, rerun_cli
 
 
@@ -62,3 +63,37 @@ def test_play_to_a_live_viewer(red_log: Path, tmp_path: Path,
     assert rec.timelines["/world/stereo_camera/left/image"] == {"log_time", "header_stamp",
                                                                 "replay_time"}
     assert rec.blueprints == 1
+
+
+def test_play_video_topics(red_log: Path, tmp_path: Path,
+                           capsys: pytest.CaptureFixture[str]) -> None:
+    """Both cameras as foxglove.CompressedVideo H.264: replayed into an .rrd as rerun video
+    samples (every picture), and into a log whose samples PyAV alone decodes."""
+    import av
+    from mcap.reader import make_reader
+
+    video = tmp_path / "video.mcap"
+    assert main(["convert", str(red_log), str(video), "--compress", "h264", "--no-progress"]) == 0
+    rrd = tmp_path / "played.rrd"
+    assert main(["play", str(video), "--rate", "8", "-o", str(rrd), "--no-progress"]) == 0
+    rec = load_rrd(rrd)
+    for side in ("left", "right"):
+        assert rec.count(f"/world/stereo_camera/{side}/video", "VideoStream:sample") == \
+            RED_FRAMES
+    assert "replay_time" in rec.timelines["/world/stereo_camera/left/video"]
+    played = tmp_path / "played.mcap"
+    assert main(["play", str(video), "--rate", "8", "-o", str(played), "--no-progress"]) == 0
+    capsys.readouterr()
+    from foxglove_schemas_protobuf.CompressedVideo_pb2 import CompressedVideo
+
+    codec = av.CodecContext.create("h264", "r")
+    pictures = 0
+    with played.open("rb") as f:
+        for _, channel, message in make_reader(f).iter_messages(
+                topics=["/stereo_camera/left/image_raw/video"]):
+            assert channel.message_encoding == "protobuf"
+            sample = CompressedVideo.FromString(message.data)
+            (picture,) = codec.decode(av.Packet(sample.data))
+            assert picture.to_ndarray(format="rgb24").shape == (240, 320, 3)
+            pictures += 1
+    assert pictures == RED_FRAMES

@@ -209,3 +209,39 @@ def test_compressed_cameras_without_camera_info(tmp_path: Path) -> None:
         # of the two left frames stamped 33 ms the first one (value 10) is paired
         assert [int(decode_frame(m).pixels[0, 0]) for m in images
                 if isinstance(m, CompressedImage)] == values
+
+
+def test_video_cameras_resync_like_raw_ones(unsynced: Path, synced: Path, tmp_path: Path
+                                            ) -> None:
+    """Both cameras as foxglove.CompressedVideo H.264 (``convert --compress h264``): the same
+    pairs as the raw log's, and the paired pictures as a video stream of their own that
+    PyAV alone decodes, picture for picture, to the raw pairs' images."""
+    import av
+
+    from replay import CompressedVideo
+    from replay.frames import psnr_db
+
+    video = tmp_path / "video.mcap"
+    assert main(["convert", str(unsynced), str(video), "--compress", "h264",
+                 "--no-progress"]) == 0
+    out = tmp_path / "synced_video.mcap"
+    assert main(["resync", str(video), "-o", str(out)]) == 0
+    raw, got = by_topic(synced), by_topic(out)
+    raw_stats, got_stats = (json.loads(t.data) for t in (raw["/stereo_sync/stats"][0],
+                                                          got["/stereo_sync/stats"][0])
+                            if isinstance(t, Text))
+    assert got_stats["pairs"] == raw_stats["pairs"] > 0
+    for side in ("left", "right"):
+        images = [m for m in raw[f"/stereo_sync/{side}/image_raw"] if isinstance(m, Image)]
+        samples = [m for m in got[f"/stereo_sync/{side}/image_raw/video"]
+                   if isinstance(m, CompressedVideo)]
+        assert [m.stamp_ns for m in samples] == [m.stamp_ns for m in images]
+        assert stamps(got[f"/stereo_sync/{side}/camera_info"]) == \
+            stamps(raw[f"/stereo_sync/{side}/camera_info"])
+        codec = av.CodecContext.create("h264", "r")
+        for sample, image in zip(samples, images, strict=True):
+            (picture,) = codec.decode(av.Packet(sample.data))
+            # two generations of lossy coding (convert, then resync)
+            assert psnr_db(image.pixels, picture.to_ndarray(format="rgb24")) > 28.0
+    assert [p.stamp_ns for p in got["/stereo_sync/offset_s"] if isinstance(p, PointStamped)] \
+        == [p.stamp_ns for p in raw["/stereo_sync/offset_s"] if isinstance(p, PointStamped)]
