@@ -8,7 +8,8 @@ drifting load hits both; figures are medians, ratios the median of the pairs' ra
 * start-up: ``camlog --help``, ``camlog info`` on the stereo log and an argument error,
   beside a bare ``python -c pass`` (targets: <= 0.15 s and <= 50 MB);
 * convert: ROS1 bag -> rosbag2 and rosbag2 (MCAP storage) -> ROS1 against
-  ``rosbags-convert`` writing the same storage (targets: <= 1.0x the time, <= 1.5x the memory);
+  ``rosbags-convert`` writing the same storage with the same compression as camlog's default
+  (zstd MCAP chunks, lz4 ROS1 chunks; targets: <= 1.0x the time, <= 1.5x the memory);
 * view: ``camlog view -o OUT.rrd`` against ``rerun mcap convert`` (target <= 1.2x);
 * calibrate: the real 12-pair wide-angle stereo sample (``shared/realdata/ros_wide_stereo``,
   imported with ``camlog import --stereo``) against ``benchmarks/opencv_stereo.py``, a plain
@@ -42,6 +43,10 @@ REPO = Path(__file__).resolve().parent.parent
 BOARD_WIDE = ["--size", "8x6", "--square", "0.108"]
 BOARD_SIM = ["--size", "7x6", "--square", "0.01"]
 STEREO_SIM = ["--left", "/stereo_camera/left", "--right", "/stereo_camera/right"]
+#: rosbags-convert told to compress as camlog convert does by default (rosbag2: zstd MCAP
+#: chunks; ROS1: lz4 chunks), so that both tools do the same work
+PEER_TO_ROSBAG2 = ["--dst-storage", "mcap", "--compress", "zstd", "--compress-mode", "storage"]
+PEER_TO_ROS1 = ["--compress", "lz4"]
 
 
 def tool(name: str) -> list[str]:
@@ -187,11 +192,11 @@ def cases(inputs: dict[str, Path], tmp: Path) -> list[Case]:
              [*camlog, "convert", str(inputs["ros1"]), str(out_r2), "--no-progress"],
              "rosbags-convert",
              [*rosbags, "--src", str(inputs["ros1"]), "--dst", str(out_r2),
-              "--dst-storage", "mcap"], [out_r2], "<= 1.0x time, <= 1.5x memory"),
+              *PEER_TO_ROSBAG2], [out_r2], "<= 1.0x time, <= 1.5x memory"),
         Case("convert rosbag2 (MCAP) -> ROS1 bag",
              [*camlog, "convert", str(inputs["rosbag2"]), str(out_bag), "--no-progress"],
-             "rosbags-convert", [*rosbags, "--src", str(inputs["rosbag2"]), "--dst", str(out_bag)],
-             [out_bag], "<= 1.0x time, <= 1.5x memory"),
+             "rosbags-convert", [*rosbags, "--src", str(inputs["rosbag2"]), "--dst", str(out_bag),
+                                 *PEER_TO_ROS1], [out_bag], "<= 1.0x time, <= 1.5x memory"),
         Case("view: MCAP -> .rrd",
              [*camlog, "view", str(inputs["mcap"]), "-o", str(out_rrd), "--no-progress"],
              "rerun mcap convert", [*rerun, "mcap", "convert", str(inputs["mcap"]), "-o",
@@ -231,11 +236,12 @@ def growth_cases(tmp: Path, seconds: Sequence[int]) -> Iterator[tuple[int, list[
         yield length_s, [
             Case("convert ROS1 -> rosbag2", [*camlog, "convert", str(bag), str(out_r2),
                                              "--no-progress"], "rosbags-convert",
-                 [*rosbags, "--src", str(bag), "--dst", str(out_r2), "--dst-storage", "mcap"],
+                 [*rosbags, "--src", str(bag), "--dst", str(out_r2), *PEER_TO_ROSBAG2],
                  [out_r2], ""),
             Case("convert rosbag2 -> ROS1", [*camlog, "convert", str(r2), str(out_bag),
                                              "--no-progress"], "rosbags-convert",
-                 [*rosbags, "--src", str(r2), "--dst", str(out_bag)], [out_bag], ""),
+                 [*rosbags, "--src", str(r2), "--dst", str(out_bag), *PEER_TO_ROS1], [out_bag],
+                 ""),
             Case("view", [*camlog, "view", str(log), "-o", str(out_rrd), "--no-progress"],
                  "rerun mcap convert", [*rerun, "mcap", "convert", str(log), "-o", str(out_rrd)],
                  [out_rrd], ""),
