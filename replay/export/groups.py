@@ -20,6 +20,10 @@ __all__ = ["related_groups"]
 
 #: kinds whose frame_id names the camera that records them
 _CAMERA_KINDS = frozenset({Kind.IMAGE, Kind.CAMERA_INFO, Kind.CALIBRATED_INFO})
+#: kinds whose namespace is a camera's (text, skipped and other series name none)
+_OF_A_CAMERA = _CAMERA_KINDS | {Kind.RECTIFIED, Kind.DETECTIONS, Kind.RESIDUALS,
+                                Kind.VIEW_ERROR, Kind.PROCESSED_IMAGE, Kind.MASK,
+                                Kind.POINT_2D, Kind.SCALAR, Kind.EDGES, Kind.GROUND_TRUTH}
 
 
 def related_groups(readers: Sequence[LogReader], chosen: Sequence[Sequence[str]],
@@ -31,7 +35,8 @@ def related_groups(readers: Sequence[LogReader], chosen: Sequence[Sequence[str]]
     placed_frames: list[set[str]] = []
     for reader, topics in zip(readers, chosen, strict=True):
         routes = {t: classify(t, reader.topics[t].msgtype, found.outputs) for t in topics}
-        namespaces.append({r.namespace for r in routes.values() if r.namespace})
+        namespaces.append({r.namespace for r in routes.values()
+                           if r.namespace and r.kind in _OF_A_CAMERA})
         frames = {t: found.frame_ids[t] for t in topics if found.frame_ids.get(t)}
         camera_frames.append({f for t, f in frames.items() if routes[t].kind in _CAMERA_KINDS})
         placed_frames.append({f for t, f in frames.items() if routes[t].by_frame})

@@ -10,7 +10,7 @@ import numpy as np
 import pyarrow as pa
 from rerun.chunk import RrdReader
 
-from replay import Image, open_writer
+from replay import Image, Text, open_writer
 from replay.camera import CameraModel
 from replay.export import view_logs
 from tests.rrd import rerun_cli
@@ -20,8 +20,11 @@ HOUR_NS = 3600 * 10**9
 
 
 def camera_log(path: Path, namespace: str, start_ns: int, frames: int = 3) -> Path:
-    """``frames`` 8x8 mono images of one camera at 10 Hz from ``start_ns``."""
+    """``frames`` 8x8 mono images of one camera at 10 Hz from ``start_ns``, and a note on a
+    topic every such log has (text names no camera: it relates no logs)."""
     with open_writer(path) as writer:
+        writer.write("/camlog/notes", Text(f"{namespace} from {start_ns}"),
+                     log_time_ns=start_ns)
         for i in range(frames):
             stamp = start_ns + i * 100_000_000
             writer.write(f"{namespace}/image_raw",
@@ -53,7 +56,7 @@ def test_unrelated_logs_keep_their_own_recordings(tmp_path: Path) -> None:
     other_rig = camera_log(tmp_path / "rig.mcap", "/rear", T0)
     out = tmp_path / "three.rrd"
     result = view_logs([morning, evening, other_rig], output=out, progress=False)
-    assert result.recordings == 3 and result.messages == 8
+    assert result.recordings == 3 and result.messages == 11
     entries = RrdReader(out).recordings()
     assert {e.application_id for e in entries} == {"camlog"}
     assert len({e.recording_id for e in entries}) == 3
@@ -88,5 +91,5 @@ def test_overlapping_logs_of_one_camera_share_a_recording(tmp_path: Path) -> Non
             writer.write("/front/camera_info", info, log_time_ns=stamp)
     out = tmp_path / "merged.rrd"
     result = view_logs([first, more], output=out, progress=False)
-    assert result.recordings == 1 and result.messages == 6
+    assert result.recordings == 1 and result.messages == 4 + 3
     assert len(RrdReader(out).recordings()) == 1 and result.cameras == ["/front"]
