@@ -1,15 +1,19 @@
 """The default viewer layout, so that a first look needs no arranging.
 
 Top row: one 2D view per camera, side by side (a grid beyond three), each showing the
-camera's images with every overlay that belongs to them. Middle row (when present): the
-rectified images side by side, with horizontal guide rows, and other processed images.
-Bottom row: one time-series view per kind of metric, then tabs with the 3D rig (when the
-log knows it) and the text records. The time panel starts on the ``log_time`` timeline.
+camera's images with every overlay that belongs to them; cameras that share a frame_id (a
+camera's raw and re-stamped streams) are tabs of one cell, so a stereo rig reads as a left
+and a right image. Middle row (when present): the rectified images side by side, with
+horizontal guide rows, and other processed images. Bottom row: one time-series view per kind
+of metric, then tabs with the 3D rig (when the log knows it) and the text records. The
+side panels and the time panel start collapsed (the time bar stays), leaving the window to
+the views; the time panel starts on the ``log_time`` timeline.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import rerun.blueprint as rrb
@@ -29,12 +33,33 @@ def _row(views: list[Any]) -> Any:
     return rrb.Grid(*views, grid_columns=math.ceil(math.sqrt(len(views))))
 
 
-def make_blueprint(plan: ScenePlan, *, timeline: str = LOG_TIME,
-                   follow: bool = False) -> rrb.Blueprint:
-    """Blueprint of a planned scene; ``follow`` keeps the time cursor on the newest data."""
-    time_panel = rrb.TimePanel(timeline=timeline, play_state="following" if follow else None)
-    cameras = [rrb.Spatial2DView(origin=cam.entity, name=cam.namespace)
-               for cam in plan.cameras.values() if cam.viewable]
+def make_blueprint(plan: ScenePlan, *, timeline: str = LOG_TIME, follow: bool = False,
+                   recordings: Sequence[tuple[str, ScenePlan]] = ()) -> rrb.Blueprint:
+    """Blueprint of a planned scene; ``follow`` keeps the time cursor on the newest data.
+    ``recordings``: (name, plan) of several recordings that share the application id (so
+    this one layout): a tab each, named after its log, laid out from its own plan."""
+    time_panel = rrb.TimePanel(timeline=timeline, play_state="following" if follow else None,
+                               state="collapsed")
+    panels = (time_panel, rrb.BlueprintPanel(state="collapsed"),
+              rrb.SelectionPanel(state="collapsed"))
+    if recordings:
+        tabs = [tab for name, part in recordings if (tab := _layout(part, name)) is not None]
+        root = rrb.Tabs(*tabs) if tabs else None
+    else:
+        root = _layout(plan)
+    if root is None:  # nothing camlog lays out: let the viewer choose
+        return rrb.Blueprint(*panels, auto_views=True)
+    return rrb.Blueprint(root, *panels)
+
+
+def _layout(plan: ScenePlan, name: str | None = None) -> Any:
+    """The views of one plan in rows (None when there is nothing to lay out)."""
+    by_frame: dict[str, list[Any]] = {}
+    for cam in plan.cameras.values():
+        if cam.viewable:  # cameras without a frame_id each get a cell of their own
+            cell = by_frame.setdefault(cam.frame_id or cam.namespace, [])
+            cell.append(rrb.Spatial2DView(origin=cam.entity, name=cam.namespace))
+    cameras = [cell[0] if len(cell) == 1 else rrb.Tabs(*cell) for cell in by_frame.values()]
     rectified = [rrb.Spatial2DView(origin=entity, name=entity.removeprefix("rectified"))
                  for entity in plan.rectified]
     rectified += [rrb.Spatial2DView(origin=entity, name=entity.removeprefix("processed"))
@@ -53,6 +78,6 @@ def make_blueprint(plan: ScenePlan, *, timeline: str = LOG_TIME,
         if views:
             rows.append(_row(views))
             shares.append(share)
-    if not rows:  # nothing camlog lays out: let the viewer choose
-        return rrb.Blueprint(time_panel, auto_views=True)
-    return rrb.Blueprint(rrb.Vertical(*rows, row_shares=shares), time_panel)
+    if not rows:
+        return None
+    return rrb.Vertical(*rows, row_shares=shares, name=name)

@@ -157,10 +157,13 @@ def view_logs(
         sessions = [whole] if len(groups) == 1 else [
             _session([readers[i] for i in group], [chosen[i] for i in group], start_s, end_s)
             for group in groups if any(chosen[i] for i in group)]
-        # one layout for every recording: they share the application id
         if say is not None:
             say(size_note(sessions, options))
-        destination = Destination(count=len(sessions), blueprint=make_blueprint(whole.plan),
+        # one layout for every recording (they share the application id): a tab each
+        tabs = [] if len(sessions) == 1 else [
+            (", ".join(_name(r.path) for r in s.readers), s.plan) for s in sessions]
+        blueprint = make_blueprint(whole.plan, recordings=tabs)
+        destination = Destination(count=len(sessions), blueprint=blueprint,
                                   output=output, connect=connect, spawn=spawn, bind=bind,
                                   port=port, overwrite=overwrite, inputs=paths)
         bar = stack.enter_context(tqdm(total=sum(s.total for s in sessions), unit="msg",
@@ -182,6 +185,11 @@ def view_logs(
     return ViewResult(output, sum(n for _, n in loggers), dict(counts),
                       cameras, skipped, warnings, duplicates, time.perf_counter() - started,
                       recordings=len(sessions))
+
+
+def _name(path: Path | str) -> str:
+    """A log's file name (the last part of a URI)."""
+    return path.name if isinstance(path, Path) else path.rstrip("/").rsplit("/", 1)[-1]
 
 
 #: raw images above this size make a JPEG quality worth suggesting
