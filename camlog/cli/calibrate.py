@@ -4,12 +4,16 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from processors.calibration.board import DEFAULT_DICTIONARY, PATTERNS
 
 from ..errors import UsageError
 from .args import name, non_negative, output_path, positive
+
+if TYPE_CHECKING:
+    from processors.calibration.board import Board
+    from processors.calibration.solve import CalibrationOptions
 
 #: ROS distortion_model names (and OpenCV's "fisheye" for equidistant)
 MODELS = ("plumb_bob", "rational_polynomial", "equidistant", "fisheye")
@@ -110,16 +114,26 @@ def _truth_error(camera: Any) -> str:
             f"{u.true_error_worst_px:.3f} px")
 
 
-def run(args: argparse.Namespace) -> int:
-    """Calibrate (or ``--check``) and print the key figures."""
+def board_and_options(args: argparse.Namespace) -> tuple[Board, CalibrationOptions]:
+    """The target and the solver options the ``calibrate`` arguments ask for."""
     from processors.calibration.board import make_board
     from processors.calibration.solve import CalibrationOptions, tangential_mode
 
+    board = make_board(args.size, args.square, args.pattern, marker_m=args.marker,
+                       dictionary=args.dictionary)
+    options = CalibrationOptions(
+        fix_principal_point=args.fix_principal_point, fix_aspect_ratio=args.fix_aspect_ratio,
+        tangential=tangential_mode(args.zero_tangent_dist, args.tangent_dist),
+        k_coefficients=args.k_coefficients, model=args.model)
+    return board, options
+
+
+def run(args: argparse.Namespace) -> int:
+    """Calibrate (or ``--check``) and print the key figures."""
     from ..calibrate.check import check_log
     from ..calibrate.flow import calibrate_log
 
-    board = make_board(args.size, args.square, args.pattern, marker_m=args.marker,
-                       dictionary=args.dictionary)
+    board, options = board_and_options(args)
     cameras = cameras_from(args)
     progress = False if args.no_progress else None
     if args.check:
@@ -130,10 +144,6 @@ def run(args: argparse.Namespace) -> int:
                            progress=progress, recover=args.recover)
         print("\n".join(result.lines()))
         return 0
-    options = CalibrationOptions(
-        fix_principal_point=args.fix_principal_point, fix_aspect_ratio=args.fix_aspect_ratio,
-        tangential=tangential_mode(args.zero_tangent_dist, args.tangent_dist),
-        k_coefficients=args.k_coefficients, model=args.model)
     output = args.output or args.log.with_name(f"{args.log.stem}_calibration")
     run_ = calibrate_log(
         args.log, board=board, cameras=cameras, output_dir=output, options=options,

@@ -1,0 +1,162 @@
+"""A calibration against the simulator's truth, and a plain OpenCV script on the same detections.
+
+Both camlog's result and the OpenCV reference are reduced to the same :class:`Accuracy`:
+focal length error (%), principal point error (px), the max projection difference against the
+true model over the image with a 16 px margin (camera frames aligned by a rotation, as mrcal's
+projection difference with an implied rotation; a fisheye only within 80° of its axis) and,
+for a stereo pair, the error of the rotation between the cameras (degrees) and of the baseline
+(%). Every figure is the worst over the cameras.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from camlog.calibrate.flow import CalibrationRun
+from processors.calibration.board import Board
+from processors.calibration.validation import projection_difference
+from replay.camera import CameraModel
+from replay.messages import F64
+
+MARGIN_PX = 16
+STEP_PX = 8
+#: a fisheye is compared within this angle of its optical axis
+FISHEYE_AXIS_DEG = 80.0
+
+
+@dataclass(frozen=True)
+class Accuracy:
+    """Errors against the truth, worst over the cameras; ``max_difference_px`` per camera."""
+
+    focal_percent: float  # signed, the largest |fx| or |fy| error
+    cx_px: float
+    cy_px: float
+    max_difference_px: list[float]
+    rotation_deg: float | None = None
+    baseline_percent: float | None = None
+
+
+def compared_pixels(truth: CameraModel) -> F64:
+    """The grid pixels ``(N, 2)`` the projection difference is taken over."""
+    us, vs = np.meshgrid(np.arange(MARGIN_PX, truth.width - MARGIN_PX + 1, STEP_PX),
+                         np.arange(MARGIN_PX, truth.height - MARGIN_PX + 1, STEP_PX))
+    pixels = np.column_stack([us.ravel(), vs.ravel()]).astype(np.float64)
+    if truth.is_fisheye:
+        rays = truth.pixel_rays(pixels)
+        angle = np.degrees(np.arccos(np.clip(rays[:, 2] / np.linalg.norm(rays, axis=1),
+                                             -1.0, 1.0)))
+        pixels = pixels[np.isfinite(angle) & (angle <= FISHEYE_AXIS_DEG)]
+    return pixels
+
+
+def max_difference_px(model: CameraModel, truth: CameraModel) -> float:
+    """Max distance between where ``truth`` and ``model`` image the same ray (aligned)."""
+    return float(np.nanmax(projection_difference(model, truth, compared_pixels(truth))))
+
+
+def rotation_deg(a: F64, b: F64) -> float:
+    """Angle (degrees) of the rotation between the 3x3 rotations ``a`` and ``b``."""
+    cos = (np.trace(a @ b.T) - 1.0) / 2.0
+    return math.degrees(math.acos(max(-1.0, min(1.0, float(cos)))))
+
+
+def accuracy(models: list[CameraModel], truths: list[CameraModel],
+             right_from_left: F64 | None = None, true_right_from_left: F64 | None = None
+             ) -> Accuracy:
+    """The errors of ``models`` against ``truths`` (and of a stereo rig, with both given)."""
+    focal = max((100 * (m.k[i, i] - t.k[i, i]) / t.k[i, i] for m, t in zip(models, truths,
+                                                                           strict=True)
+                 for i in (0, 1)), key=abs)
+    cx = max((m.k[0, 2] - t.k[0, 2] for m, t in zip(models, truths, strict=True)), key=abs)
+    cy = max((m.k[1, 2] - t.k[1, 2] for m, t in zip(models, truths, strict=True)), key=abs)
+    rotation = baseline = None
+    if right_from_left is not None and true_right_from_left is not None:
+        rotation = rotation_deg(right_from_left[:3, :3], true_right_from_left[:3, :3])
+        true_b = float(np.linalg.norm(true_right_from_left[:3, 3]))
+        baseline = 100 * (float(np.linalg.norm(right_from_left[:3, 3])) - true_b) / true_b
+    return Accuracy(float(focal), float(cx), float(cy),
+                    [max_difference_px(m, t) for m, t in zip(models, truths, strict=True)],
+                    rotation, baseline)
+
+
+def true_models(run: CalibrationRun) -> list[CameraModel]:
+    """The simulator's camera models of a run's cameras."""
+    out = []
+    for camera in run.cameras:
+        assert camera.truth is not None, "the log has no ground truth"
+        out.append(camera.truth.model())
+    return out
+
+
+def true_right_from_left(run: CalibrationRun) -> F64 | None:
+    """The simulator's ``right_from_left`` (4, 4) of a stereo run (None: mono)."""
+    if len(run.cameras) != 2:
+        return None
+    left, right = (c.truth for c in run.cameras)
+    assert left is not None and right is not None, "the log has no ground truth"
+    return np.asarray(np.linalg.inv(right.world_from_camera) @ left.world_from_camera,
+                      dtype=np.float64)
+
+
+def camlog_accuracy(run: CalibrationRun) -> Accuracy:
+    """camlog's result against the truth."""
+    return accuracy([c.solution.result.model for c in run.cameras], true_models(run),
+                    run.stereo.result.right_from_left if run.stereo is not None else None,
+                    true_right_from_left(run))
+
+
+def _calibrate_one(objects: list[F64], images: list[F64], size: tuple[int, int],
+                   truth: CameraModel) -> CameraModel:
+    """``cv2.calibrateCamera`` (``cv2.fisheye.calibrate`` for a fisheye) with default flags
+    in the true lens model."""
+    if truth.is_fisheye:
+        _rms, k, d, _r, _t = cv2.fisheye.calibrate(
+            [o.reshape(1, -1, 3) for o in objects], [i.reshape(1, -1, 2) for i in images],
+            size, np.zeros((3, 3)), np.zeros(4),
+            flags=cv2.CALIB_RECOMPUTE_EXTRINSIC | cv2.CALIB_FIX_SKEW)
+        return CameraModel(size[0], size[1], np.asarray(k, dtype=np.float64), "equidistant",
+                           np.asarray(d, dtype=np.float64).reshape(-1)[:4])
+    rational = truth.distortion_model == "rational_polynomial"
+    _rms, k, d, _r, _t = cv2.calibrateCamera(
+        [o.astype(np.float32) for o in objects], [i.astype(np.float32) for i in images],
+        size, None, None, flags=cv2.CALIB_RATIONAL_MODEL if rational else 0)
+    return CameraModel(size[0], size[1], np.asarray(k, dtype=np.float64),
+                       truth.distortion_model,
+                       np.asarray(d, dtype=np.float64).reshape(-1)[:8 if rational else 5])
+
+
+def opencv_reference(run: CalibrationRun, board: Board) -> Accuracy:
+    """A plain OpenCV script on the same detections: each camera calibrated from every
+    detected frame (every distinct frame whose board passed detection), then for a pair
+    ``cv2.stereoCalibrate`` with its default flags (intrinsics fixed) on the pairs camlog
+    paired."""
+    points = board.points_in_board()
+    truths = true_models(run)
+    models = []
+    for camera, truth in zip(run.cameras, truths, strict=True):
+        views = camera.views
+        found = [f.detection for f in views.frames if f.candidate and f.detection is not None]
+        models.append(_calibrate_one([points[d.ids] for d in found],
+                                     [d.corners_px for d in found], views.size, truth))
+    if len(models) == 1:
+        return accuracy(models, truths)
+    rig = run.solved.rig
+    objects, lefts, rights = [], [], []
+    for lv, rv in rig.pairs:
+        left, right = rig.views[lv], rig.views[rv]
+        shared, li, ri = np.intersect1d(left.point_ids, right.point_ids, return_indices=True)
+        if len(shared) >= 4:
+            objects.append(points[shared].astype(np.float32))
+            lefts.append(left.corners_px[li].astype(np.float32))
+            rights.append(right.corners_px[ri].astype(np.float32))
+    left_m, right_m = models
+    _rms, _k1, _d1, _k2, _d2, rotation, translation, _e, _f = cv2.stereoCalibrate(
+        objects, lefts, rights, left_m.k, left_m.d, right_m.k, right_m.d,
+        (left_m.width, left_m.height))
+    right_from_left = np.eye(4)
+    right_from_left[:3, :3], right_from_left[:3, 3] = rotation, np.ravel(translation)
+    return accuracy(models, truths, right_from_left, true_right_from_left(run))
