@@ -10,6 +10,7 @@ rectified image. It also hands back the rectified images of one joint view for t
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -28,6 +29,7 @@ from replay.topics import CALIBRATION_SUMMARY, CameraTopics
 
 from .pixels import TopicFrames
 from .solving import CalibratedCamera, StereoSolution
+from .views import Frame
 
 __all__ = ["Evidence", "write_evidence"]
 
@@ -44,12 +46,27 @@ def _rectify_maps(info: CameraInfo) -> tuple[np.ndarray, np.ndarray]:
     return rectify_maps(info, cv2.CV_16SC2)
 
 
+def hold_ends(frames: Sequence[Frame], view_of: Mapping[int, int]) -> dict[int, int]:
+    """Per view (named by its first frame's index), the stamp of the last frame it covers:
+    the frames of its held pose and their byte-for-byte repeats."""
+    ends: dict[int, int] = {}
+    current: int | None = None
+    for frame in frames:
+        if not frame.duplicate:
+            current = view_of.get(frame.index, frame.index)
+        if current is not None:
+            ends[current] = frame.stamp_ns
+    return ends
+
+
 def write_evidence(reader: LogReader, path: Path, cameras: list[CalibratedCamera], *,
                    board: Board, stereo: StereoSolution | None, summary: CalibrationSummary,
                    progress: bool | None) -> Evidence:
     """Write ``path``: the log of ``reader`` plus the calibration's annotated topics."""
     by_topic = {c.views.source.image_topic: c for c in cameras}
     counters = dict.fromkeys(by_topic, 0)
+    ends = {c.views.source.namespace: hold_ends(c.views.frames, c.solution.view_of)
+            for c in cameras}
     maps = {c.views.source.namespace: _rectify_maps(c.camera_info) for c in cameras} \
         if stereo is not None else {}
     # frames of the joint views, per camera, and the one the report shows
@@ -111,7 +128,8 @@ def write_evidence(reader: LogReader, path: Path, cameras: list[CalibratedCamera
                 outliers = np.flatnonzero(~inliers).tolist() if inliers is not None else []
                 writer.write(topics.residuals, ViewResiduals(
                     stamp, image.frame_id, rms, np.round(corners, 4),
-                    np.round(result.residuals_px[frame.index], 5), outliers).to_message(),
+                    np.round(result.residuals_px[frame.index], 5), outliers,
+                    until_ns=ends[ns].get(frame.index)).to_message(),
                     log_time_ns=log_time)
         writer.write(CALIBRATION_SUMMARY, summary.to_message(indent=1),
                      log_time_ns=reader.end_ns or 0)

@@ -53,6 +53,13 @@ class CameraFrames:
         """Note an overlay that must go when a later frame arrives."""
         self.live[entity] = stamp_ns
 
+    def hold(self, stamp_ns: int, until_ns: int) -> None:
+        """Keep the overlays drawn for the frame at ``stamp_ns`` until the frames after
+        ``until_ns`` (a held pose's view covers its frames, noisy or not)."""
+        for entity, shown in self.live.items():
+            if shown == stamp_ns:
+                self.live[entity] = max(shown, until_ns)
+
     def stale(self, stamp_ns: int, image_key: bytes | None = None) -> list[str]:
         """Overlays of frames older than ``stamp_ns``; forgotten once returned. An image
         whose ``image_key`` (content) repeats the last one's is the same view (a held pose):

@@ -2,15 +2,15 @@
 
 Every message is logged on two timelines: ``log_time`` (when it was stored) and
 ``header_stamp`` (its header, absent for messages without one). Images are decimated per
-camera (``every``); an overlay is dropped with the frame it belongs to (same stamp).
-Overlays are per frame: a camera's next image clears those of older frames, unless it
-repeats the last image byte for byte (a held pose keeps its corners on all its frames).
-Overlay topics with a message for every image of their camera (ground truth, processed
-every frame) need no clearing: the next frame's message replaces them.
+camera (``every``); an overlay is dropped with the frame it belongs to (same stamp). A
+camera's next image clears the overlays of older frames, unless it repeats the last image
+byte for byte or a calibration view covers the frames up to a later stamp (a held pose keeps
+its corners on all its frames); topics with a message for every image of their camera
+(ground truth, processed every frame) need no clearing: the next message replaces them.
 Camera_info is decoded only when its bytes (minus the stamp) change. With a JPEG quality,
 images are encoded on worker threads (OpenCV releases the GIL) while the next messages are
-read; every log call still reaches rerun in message order. Frames that do not decode (a cut
-JPEG, video before its first keyframe) are counted per topic and reported."""
+read, and reach rerun in message order. Frames that do not decode (a cut JPEG, video
+before its first keyframe) are counted per topic and reported."""
 
 from __future__ import annotations
 
@@ -190,8 +190,6 @@ class SceneLogger:
         if not dense:
             cam.frames.drawn(entity, stamp_ns)
 
-    # --- handlers --------------------------------------------------------------------------
-
     def _image(self, raw: RawMessage, route: Route) -> None:
         cam = self.cameras[route.namespace]
         if raw.topic != cam.plan.image_topic:
@@ -307,6 +305,8 @@ class SceneLogger:
             self._overlay(raw, cam, f"{base}/status", view.stamp_ns, rr.Boxes2D(
                 mins=[[0, 0]], sizes=[[width, height]], colors=[GREEN],
                 labels=[f"used: view RMS {view.rms_px:.3f} px (residuals ×{scale:g})"]))
+        if view.until_ns is not None:  # a held pose: the overlays stay on all its frames
+            cam.frames.hold(view.stamp_ns, view.until_ns)
 
     def _series(self, raw: RawMessage, route: Route) -> None:
         message = self._decode(raw)

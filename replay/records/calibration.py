@@ -39,7 +39,8 @@ __all__ = [
 class ViewResiduals(JsonRecord):
     """One used calibration view: detected ``corners_px`` (N, 2) and ``residuals_px`` (N, 2),
     observed minus reprojected, the view's RMS over its inlier corners and the indices of
-    the corners left out as outliers."""
+    the corners left out as outliers. A held pose's view is stamped at its first frame;
+    ``until_ns`` is the stamp of the last frame it covers (None: that frame alone)."""
 
     what = "residuals record"
 
@@ -49,6 +50,7 @@ class ViewResiduals(JsonRecord):
     corners_px: F64
     residuals_px: F64
     outliers: list[int] = field(default_factory=list)
+    until_ns: int | None = None
 
     def __post_init__(self) -> None:
         corners = np.asarray(self.corners_px, dtype=np.float64).reshape(-1, 2)

@@ -89,7 +89,9 @@ def test_residuals_record_checks_its_shapes() -> None:
     np.testing.assert_array_equal(again.residuals_px, view.residuals_px)
     assert json.loads(view.to_message().data) == {
         "stamp_ns": 5, "frame_id": "f", "rms_px": 0.1, "corners_px": [[1, 2], [3, 4]],
-        "residuals_px": [[0.1, 0], [0, 0.2]], "outliers": [1]}
+        "residuals_px": [[0.1, 0], [0, 0.2]], "outliers": [1], "until_ns": None}
+    held = ViewResiduals(5, "f", 0.1, np.zeros((1, 2)), np.zeros((1, 2)), until_ns=70)
+    assert ViewResiduals.from_message(held.to_message()).until_ns == 70
     with pytest.raises(RecordError, match="1 corners but 2 residuals"):
         ViewResiduals.from_json_text(json.dumps({
             "stamp_ns": 5, "frame_id": "f", "rms_px": 0.1, "corners_px": [[1, 2]],
