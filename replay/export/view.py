@@ -224,16 +224,17 @@ def _window_share(session: ExportSession, reader: LogReader) -> float:
 
 
 def size_note(sessions: Sequence[ExportSession], options: LoggerOptions) -> str:
-    """One line: about how many bytes of images a recording of ``sessions`` holds, and a
-    hint at ``--jpeg-quality`` when raw images would pass :data:`LARGE_BYTES`."""
+    """One line: about how many bytes of images a recording of ``sessions`` holds (before
+    rerun's own compression, which shrinks clean synthetic images far more than noisy real
+    ones), and a hint at ``--jpeg-quality`` when raw images would pass :data:`LARGE_BYTES`."""
     total, raw = (sum(pair) for pair in zip(*(image_bytes(s, options.every) for s in sessions),
                                             strict=True))
-    note = f"images to write: about {_size(total)}"
+    note = f"images to write: about {_size(total)} before compression"
     if options.jpeg_quality is not None and raw:
-        note += f" before the raw ones are encoded as JPEG (quality {options.jpeg_quality})"
+        note += f" (the raw ones as JPEG of quality {options.jpeg_quality})"
     elif raw > LARGE_BYTES:
-        note += (f" ({_size(raw)} raw images: --jpeg-quality 90 stores them as JPEG, "
-                 "several times smaller; --every N keeps every N-th frame)")
+        note += (f"; {_size(raw)} of raw images: --jpeg-quality 90 stores them as JPEG, "
+                 "several times smaller, --every N keeps every N-th frame")
     return note
 
 

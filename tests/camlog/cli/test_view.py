@@ -18,7 +18,7 @@ def test_view_writes_an_rrd_beside_the_log(red_processed_log: Path, tmp_path: Pa
     assert main(["view", str(log), "--no-progress"]) == 0
     out, err = capsys.readouterr()
     # 40 raw 320x240 rgb8 images of 230400 bytes each, announced before writing
-    assert out.splitlines()[0] == "images to write: about 9 MB"
+    assert out.splitlines()[0] == "images to write: about 9 MB before compression"
     assert out.splitlines()[1].startswith("logged 202 messages (40 images, 2 cameras: "
                                           "/stereo_camera/left, /stereo_camera/right)")
     assert out.splitlines()[-1] == f"wrote {tmp_path / 'run.rrd'}" and err == ""
@@ -92,9 +92,10 @@ def test_view_suggests_jpeg_for_large_raw_images(red_log: Path, tmp_path: Path,
     monkeypatch.setattr(replay.export.view, "LARGE_BYTES", 5_000_000)  # this log: 9.2 MB
     assert main(["view", str(red_log), "-o", str(tmp_path / "a.rrd"), "--no-progress"]) == 0
     first = capsys.readouterr().out.splitlines()[0]
-    assert first == ("images to write: about 9 MB (9 MB raw images: --jpeg-quality 90 stores "
-                     "them as JPEG, several times smaller; --every N keeps every N-th frame)")
+    assert first == ("images to write: about 9 MB before compression; 9 MB of raw images: "
+                     "--jpeg-quality 90 stores them as JPEG, several times smaller, --every N "
+                     "keeps every N-th frame")
     assert main(["view", str(red_log), "-o", str(tmp_path / "b.rrd"), "--every", "4",
                  "--jpeg-quality", "80", "--no-progress"]) == 0
     assert capsys.readouterr().out.splitlines()[0] == (
-        "images to write: about 2 MB before the raw ones are encoded as JPEG (quality 80)")
+        "images to write: about 2 MB before compression (the raw ones as JPEG of quality 80)")

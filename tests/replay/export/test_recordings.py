@@ -4,16 +4,19 @@ and dataframe API."""
 
 from __future__ import annotations
 
+import time
+import warnings
 from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
 from rerun.chunk import RrdReader
+from rerun.error_utils import RerunWarning
 
 from replay import Image, Text, open_writer
 from replay.camera import CameraModel
 from replay.export import view_logs
-from tests.rrd import rerun_cli
+from tests.rrd import Receiver, rerun_cli
 
 T0 = 1_700_000_000_000_000_000
 HOUR_NS = 3600 * 10**9
@@ -93,3 +96,39 @@ def test_overlapping_logs_of_one_camera_share_a_recording(tmp_path: Path) -> Non
     result = view_logs([first, more], output=out, progress=False)
     assert result.recordings == 1 and result.messages == 4 + 3
     assert len(RrdReader(out).recordings()) == 1 and result.cameras == ["/front"]
+
+
+def test_a_viewer_receives_each_recording(tmp_path: Path) -> None:
+    morning = camera_log(tmp_path / "morning.mcap", "/front", T0)
+    other_rig = camera_log(tmp_path / "rig.mcap", "/rear", T0)
+    receiver = Receiver(tmp_path)  # a headless rerun that saves what it receives
+    try:
+        result = view_logs([morning, other_rig], connect=receiver.url, progress=False)
+        deadline, received = time.monotonic() + 30, received_images(receiver.path)
+        while len(received) < 2 and time.monotonic() < deadline:
+            time.sleep(0.3)
+            received = received_images(receiver.path)
+    finally:
+        receiver.stop()
+    assert result.recordings == 2 and result.output is None
+    # two recordings (application camlog), one camera each, three frames each
+    assert sorted(received.values()) == [("camlog", "/world/front/image", 3),
+                                         ("camlog", "/world/rear/image", 3)]
+
+
+def received_images(path: Path) -> dict[str, tuple[str, str, int]]:
+    """recording id -> (application id, image entity, frames) of an .rrd being written."""
+    out = {}
+    with warnings.catch_warnings():  # the file has no footer while it is written
+        warnings.filterwarnings("ignore", "RRD file has no footer", RerunWarning)
+        try:
+            reader = RrdReader(path)
+            for entry in reader.recordings():
+                for chunk in reader.stream(store=entry):
+                    if chunk.entity_path.endswith("/image"):
+                        _, _, frames = out.get(entry.recording_id, ("", "", 0))
+                        out[entry.recording_id] = (entry.application_id, chunk.entity_path,
+                                                   frames + chunk.num_rows)
+        except (OSError, ValueError, RuntimeError):
+            return {}
+    return out
