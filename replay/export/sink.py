@@ -113,7 +113,8 @@ class RecordingSink:
     def __init__(self, *, output: Path | None = None, connect: str | None = None,
                  spawn: bool = False, overwrite: bool = False, blueprint: Any = None,
                  bind: str = LOCALHOST, port: int = DEFAULT_PORT,
-                 application_id: str = APPLICATION_ID, inputs: Iterable[Path] = ()) -> None:
+                 application_id: str = APPLICATION_ID, inputs: Iterable[Path] = (),
+                 recording_id: str | None = None) -> None:
         chosen = sum((output is not None, connect is not None, spawn))
         if chosen != 1:
             raise ViewerError("choose one destination: -o OUT.rrd, --connect URL or --spawn")
@@ -126,7 +127,7 @@ class RecordingSink:
         self._atomic = AtomicOutput(output, overwrite=overwrite, inputs=inputs,
                                     what="a rerun recording") if output is not None else None
         self._blueprint = blueprint
-        self.rec = rr.RecordingStream(application_id, recording_id=uuid.uuid4())
+        self.rec = rr.RecordingStream(application_id, recording_id=recording_id or uuid.uuid4())
         self._stalled: RuntimeError | None = None
 
     def __enter__(self) -> Self:
@@ -220,6 +221,7 @@ class Destination:
         self._bind, self._port, self._inputs = bind, port, list(inputs)
         self._parts: list[Path] = []
         self._made = 0
+        self._base = uuid.uuid4()
         self._first: RecordingSink | None = None
         self._atomic: AtomicOutput | None = None
         if count > 1 and output is not None:
@@ -237,17 +239,21 @@ class Destination:
         """The sink of the next recording (enter it to send)."""
         index, self._made = self._made, self._made + 1
         blueprint = self._blueprint if index == 0 else None  # one per application id
+        # ids that sort in order (rrd merge orders recordings by id; the viewer opens the
+        # first, which the layout's first tab shows)
+        recording_id = f"{self._base}-{index:03d}" if self._count > 1 else None
         if self._atomic is not None:
             part = self._atomic.temp / f"{index}.rrd"
             self._parts.append(part)
-            return RecordingSink(output=part, blueprint=blueprint)
+            return RecordingSink(output=part, blueprint=blueprint, recording_id=recording_id)
         if index > 0 and self._first is not None and self._first.url is not None:
             # the viewer the first recording started (or connected to)
-            return RecordingSink(connect=self._first.url, blueprint=blueprint)
+            return RecordingSink(connect=self._first.url, blueprint=blueprint,
+                                 recording_id=recording_id)
         sink = RecordingSink(
             output=self._output, connect=self._connect, spawn=self._spawn,
             overwrite=self._overwrite, blueprint=self._blueprint, bind=self._bind,
-            port=self._port, inputs=self._inputs)
+            port=self._port, inputs=self._inputs, recording_id=recording_id)
         self._first = self._first or sink
         return sink
 

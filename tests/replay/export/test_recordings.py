@@ -63,6 +63,8 @@ def test_unrelated_logs_keep_their_own_recordings(tmp_path: Path) -> None:
     entries = RrdReader(out).recordings()
     assert {e.application_id for e in entries} == {"camlog"}
     assert len({e.recording_id for e in entries}) == 3
+    # in input order: the viewer opens the first log's recording, the layout's first tab
+    assert image_stamps(out)[f"{entries[0].recording_id} /world/front/image"][0] == T0
     stamps = sorted((times[0], key.split()[1], times) for key, times in image_stamps(out).items())
     # each log on its own: the evening's frames do not stretch the morning's timeline
     assert [(entity, times) for _, entity, times in stamps] == [
