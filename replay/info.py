@@ -8,6 +8,8 @@ their encoding and size. :func:`format_summary` renders the result as text.
 
 from __future__ import annotations
 
+import contextlib
+import io
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -223,7 +225,9 @@ def _describe_by_schema(raw: RawMessage) -> str | None:
     from mcap_ros2.decoder import DecoderFactory
 
     try:
-        decode = DecoderFactory().decoder_for(CDR, schema)
+        # its parser prints a damaged definition's line on stderr before raising
+        with contextlib.redirect_stderr(io.StringIO()):
+            decode = DecoderFactory().decoder_for(CDR, schema)
         msg = decode(bytes(raw.data)) if decode is not None else None
         if msg is None:
             return None

@@ -15,6 +15,7 @@ from ..errors import LogFormatError, LogReadError
 from ..format_names import WRITE_FORMATS
 from .base import FrameRecord, LogReader, LogWriter, RawMessage, Record, TopicInfo
 from .mcap import MAGIC, McapLogReader, is_mcap
+from .rosbag2_metadata import BagMetadata, count_warnings, read_metadata
 from .rosbag2_reindex import lone_storage
 
 __all__ = [
@@ -58,7 +59,7 @@ def _ros1_writer(path: Path, **options: Any) -> LogWriter:
 
 
 def _rosbag2_reader(path: Path, **options: Any) -> LogReader:
-    from .rosbags_formats import Rosbag2LogReader
+    from .rosbag2_reader import Rosbag2LogReader
 
     return Rosbag2LogReader(path, **options)
 
@@ -139,7 +140,45 @@ def _open(path: Path, *, recover: bool) -> LogReader:
         return reader
     if fmt == "rosbag2" and path.is_file():
         path = path.parent
+    if fmt == "rosbag2" and (path / "metadata.yaml").exists():
+        metadata = read_metadata(path)
+        storage = _mcap_storage(path, metadata)
+        if storage is not None:
+            return _rosbag2_mcap(path, storage, metadata, recover=recover)
     return READERS[fmt](path, recover=recover)
+
+
+def _mcap_storage(folder: Path, metadata: BagMetadata | str) -> Path | None:
+    """The one MCAP storage file of a rosbag2 folder that camlog's MCAP reader can read
+    (None: split over several files, per-message compression or SQLite storage)."""
+    if isinstance(metadata, str):
+        storage = lone_storage(folder)
+        return storage if storage is not None and storage.suffix == ".mcap" else None
+    if metadata.storage != "mcap" or metadata.message_compression or len(metadata.files) != 1:
+        return None
+    storage = folder / metadata.files[0]
+    return storage if storage.is_file() else None
+
+
+def _rosbag2_mcap(folder: Path, storage: Path, metadata: BagMetadata | str, *,
+                  recover: bool) -> LogReader:
+    """A rosbag2 folder with MCAP storage, read by the MCAP reader (CRCs checked, lengths
+    bounded, ``recover`` past damaged chunks); counts come from the storage, with a warning
+    where metadata.yaml disagrees or does not parse."""
+    try:
+        file = storage.open("rb")
+    except OSError as err:
+        raise LogReadError(f"cannot open {storage}: {err.strerror}") from None
+    reader = McapLogReader(folder, file=file, recover=recover)
+    reader.format_name = "rosbag2 (mcap)"
+    reader.metadata.pop("rosbag2", None)  # the storage's copy of metadata.yaml
+    if isinstance(metadata, str):
+        reader.warnings.append(f"{folder}: {metadata}; read its storage file {storage.name} "
+                               "directly")
+    else:
+        reader.warnings += count_warnings(
+            folder, metadata, {name: info.count for name, info in reader.topics.items()})
+    return reader
 
 
 def _open_remote(uri: str, *, recover: bool) -> LogReader:

@@ -13,7 +13,7 @@ import inspect
 import struct
 from collections.abc import Iterable, Iterator
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, cast
 
 import zstandard
 from mcap.exceptions import McapError
@@ -24,6 +24,8 @@ from mcap.stream_reader import StreamReader, breakup_chunk
 from ..errors import LogReadError
 from ..wire import CDR, ROS1, normalize_msgtype
 from .base import LogReader, RawMessage, TopicInfo
+from .bounded import BoundedFile
+from .mcap_checks import check_chunk_size, summary_problem
 from .mcap_index import channel_spans
 
 MAGIC = b"\x89MCAP0\r\n"
@@ -42,6 +44,8 @@ _DAMAGE = (
     struct.error,
     ValueError,
     MemoryError,
+    OverflowError,
+    RuntimeError,  # lz4
     IndexError,
     KeyError,
 )
@@ -73,7 +77,14 @@ class McapLogReader(LogReader):
                 file = Path(path).open("rb")  # noqa: SIM115 (the reader owns it)
             except OSError as err:
                 raise LogReadError(f"cannot open {path}: {err.strerror}") from None
-        self._file: IO[bytes] = file
+        try:
+            # a damaged length field cannot make the mcap library allocate past the file
+            bounded = BoundedFile(file)
+        except OSError as err:
+            file.close()
+            raise LogReadError(f"cannot read {path}: {err.strerror or err}") from None
+        self._file = cast(IO[bytes], bounded)  # it has what the mcap library uses of IO
+        self._file_size = bounded.size
         self._recover = recover
         self._summary: Any = None
         self._valid_until: int | None = None  # streaming: stop before this byte offset
@@ -95,6 +106,11 @@ class McapLogReader(LogReader):
                 summary = self._seeking_reader().get_summary()
             except (*_DAMAGE, OSError):  # OSError: too short to seek to a footer
                 summary = self._seeker = None
+        problem = None if summary is None else summary_problem(summary, self._file_size)
+        if problem is not None:
+            self.warnings.append(f"{self.path}: its summary {problem}; reading the whole file "
+                                 "instead")
+            summary = self._seeker = None
         if summary is not None and summary.chunk_indexes and summary.statistics is not None:
             self._summary = summary
             self._load_summary(summary)
@@ -166,6 +182,7 @@ class McapLogReader(LogReader):
         offset = len(MAGIC)
         seen: set[tuple[int, int, int, int, int]] = set()  # chunks read: a repeat is skipped
         lost: list[int] | None = None  # [messages] of a damaged chunk, from its indexes
+        orphans = 0  # messages of channels no channel record declared
         while True:
             if self._valid_until is not None and not learn and offset >= self._valid_until:
                 return
@@ -174,6 +191,7 @@ class McapLogReader(LogReader):
             except StopIteration:
                 if learn:
                     self._note_damage(offset, "file ends before its footer", truncated=True)
+                    self._note_orphans(orphans)
                 return
             except _DAMAGE as err:
                 if learn:
@@ -185,6 +203,7 @@ class McapLogReader(LogReader):
                         cut = offset < size
                         why = "file ends inside a record" if cut else "file ends before its footer"
                     self._note_damage(offset, why, truncated=at_end)
+                    self._note_orphans(orphans)
                 return
             start, offset = offset, self._file.tell()
             if isinstance(record, MessageIndex):
@@ -209,6 +228,7 @@ class McapLogReader(LogReader):
                     continue
                 seen.add(key)
                 try:
+                    check_chunk_size(record)
                     inner = list(breakup_chunk(record, validate_crc=True))
                 except _DAMAGE as err:
                     if not self._recover:
@@ -227,20 +247,27 @@ class McapLogReader(LogReader):
                         schemas[sub.id] = sub
                     elif isinstance(sub, Channel) and learn:
                         self._add_channel(sub, schemas)
-                yield from sorted(
-                    (m for m in inner if isinstance(m, Message)), key=lambda m: m.log_time
-                )
+                messages = [m for m in inner if isinstance(m, Message)]
+                known = [m for m in messages if m.channel_id in self._channels]
+                orphans += len(messages) - len(known)
+                yield from sorted(known, key=lambda m: m.log_time)
             elif isinstance(record, Message):
-                yield record
+                if record.channel_id in self._channels:
+                    yield record
+                else:
+                    orphans += 1
             elif isinstance(record, DataEnd | Footer):
+                if learn:
+                    self._note_orphans(orphans)
                 return
 
+    def _note_orphans(self, count: int) -> None:
+        if count:
+            self.warnings.append(f"{self.path}: skipped {count} messages of channels the file "
+                                 "does not declare (damaged records?)")
+
     def _size(self) -> int:
-        position = self._file.tell()
-        try:
-            return self._file.seek(0, 2)
-        finally:
-            self._file.seek(position)
+        return self._file_size
 
     def _note_damage(self, offset: int, why: str, *, truncated: bool) -> None:
         self._valid_until = offset
@@ -305,6 +332,8 @@ class McapLogReader(LogReader):
             return None
         spans: dict[str, tuple[int, int]] = {}
         for channel_id, (first, last) in by_channel.items():
+            if channel_id not in self._channels:
+                return None
             topic = self._channels[channel_id][0]
             known = spans.get(topic, (first, last))
             spans[topic] = (min(known[0], first), max(known[1], last))

@@ -14,7 +14,7 @@ import io
 import struct
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, BinaryIO
+from typing import Any, BinaryIO, cast
 
 from rosbags.rosbag1 import Writer as Writer1
 from rosbags.rosbag1.reader import (
@@ -26,6 +26,8 @@ from rosbags.rosbag1.reader import (
     read_uint32,
 )
 from rosbags.typesys.msg import normalize_msgtype
+
+from .bounded import BoundedFile
 
 
 @dataclass(frozen=True)
@@ -67,7 +69,9 @@ def reindexed_copy(path: Path, output: Path) -> Reindexed:
     connections: dict[int, Any] = {}
     count = 0
     try:
-        with path.open("rb") as src:
+        # lengths read from a damaged bag cannot allocate past its end
+        with BoundedFile(path.open("rb")) as bounded:
+            src = cast(BinaryIO, bounded)
             if src.readline() != b"#ROSBAG V2.0\n":
                 raise ReaderError("not a ROS1 v2.0 bag")
             _record(src)  # the bag header, padded

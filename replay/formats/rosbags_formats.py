@@ -1,150 +1,36 @@
-"""rosbag2 directories (mcap or sqlite3 storage) and ROS1 bags, through ``rosbags``."""
+"""ROS1 bags (read and written) and rosbag2 directories (written), through ``rosbags``."""
 
 from __future__ import annotations
 
 import contextlib
-import sqlite3
 import tempfile
-import traceback
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO, cast
 
-import zstandard
 from rosbags.rosbag1 import Reader as Reader1
 from rosbags.rosbag1 import Writer as Writer1
 from rosbags.rosbag1.reader import Header, ReaderError, RecordType
-from rosbags.rosbag2 import Reader as Reader2
 from rosbags.rosbag2 import Writer as Writer2
 from rosbags.rosbag2.enums import CompressionFormat, CompressionMode, StoragePlugin
 
 from ..errors import LogReadError, LogWriteError
 from ..wire import CDR, ROS1, ros1_typestore, ros2_typestore
-from .base import LogReader, LogWriter, RawMessage, TopicInfo
+from .base import LogWriter, RawMessage
+from .bounded import BoundedFile
+from .ros1_layout import layout_problem
 from .ros1_reindex import reindexed_copy
-from .rosbag2_reindex import ZSTD_MAGIC, lone_storage, rolled_back_copy
 from .rosbag2_storage import McapStorage, Sqlite3Storage
+from .rosbags_reader import RosbagsReader, first_line
 
 
-class _RosbagsReader(LogReader):
-    """Shared reading over a rosbags reader object."""
-
-    serialization = CDR
-
-    def __init__(self, path: Path, reader: Any) -> None:
-        super().__init__(path)
-        self._reader = reader
-        self._decompress = False  # zstd per message that rosbags does not know about
-        try:
-            reader.open()
-        except Exception as err:  # rosbags raises ReaderError, OSError, sqlite errors...
-            raise LogReadError(f"cannot read {path}: {_first_line(err)}") from None
-        counts: dict[str, int] = {}
-        self._by_topic: dict[str, list[Any]] = {}
-        for conn in reader.connections:
-            counts[conn.topic] = counts.get(conn.topic, 0) + conn.msgcount
-            self._by_topic.setdefault(conn.topic, []).append(conn)
-        for topic, conns in self._by_topic.items():
-            msgdef = getattr(conns[0].msgdef, "data", "") or ""
-            self.topics[topic] = TopicInfo(
-                topic, conns[0].msgtype, counts[topic], self.serialization, msgdef
-            )
-        self.message_count = reader.message_count
-        if self.message_count:
-            self.start_ns = reader.start_time
-            # rosbags' end_time lies one nanosecond after the last message
-            self.end_ns = max(reader.end_time - 1, reader.start_time)
-
-    def raw_messages(
-        self,
-        topics: Iterable[str] | None = None,
-        start_ns: int | None = None,
-        end_ns: int | None = None,
-    ) -> Iterator[RawMessage]:
-        conns = (
-            list(self._reader.connections)
-            if topics is None
-            else [c for t in topics for c in self._by_topic.get(t, [])]
-        )
-        if not conns:
-            return
-        try:
-            for conn, timestamp, data in self._reader.messages(
-                connections=conns, start=start_ns, stop=end_ns
-            ):
-                payload = zstandard.ZstdDecompressor().decompress(data) \
-                    if self._decompress else data
-                yield RawMessage(conn.topic, conn.msgtype, timestamp, payload, self.serialization)
-        except Exception as err:
-            raise LogReadError(f"cannot read {self.path}: {_first_line(err)}") from None
-
-    def close(self) -> None:
-        self._reader.close()
-
-
-class Rosbag2LogReader(_RosbagsReader):
-    """Reader for a rosbag2 directory (metadata.yaml + .mcap or .db3 files).
-
-    A directory without metadata.yaml (the recording was cut short) is read from its one
-    SQLite storage file up to its last commit, as ``ros2 bag reindex`` would (see
-    :mod:`.rosbag2_reindex`; the input is never modified), with a warning.
-    """
-
-    format_name = "rosbag2"
-
-    def __init__(self, path: Path, *, recover: bool = False) -> None:
-        self._scratch: tempfile.TemporaryDirectory[str] | None = None
-        storage = None if (path / "metadata.yaml").exists() else lone_storage(path)
-        try:
-            opened = path if storage is None else self._recovered(storage)
-            try:
-                reader = Reader2(opened)
-            except Exception as err:
-                raise LogReadError(f"cannot read {path}: {_first_line(err)}") from None
-            super().__init__(path, reader)
-        except BaseException:
-            self._close_scratch()
-            raise
-        kind = "sqlite3" if opened.suffix == ".db3" or any(
-            f.suffix == ".db3" for f in path.iterdir()) else "mcap"
-        self.format_name = f"rosbag2 ({kind})"
-        if storage is not None:
-            self._decompress = self._first_message_is_zstd()
-            self.warnings.append(
-                f"{path} has no metadata.yaml (its recording was cut short?); read its "
-                f"storage file {storage.relative_to(path)} up to its last commit, as `ros2 "
-                f"bag reindex` would: {self.message_count} messages")
-
-    def _recovered(self, storage: Path) -> Path:
-        self._scratch = tempfile.TemporaryDirectory(prefix="camlog-reindex-")
-        try:
-            return rolled_back_copy(storage, Path(self._scratch.name))
-        except (OSError, sqlite3.Error) as err:
-            raise LogReadError(f"cannot read {storage}: {_first_line(err)}") from None
-
-    def _first_message_is_zstd(self) -> bool:
-        """Whether messages carry rosbag2's per-message zstd compression, which only the
-        missing metadata.yaml would have said."""
-        for raw in self.raw_messages():
-            return bytes(raw.data[:4]) == ZSTD_MAGIC
-        return False
-
-    def _close_scratch(self) -> None:
-        if self._scratch is not None:
-            self._scratch.cleanup()
-
-    def close(self) -> None:
-        try:
-            super().close()
-        finally:
-            self._close_scratch()
-
-
-class Ros1LogReader(_RosbagsReader):
+class Ros1LogReader(RosbagsReader):
     """Reader for a ROS1 ``.bag`` file (v2.0).
 
     A bag without its index (the recording was killed) is read through an indexed copy in a
-    temporary folder, made from its complete chunks, with a warning.
+    temporary folder, made from its complete chunks, with a warning. Every record's lengths
+    and the index's offsets are checked first (:mod:`.ros1_layout`): a bag where they do not
+    hold is refused, or with ``recover`` read like an unindexed one.
     """
 
     format_name = "ros1"
@@ -153,17 +39,25 @@ class Ros1LogReader(_RosbagsReader):
     def __init__(self, path: Path, *, recover: bool = False) -> None:
         self._scratch: tempfile.TemporaryDirectory[str] | None = None
         note = ""
-        if _unindexed_ros1(path):
+        try:
+            problem = None if _unindexed_ros1(path) else layout_problem(path)
+        except OSError as err:
+            raise LogReadError(f"cannot read {path}: {err.strerror or err}") from None
+        if problem is not None and not recover:
+            raise LogReadError(f"{path} is corrupt: {problem}; use --recover to read the "
+                               "chunks before the damage")
+        if problem is not None or _unindexed_ros1(path):
             self._scratch = tempfile.TemporaryDirectory(prefix="camlog-reindex-")
             copy = Path(self._scratch.name) / path.name
             try:
                 done = reindexed_copy(path, copy)
             except Exception as err:
                 self._scratch.cleanup()
-                raise LogReadError(f"cannot reindex {path}: {_first_line(err)}") from None
-            note = (f"{path} has no index (its recording was cut short); reading the "
-                    f"{done.messages} messages of its complete chunks, up to byte "
-                    f"{done.stopped_at} of {path.stat().st_size}")
+                raise LogReadError(f"cannot reindex {path}: {first_line(err)}") from None
+            why = "has no index (its recording was cut short)" if problem is None \
+                else f"is damaged ({problem})"
+            note = (f"{path} {why}; reading the {done.messages} messages of its complete "
+                    f"chunks, up to byte {done.stopped_at} of {path.stat().st_size}")
             opened = copy
         else:
             opened = path
@@ -198,10 +92,11 @@ class Ros1LogReader(_RosbagsReader):
 def _unindexed_ros1(path: Path) -> bool:
     """Whether a ROS1 bag's header says it has no index (``index_pos`` 0)."""
     try:
-        with path.open("rb") as src:
+        with BoundedFile(path.open("rb")) as src:  # a damaged length reads what is there
             src.readline()
-            return Header.read(src, RecordType.BAGHEADER).get_uint64("index_pos") == 0
-    except (OSError, ReaderError):
+            return Header.read(cast(BinaryIO, src), RecordType.BAGHEADER) \
+                .get_uint64("index_pos") == 0
+    except (OSError, ReaderError, ValueError):  # ValueError: e.g. a field name not UTF-8
         return False  # the reader reports what is wrong
 
 
@@ -223,7 +118,7 @@ class _RosbagsWriter(LogWriter):
         try:
             writer.open()
         except Exception as err:
-            raise LogWriteError(f"cannot write {self.path}: {_first_line(err)}") from None
+            raise LogWriteError(f"cannot write {self.path}: {first_line(err)}") from None
 
     def _typestore(self) -> Any:
         raise NotImplementedError
@@ -239,7 +134,7 @@ class _RosbagsWriter(LogWriter):
         except (OSError, LogWriteError):
             raise
         except Exception as err:  # sqlite3.Error, rosbags' WriterError
-            raise LogWriteError(f"cannot write {self.path}: {_first_line(err)}") from None
+            raise LogWriteError(f"cannot write {self.path}: {first_line(err)}") from None
 
     def _finish(self) -> None:
         try:
@@ -247,7 +142,7 @@ class _RosbagsWriter(LogWriter):
         except OSError:
             raise
         except Exception as err:
-            raise LogWriteError(f"cannot write {self.path}: {_first_line(err)}") from None
+            raise LogWriteError(f"cannot write {self.path}: {first_line(err)}") from None
 
     def _abort(self) -> None:
         with contextlib.suppress(Exception):  # the output is discarded anyway
@@ -307,7 +202,7 @@ class Rosbag2LogWriter(_RosbagsWriter):
         except OSError:
             raise
         except Exception as err:  # sqlite3.Error
-            raise LogWriteError(f"cannot write {self.path}: {_first_line(err)}") from None
+            raise LogWriteError(f"cannot write {self.path}: {first_line(err)}") from None
 
     def _commit(self) -> None:
         self._atomic.commit(self.temp_path / self.path.name)
@@ -341,14 +236,3 @@ class Ros1LogWriter(_RosbagsWriter):
         writer = self._writer
         writer.write_chunk(writer.chunks[-1])  # the open chunk; rosbags starts a new one
         writer.bio.flush()
-
-
-def _first_line(err: BaseException) -> str:
-    """The first line of an error's message; for a bare one (rosbags' ``assert`` checks of
-    a damaged index or record), what kind of check failed and where."""
-    text = str(err).strip()
-    if text:
-        return text.splitlines()[0]
-    frames = traceback.extract_tb(err.__traceback__)
-    where = f" in {Path(frames[-1].filename).name}:{frames[-1].lineno}" if frames else ""
-    return f"malformed data ({type(err).__name__}{where})"

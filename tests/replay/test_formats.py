@@ -190,7 +190,7 @@ def test_text_needs_explicit_log_time(tmp_path: Path) -> None:
         (lambda p: _file(p / "noise.bag", _noise()), LogFormatError, "is not a log"),
         (lambda p: _file(p / "magic.mcap", b"\x89MCAP0\r\n" + _noise()), LogReadError, "corrupt"),
         (lambda p: _file(p / "magic.bag", b"#ROSBAG V2.0\n" + _noise()), LogReadError,
-         "cannot read"),
+         "corrupt"),
         (lambda p: _dir(p / "bare"), LogFormatError, "without rosbag2 metadata.yaml"),
         (lambda p: _file(_dir(p / "bad") / "metadata.yaml", b"x: [").parent, LogReadError,
          "cannot read"),
