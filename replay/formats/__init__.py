@@ -154,9 +154,10 @@ def _mcap_storage(folder: Path, metadata: BagMetadata | str) -> Path | None:
     if isinstance(metadata, str):
         storage = lone_storage(folder)
         return storage if storage is not None and storage.suffix == ".mcap" else None
-    if metadata.storage != "mcap" or metadata.message_compression or len(metadata.files) != 1:
+    files = set(metadata.files)  # a file listed twice is one file
+    if metadata.storage != "mcap" or metadata.message_compression or len(files) != 1:
         return None
-    storage = folder / metadata.files[0]
+    storage = folder / files.pop()
     return storage if storage.is_file() else None
 
 

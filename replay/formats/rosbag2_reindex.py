@@ -14,7 +14,7 @@ import shutil
 import sqlite3
 from pathlib import Path
 
-__all__ = ["ZSTD_MAGIC", "lone_storage", "rolled_back_copy"]
+__all__ = ["ZSTD_MAGIC", "has_journal", "lone_storage", "rolled_back_copy"]
 
 #: first bytes of a zstd frame (rosbag2's per-message compression); CDR starts 00 01
 ZSTD_MAGIC = b"\x28\xb5\x2f\xfd"
@@ -32,6 +32,12 @@ def lone_storage(path: Path) -> Path | None:
         if found:
             return found[0] if len(found) == 1 else None
     return None
+
+
+def has_journal(db3: Path) -> bool:
+    """Whether SQLite left a rollback journal or write-ahead log next to ``db3`` (a writer
+    that did not finish)."""
+    return any(db3.with_name(db3.name + suffix).is_file() for suffix in _SIDE_FILES)
 
 
 def rolled_back_copy(db3: Path, scratch: Path) -> Path:

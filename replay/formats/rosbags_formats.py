@@ -19,7 +19,7 @@ from ..wire import CDR, ROS1, ros1_typestore, ros2_typestore
 from .base import LogWriter, RawMessage
 from .bounded import BoundedFile
 from .ros1_layout import layout_problem
-from .ros1_reindex import reindexed_copy
+from .ros1_reindex import Reindexed, reindexed_copy
 from .rosbag2_storage import McapStorage, Sqlite3Storage
 from .rosbags_reader import RosbagsReader, first_line
 
@@ -38,29 +38,27 @@ class Ros1LogReader(RosbagsReader):
 
     def __init__(self, path: Path, *, recover: bool = False) -> None:
         self._scratch: tempfile.TemporaryDirectory[str] | None = None
-        note = ""
+        notes: list[str] = []
         try:
-            problem = None if _unindexed_ros1(path) else layout_problem(path)
+            unindexed = _unindexed_ros1(path)
+            problem = None if unindexed else layout_problem(path)
         except OSError as err:
             raise LogReadError(f"cannot read {path}: {err.strerror or err}") from None
         if problem is not None and not recover:
             raise LogReadError(f"{path} is corrupt: {problem}; use --recover to read the "
-                               "chunks before the damage")
-        if problem is not None or _unindexed_ros1(path):
+                               "chunks around the damage")
+        if not recover:
+            self.recover_hint = "; use --recover to read the chunks around the damage"
+        opened = path
+        if recover or unindexed:  # rebuilt from its chunks, past damage with recover
             self._scratch = tempfile.TemporaryDirectory(prefix="camlog-reindex-")
-            copy = Path(self._scratch.name) / path.name
+            opened = Path(self._scratch.name) / path.name
             try:
-                done = reindexed_copy(path, copy)
+                done = reindexed_copy(path, opened, resync=recover)
             except Exception as err:
                 self._scratch.cleanup()
                 raise LogReadError(f"cannot reindex {path}: {first_line(err)}") from None
-            why = "has no index (its recording was cut short)" if problem is None \
-                else f"is damaged ({problem})"
-            note = (f"{path} {why}; reading the {done.messages} messages of its complete "
-                    f"chunks, up to byte {done.stopped_at} of {path.stat().st_size}")
-            opened = copy
-        else:
-            opened = path
+            notes = _reindex_notes(path, done, unindexed=unindexed, problem=problem)
         try:
             reader = Reader1(opened)
             super().__init__(path, reader)
@@ -68,8 +66,7 @@ class Ros1LogReader(RosbagsReader):
             if self._scratch is not None:
                 self._scratch.cleanup()
             raise
-        if note:
-            self.warnings.append(note)
+        self.warnings += notes
 
     def topic_spans(self) -> dict[str, tuple[int, int]] | None:
         """From the bag's index, which holds every message's time, sorted per connection."""
@@ -87,6 +84,25 @@ class Ros1LogReader(RosbagsReader):
         finally:
             if self._scratch is not None:
                 self._scratch.cleanup()
+
+
+def _reindex_notes(path: Path, done: Reindexed, *, unindexed: bool,
+                   problem: str | None) -> list[str]:
+    """Warnings about a bag read through a reindexed copy: why, and what was lost."""
+    notes = []
+    if unindexed or problem is not None or done.reason != "end of file":
+        why = "has no index (its recording was cut short)" if unindexed \
+            else f"is damaged ({problem or done.reason})"
+        notes.append(f"{path} {why}; reading the {done.messages} messages of its complete "
+                     f"chunks, up to byte {done.stopped_at} of {path.stat().st_size}")
+    for gap in done.skipped:
+        times = f"{'start' if gap.first_ns is None else gap.first_ns} to " \
+                f"{'end' if gap.last_ns is None else gap.last_ns} ns"
+        lost = f"{gap.messages} messages lost, log times {times}" if gap.messages is not None \
+            else f"messages lost between log times {times} (the bag's index does not say " \
+                 "how many)"
+        notes.append(f"{path}: skipped bytes {gap.start} to {gap.end} ({gap.reason}): {lost}")
+    return notes
 
 
 def _unindexed_ros1(path: Path) -> bool:

@@ -19,13 +19,18 @@ from ..errors import LogReadError
 from ..wire import CDR
 from .base import LogReader, RawMessage, TopicInfo
 
-__all__ = ["RosbagsReader", "as_count", "check_connection", "first_line"]
+__all__ = ["MAX_MESSAGE_BYTES", "RosbagsReader", "as_count", "check_connection", "first_line"]
+
+#: a compressed message may state at most this size (a damaged frame header claims anything)
+MAX_MESSAGE_BYTES = 1 << 30
 
 
 class RosbagsReader(LogReader):
     """Shared reading over a rosbags reader object."""
 
     serialization = CDR
+    #: appended to read errors: how ``--recover`` would help (empty when it would not)
+    recover_hint = ""
 
     def __init__(self, path: Path, reader: Any) -> None:
         super().__init__(path)
@@ -39,7 +44,8 @@ class RosbagsReader(LogReader):
             # on a metadata.yaml whose values have the wrong types: one place maps them all
             with contextlib.suppress(Exception):
                 reader.close()
-            raise LogReadError(f"cannot read {path}: {first_line(err)}") from None
+            raise LogReadError(f"cannot read {path}: {first_line(err)}{self.recover_hint}") \
+                from None
 
     def _load(self, reader: Any) -> None:
         """Topics, counts and times from the opened rosbags reader."""
@@ -77,11 +83,11 @@ class RosbagsReader(LogReader):
             for conn, timestamp, data in self._reader.messages(
                 connections=conns, start=start_ns, stop=end_ns
             ):
-                payload = zstandard.ZstdDecompressor().decompress(data) \
-                    if self._decompress else data
+                payload = _decompressed(data) if self._decompress else data
                 yield RawMessage(conn.topic, conn.msgtype, timestamp, payload, self.serialization)
         except Exception as err:
-            raise LogReadError(f"cannot read {self.path}: {first_line(err)}") from None
+            raise LogReadError(f"cannot read {self.path}: {first_line(err)}"
+                               f"{self.recover_hint}") from None
 
     def close(self) -> None:
         self._reader.close()
@@ -102,6 +108,15 @@ def as_count(value: Any, what: str) -> int:
     if not isinstance(value, int) or isinstance(value, bool) or value < 0:
         raise TypeError(f"{what} is {value!r}, not a non-negative integer")
     return value
+
+
+def _decompressed(data: bytes) -> bytes:
+    """A message of rosbag2's per-message zstd compression, decompressed; a frame that
+    states more than :data:`MAX_MESSAGE_BYTES` is damage, not allocated."""
+    stated = zstandard.frame_content_size(data)
+    if stated > MAX_MESSAGE_BYTES:
+        raise ValueError(f"a compressed message states {stated} bytes")
+    return zstandard.ZstdDecompressor().decompress(data)
 
 
 def first_line(err: BaseException) -> str:
