@@ -86,9 +86,8 @@ def write_evidence(reader: LogReader, path: Path, cameras: list[CalibratedCamera
             camera = by_topic.get(raw.topic)
             if camera is None:
                 continue
-            image = to_frame(reader.decode(raw), topic=raw.topic,
-                             where=f"{reader.path}: {raw.topic}")
-            if image is None:  # video before its first keyframe: no frame in the views
+            image = to_frame(reader, raw)
+            if image is None:  # no frame in the views either (see TopicFrames)
                 continue
             frame = camera.views.frames[counters[raw.topic]]
             counters[raw.topic] += 1

@@ -42,6 +42,7 @@ class CalibrationRun:
     files: list[Path]
     wall_s: float
     summary: CalibrationSummary
+    warnings: list[str]  # what the user should know, e.g. frames that did not decode
 
 
 def _check_size(views: CameraViews) -> None:
@@ -103,4 +104,5 @@ def calibrate_log(
         write_files(staged.path, calibrated, stereo=stereo, summary=summary,
                     evidence=evidence, camera_name=camera_name)
     return CalibrationRun(calibrated, stereo, solved, output_dir, staged.files,
-                          time.perf_counter() - started, summary)
+                          time.perf_counter() - started, summary,
+                          [*reader.warnings, *found.warnings])

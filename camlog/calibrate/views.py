@@ -141,6 +141,7 @@ class LogViews:
 
     cameras: list[CameraViews]
     scenario: Scenario | None
+    warnings: list[str] = field(default_factory=list)  # e.g. frames that did not decode
 
 
 @dataclass
@@ -239,18 +240,18 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
     to_frame = TopicFrames()
     with ThreadPoolExecutor(max_workers=workers) as pool, bar:
         for raw in reader.raw_messages(wanted):
-            message = reader.decode(raw)
             if raw.topic == SCENARIO:
-                scenario = scenario or _scenario(message)
+                scenario = scenario or _scenario(reader.decode(raw))
                 continue
             if raw.topic in by_info:
                 camera = by_info[raw.topic]
-                if camera.log_info is None and isinstance(message, CameraInfo):
-                    camera.log_info = message
+                if camera.log_info is None:
+                    message = reader.decode(raw)
+                    camera.log_info = message if isinstance(message, CameraInfo) else None
                 continue
             camera = by_image[raw.topic]
-            image = to_frame(message, topic=raw.topic, where=f"{reader.path}: {raw.topic}")
-            if image is None:  # video before its first keyframe: no frame, no view
+            image = to_frame(reader, raw)
+            if image is None:  # video before its first keyframe, or undecodable: no view
                 bar.update()
                 continue
             gray = image.mono8()
@@ -265,7 +266,8 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
                 submit(camera)
         for done, at, future in pending:
             done.detections.update(zip(at, future.result(), strict=True))
-    return LogViews([seen[s.namespace].views() for s in sources], scenario)
+    return LogViews([seen[s.namespace].views() for s in sources], scenario,
+                    to_frame.warnings())
 
 
 def _scenario(message: object) -> Scenario | None:

@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING, Any
 from processors.calibration.board import DEFAULT_DICTIONARY, PATTERNS
 
 from ..errors import UsageError
-from .args import name, non_negative, output_path, positive
+from .args import name, non_negative, output_path, positive, print_warnings
 
 if TYPE_CHECKING:
     from processors.calibration.board import Board
@@ -151,6 +151,7 @@ def run(args: argparse.Namespace) -> int:
         max_speed_px=args.max_chessboard_speed,
         overwrite=args.overwrite, progress=progress, recover=args.recover,
         report=not args.no_report)
+    print_warnings(run_.warnings)
     for camera in run_.summary.cameras:
         p = camera.parameters
         print(f"{camera.namespace}: {camera.used_views} views "

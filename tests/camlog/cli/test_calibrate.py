@@ -237,8 +237,11 @@ def test_foxglove_camera_calibrates_like_the_ros_one(mono: Path, rig_log: Path,
     ros = load_calibration(mono / "ost.yaml").camera_info
     fox_info = load_calibration(folder / "ost.yaml").camera_info
     assert fox_info.distortion_model == ros.distortion_model
-    for name in ("k", "d", "r", "p"):  # equal up to floating-point summation order
-        np.testing.assert_allclose(getattr(fox_info, name), getattr(ros, name), rtol=1e-9,
+    # equal up to floating-point summation order (detections are gathered from threads),
+    # which the least-squares solve amplifies in weakly determined coefficients (k2, k3) to
+    # ~1e-7 relative: still 1e5 times below their standard deviation
+    for name in ("k", "d", "r", "p"):
+        np.testing.assert_allclose(getattr(fox_info, name), getattr(ros, name), rtol=1e-6,
                                    atol=1e-9)
 
 

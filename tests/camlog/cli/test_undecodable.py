@@ -5,6 +5,7 @@ pictures before the first keyframe), made with OpenCV, the mcap libraries and Py
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import av
@@ -232,3 +233,47 @@ def test_view_counts_video_pictures_before_the_first_keyframe(
                               "(not shown; ")
     assert load_rrd(rrd).count("/world/video/video", "VideoStream:sample") == \
         FRAMES - GOP + DROPPED
+
+
+def _cut_every(source: Path, out: Path, topic: str, every: int) -> int:
+    """Copy an MCAP log with the mcap libraries, each ``every``-th image of ``topic`` with its
+    raw buffer cut in half; returns how many were cut."""
+    from mcap_ros2.decoder import DecoderFactory
+
+    cut = 0
+    with source.open("rb") as f, out.open("wb") as g:
+        reader = make_reader(f, decoder_factories=[DecoderFactory()])
+        writer = Ros2Writer(g)
+        schemas: dict[int, object] = {}
+        index = 0
+        for schema, channel, message, decoded in reader.iter_decoded_messages():
+            assert schema is not None
+            if schema.id not in schemas:
+                schemas[schema.id] = writer.register_msgdef(schema.name, schema.data.decode())
+            if channel.topic == topic:
+                if index % every == every - 1:
+                    decoded.data = bytes(decoded.data)[: len(decoded.data) // 2]
+                    cut += 1
+                index += 1
+            writer.write_message(channel.topic, schemas[schema.id], decoded,
+                                 log_time=message.log_time, publish_time=message.publish_time)
+        writer.finish()
+    return cut
+
+
+def test_calibrate_leaves_out_undecodable_frames_and_says_so(
+        mono_calibration_log: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    source = mono_calibration_log.parent.parent / "mono.mcap"
+    topic = "/simple_camera/image_raw"
+    damaged = tmp_path / "damaged.mcap"
+    cut = _cut_every(source, damaged, topic, every=10)
+    total = _count(source)[topic]
+    assert 0 < cut < total
+    out = tmp_path / "cal"
+    assert main(["calibrate", str(damaged), "--size", "7x6", "--square", "0.01",
+                 "-o", str(out), "--no-progress"]) == 0
+    assert _warnings(capsys.readouterr().err) == [
+        f"warning: {topic}: {cut} frames did not decode and were left out"]
+    (camera,) = json.loads((out / "calibration.json").read_text())["cameras"]
+    assert camera["frames"] == total - cut
+    assert _count(out / "calibration.mcap")[topic] == total  # the input, copied whole
