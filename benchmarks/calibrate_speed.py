@@ -230,9 +230,9 @@ def speed(duration: float, tmp: Path) -> None:
             short = tmp / "speed_short.mcap"
             record(load_scenario(scenario, {"duration_s": duration / 3, "seed": 0}), short,
                    progress=False)
-            argv = ["calibrate", *case.flags.split(), "--overwrite", "--no-progress", "-o"]
-            rss_short = cli_peak_rss_mb([str(short), *argv, str(tmp / "rss_short")])
-            rss_long = cli_peak_rss_mb([str(path), *argv, str(tmp / "rss_long")])
+            flags = [*case.flags.split(), "--overwrite", "--no-progress", "-o"]
+            rss_short = cli_peak_rss_mb(["calibrate", str(short), *flags, str(tmp / "rss_short")])
+            rss_long = cli_peak_rss_mb(["calibrate", str(path), *flags, str(tmp / "rss_long")])
             print(f"peak memory of camlog calibrate: {rss_short:.0f} MB for "
                   f"{duration / 3:.0f} s, {rss_long:.0f} MB for {duration:.0f} s of log",
                   flush=True)
