@@ -12,6 +12,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import os
+import signal
 import sys
 from collections.abc import Collection, Sequence
 from typing import NoReturn
@@ -91,10 +92,24 @@ def known_error(err: BaseException) -> bool:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: known errors, and OS errors, become one line on stderr and exit status 1;
-    Ctrl-C at any moment (start-up included) ends with one line and exit status 130."""
+    Ctrl-C at any moment (start-up included) ends with one line and exit status 130.
+
+    Called as the program (no ``argv``), the process exits once the command is over: Ctrl-C
+    is then ignored, so that one arriving during the interpreter's exit (libraries' exit
+    handlers, e.g. tqdm's monitor) prints no traceback."""
+    as_program = argv is None
     argv = sys.argv[1:] if argv is None else list(argv)
     command = _command_in(argv)
     where = f"camlog {command}" if command else "camlog"
+    try:
+        return _run(argv, command, where)
+    finally:
+        if as_program:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _run(argv: list[str], command: str | None, where: str) -> int:
+    """:func:`main` without its exit handler."""
     try:
         # rerun's Rust side logs a failure (disk full, lost viewer) as several lines of its
         # own; camlog reports it in one. RUST_LOG=warn (or any value) brings them back.
