@@ -107,7 +107,7 @@ def add_viewer_destination(p: argparse.ArgumentParser, *, what: str) -> None:
     p.add_argument("--port", default=9876, type=bounded_int(1, 65535), metavar="N",
                    help="with --spawn: the port the viewer listens on (default 9876; a viewer "
                         "already there is used)")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing output")
+    add_overwrite(p)
 
 
 def print_warnings(warnings: Iterable[str]) -> None:
@@ -120,3 +120,20 @@ def add_format_argument(parser: argparse.ArgumentParser, *, default_from: str) -
     """``--format``: the output log format, by default told from ``default_from``'s name."""
     parser.add_argument("--format", choices=sorted(WRITE_FORMATS),
                         help=f"output format (default: from {default_from})")
+
+
+def add_recover(parser: argparse.ArgumentParser) -> None:
+    """``--recover``: read a damaged log as far as it can be read."""
+    parser.add_argument("--recover", action="store_true",
+                        help="read a damaged log: past damaged chunks (MCAP, ROS1) and the "
+                             "SQLite rows that still read (rosbag2), saying what was lost")
+
+
+def add_overwrite(parser: argparse.ArgumentParser) -> None:
+    """``--overwrite``: replace existing outputs."""
+    parser.add_argument("--overwrite", action="store_true", help="replace an existing output")
+
+
+def add_no_progress(parser: argparse.ArgumentParser) -> None:
+    """``--no-progress``: hide progress bars."""
+    parser.add_argument("--no-progress", action="store_true", help="hide progress bars")

@@ -8,6 +8,7 @@ import sys
 
 from ..batch.pipeline import STEPS
 from ..batch.run import ENGINES
+from .args import add_no_progress
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -36,7 +37,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--retries", type=int, default=2, metavar="N",
                    help="runs again a log whose worker or node died, up to N times "
                         "(default 2)")
-    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    add_no_progress(p)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -9,7 +9,16 @@ from typing import TYPE_CHECKING, Any
 from processors.calibration.board import DEFAULT_DICTIONARY, PATTERNS
 
 from ..errors import UsageError
-from .args import name, non_negative, output_path, positive, print_warnings
+from .args import (
+    add_no_progress,
+    add_overwrite,
+    add_recover,
+    name,
+    non_negative,
+    output_path,
+    positive,
+    print_warnings,
+)
 
 if TYPE_CHECKING:
     from processors.calibration.board import Board
@@ -77,12 +86,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="measure --calibration files on LOG instead of calibrating")
     p.add_argument("--calibration", type=Path, action="append", metavar="YAML",
                    help="with --check: calibration file (twice for stereo: left, right)")
-    p.add_argument("--overwrite", action="store_true", help="replace existing output files")
-    p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
+    add_overwrite(p)
+    add_recover(p)
     p.add_argument("--no-report", action="store_true",
                    help="write only the calibration files and calibration.json: no "
                         "calibration.mcap, figures or report.md (for scripts)")
-    p.add_argument("--no-progress", action="store_true", help="hide progress bars")
+    add_no_progress(p)
 
 
 def cameras_from(args: argparse.Namespace) -> list[str]:

@@ -8,7 +8,16 @@ from pathlib import Path
 from replay.convert import COMPRESSIONS, convert_log
 from replay.frames.video import DEFAULT_CRF
 
-from .args import add_format_argument, add_selection, bounded_int, output_path, print_warnings
+from .args import (
+    add_format_argument,
+    add_no_progress,
+    add_overwrite,
+    add_recover,
+    add_selection,
+    bounded_int,
+    output_path,
+    print_warnings,
+)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -38,9 +47,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--profile", choices=("ros2", "foxglove"), default="ros2",
                    help="MCAP: store images, camera models and video in Foxglove's schemas "
                         "(foxglove) or ROS 2 messages (ros2, default)")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing output")
-    p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
-    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    add_overwrite(p)
+    add_recover(p)
+    add_no_progress(p)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 
 from ..errors import UsageError
-from .args import positive
+from .args import add_no_progress, positive
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -20,7 +20,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--duration", type=positive, default=10.0, metavar="S",
                    help="length of the stereo recording in seconds (default 10)")
     p.add_argument("--seed", type=int, default=0, help="random seed of both scenarios")
-    p.add_argument("--no-progress", action="store_true", help="hide progress bars")
+    add_no_progress(p)
 
 
 def run(args: argparse.Namespace) -> int:

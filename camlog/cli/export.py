@@ -10,7 +10,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .args import bounded_int
+from .args import add_no_progress, add_overwrite, add_recover, bounded_int
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -32,9 +32,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="stop S seconds after the log's first message (exclusive)")
     p.add_argument("--jpeg-quality", type=bounded_int(1, 100), default=95, metavar="Q",
                    help="JPEG quality for --format jpg (default 95)")
-    p.add_argument("--overwrite", action="store_true", help="replace existing output files")
-    p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
-    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    add_overwrite(p)
+    add_recover(p)
+    add_no_progress(p)
 
 
 def run(args: argparse.Namespace) -> int:

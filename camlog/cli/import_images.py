@@ -7,7 +7,16 @@ from pathlib import Path
 
 from replay.importer import DEFAULT_START_NS, import_images
 
-from .args import add_format_argument, bounded_int, name, number, output_path, print_warnings
+from .args import (
+    add_format_argument,
+    add_no_progress,
+    add_overwrite,
+    bounded_int,
+    name,
+    number,
+    output_path,
+    print_warnings,
+)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -37,8 +46,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="header frame_id (default from the namespace, e.g. "
                         "camera_optical_frame; with --stereo ID_left / ID_right)")
     add_format_argument(p, default_from="LOG")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing output")
-    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    add_overwrite(p)
+    add_no_progress(p)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -6,17 +6,15 @@ import argparse
 import dataclasses
 from pathlib import Path
 
+from .args import add_recover
+
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the ``info`` arguments."""
     parser.add_argument(
         "log", metavar="LOG", type=Path, help="MCAP file, rosbag2 directory or ROS1 .bag"
     )
-    parser.add_argument(
-        "--recover",
-        action="store_true",
-        help="read a damaged log up to the damage",
-    )
+    add_recover(parser)
     parser.add_argument(
         "--verify",
         action="store_true",

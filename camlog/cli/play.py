@@ -8,7 +8,15 @@ from pathlib import Path
 from replay.format_names import WRITE_FORMATS
 from replay.play import LOG_TIMES, play_log
 
-from .args import add_selection, add_viewer_destination, bounded_int, number, print_warnings
+from .args import (
+    add_no_progress,
+    add_recover,
+    add_selection,
+    add_viewer_destination,
+    bounded_int,
+    number,
+    print_warnings,
+)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -33,8 +41,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="log time written to a log output (default: replay wall clock)")
     p.add_argument("--format", choices=sorted(WRITE_FORMATS),
                    help="log output format (default: from OUT)")
-    p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
-    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    add_recover(p)
+    add_no_progress(p)
 
 
 def run(args: argparse.Namespace) -> int:

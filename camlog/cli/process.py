@@ -12,7 +12,15 @@ from processors.registry import SPECS
 
 from ..errors import UsageError
 from ..processing.outputs import CHAPTER_NS, COMPRESSIONS
-from .args import add_format_argument, bounded_int, name, output_path, print_warnings
+from .args import (
+    add_format_argument,
+    add_overwrite,
+    add_recover,
+    bounded_int,
+    name,
+    output_path,
+    print_warnings,
+)
 from .processor_args import add_processor_arguments, chosen_processors, worded
 
 
@@ -45,8 +53,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=bounded_int(1, 256), metavar="N",
                    help="processing threads (default: cores)")
     add_format_argument(p, default_from="OUT")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing output")
-    p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
+    add_overwrite(p)
+    add_recover(p)
 
 
 def run(args: argparse.Namespace) -> int:

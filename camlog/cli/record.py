@@ -11,7 +11,15 @@ from recorder.scenario import DEFAULT_SCENARIO, MAX_FRAMES, builtin_names
 from replay.camera import CAMERA_MODELS
 from replay.format_names import WRITE_FORMATS
 
-from .args import bounded_int, non_negative, number, output_path, positive
+from .args import (
+    add_no_progress,
+    add_overwrite,
+    bounded_int,
+    non_negative,
+    number,
+    output_path,
+    positive,
+)
 
 #: longest recording in seconds and largest image side the command line accepts
 MAX_DURATION_S = 86_400.0
@@ -76,7 +84,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "(rosbag2); default: recordings/SCENARIO.mcap")
     p.add_argument("--format", choices=sorted(WRITE_FORMATS),
                    help="output format (default: from the output name; .mcap when none)")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing output")
+    add_overwrite(p)
     p.add_argument("--seed", type=bounded_int(0, 2**63 - 1),
                    help="random seed (board poses, stamps, noise)")
     length = p.add_mutually_exclusive_group()
@@ -102,7 +110,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="compression: MCAP chunks zstd (default), lz4 or none; rosbag2 "
                         "zstd (MCAP chunks, default; sqlite3: per message) or none "
                         "(sqlite3 default); ROS1 chunks lz4 (default), bz2 or none")
-    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    add_no_progress(p)
 
 
 def overrides_from(args: argparse.Namespace) -> dict[str, Any]:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 from replay.topics import RESYNC_PREFIX
 
-from .args import add_format_argument, name, number, output_path
+from .args import add_format_argument, add_overwrite, add_recover, name, number, output_path
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -34,8 +34,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out-prefix", type=name, default=RESYNC_PREFIX, metavar="NS",
                    help=f"namespace of the re-stamped topics (default {RESYNC_PREFIX})")
     add_format_argument(p, default_from="OUT")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing output")
-    p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
+    add_overwrite(p)
+    add_recover(p)
 
 
 def _stamps(values: list[int]) -> str:

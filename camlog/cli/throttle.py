@@ -11,7 +11,7 @@ from pathlib import Path
 
 from processors.registry import spec_of
 
-from .args import add_format_argument
+from .args import add_format_argument, add_overwrite, add_recover
 from .processor_args import add_processor_arguments, chosen_processors, worded
 
 
@@ -25,8 +25,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "repeat it for several (each is thinned by its own stamps)")
     add_processor_arguments(p, [spec_of("throttle")], required=True)
     add_format_argument(p, default_from="OUT")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing output")
-    p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
+    add_overwrite(p)
+    add_recover(p)
 
 
 def run(args: argparse.Namespace) -> int:

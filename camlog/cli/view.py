@@ -5,7 +5,15 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .args import add_selection, add_viewer_destination, bounded_int, positive, print_warnings
+from .args import (
+    add_no_progress,
+    add_recover,
+    add_selection,
+    add_viewer_destination,
+    bounded_int,
+    positive,
+    print_warnings,
+)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -36,8 +44,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="draw calibration residual arrows X times their length (default 50)")
     p.add_argument("--no-ground-truth", action="store_true",
                    help="do not project the simulator's target points into the images")
-    p.add_argument("--recover", action="store_true", help="read a damaged log up to the damage")
-    p.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    add_recover(p)
+    add_no_progress(p)
 
 
 def run(args: argparse.Namespace) -> int:

@@ -280,7 +280,7 @@ class McapLogReader(LogReader):
             return
         raise LogReadError(
             f"{self.path} is corrupt at byte {offset} of {size} ({why}); "
-            "use --recover to read the messages before the damage"
+            "use --recover to read the intact messages around the damage"
         )
 
     def raw_messages(
@@ -306,7 +306,7 @@ class McapLogReader(LogReader):
             except _DAMAGE as err:
                 raise LogReadError(
                     f"{self.path} is corrupt ({_describe(err)}); "
-                    "use --recover to read the messages before the damage"
+                    "use --recover to read the intact messages around the damage"
                 ) from None
             return
         for message in self._merge_in_time(self._stream_messages()):
