@@ -237,7 +237,8 @@ def record(
     storage: list[str] = []
 
     def open_log() -> LogWriter:
-        writer = open_writer(output, fmt=fmt, overwrite=overwrite, **writer_options)
+        writer = open_writer(output, fmt=fmt, overwrite=overwrite, live=True,
+                             **writer_options)
         storage.append(f"{writer.format_name}, {writer.compression}")
         try:
             writer.write(SCENARIO, header, log_time_ns=scenario.start_stamp_ns)

@@ -15,6 +15,7 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from tqdm import tqdm
 
@@ -131,7 +132,7 @@ def convert_log(
                                  compress=compress, decompress=decompress)
         start_ns, end_ns = window_ns(reader.start_ns, start_s, end_s)
         total = sum(reader.topics[t].count for t in names)
-        options = {"profile": profile} if fmt == "mcap" else {}
+        options: dict[str, Any] = {"profile": profile} if fmt == "mcap" else {}
         codecs = {t: TopicReencoder(t, compress, crf) for t in renamed}
         written = reencoded = 0
         with open_writer(output, fmt=fmt, overwrite=overwrite, inputs=[input_path],

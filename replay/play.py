@@ -157,7 +157,7 @@ def play_log(
         else:
             assert output is not None
             writer = stack.enter_context(open_writer(output, fmt=fmt, overwrite=overwrite,
-                                                          inputs=paths))
+                                                          inputs=paths, live=True))
             destination = _LogDestination(writer, original=log_time == "original")
         bar = stack.enter_context(tqdm(total=session.total * max(loops, 1) or None,
                                        unit="msg", desc="play", leave=False,

@@ -227,8 +227,14 @@ def format_for_output(path: Path, fmt: str | None = None) -> str:
 
 
 def open_writer(
-    path: str | Path, *, fmt: str | None = None, overwrite: bool = False, **options: Any
+    path: str | Path, *, fmt: str | None = None, overwrite: bool = False, live: bool = False,
+    **options: Any
 ) -> LogWriter:
-    """Create a log writer; the output appears atomically when it is closed."""
+    """Create a log writer; the output appears atomically when it is closed. ``live``: the
+    messages arrive as they happen (a recording): flush at least every
+    :data:`~.base.FLUSH_INTERVAL_S` so a killed process keeps all but its last moments;
+    otherwise chunks are completed by size only, and the same messages give the same bytes."""
     path = Path(path)
-    return FORMATS[format_for_output(path, fmt)](path, overwrite=overwrite, **options)
+    writer = FORMATS[format_for_output(path, fmt)](path, overwrite=overwrite, **options)
+    writer.live = live
+    return writer

@@ -186,8 +186,9 @@ def is_rosbag2_dir(path: Path) -> bool:
     return (path / "metadata.yaml").is_file()
 
 
-#: a writer hands what it holds to the OS at least this often while messages arrive, so a
-#: process killed mid-way loses at most the last second of messages
+#: a live writer (``live=True``: recording, playing) hands what it holds to the OS at least
+#: this often while messages arrive, so a process killed mid-way loses at most the last
+#: second of messages
 FLUSH_INTERVAL_S = 0.5
 
 
@@ -198,9 +199,10 @@ class LogWriter:
     ends without an exception; otherwise the temporary output is removed. ``inputs`` are the
     logs the output is made from: an output that is one of them (or lies inside one) is
     refused.
-    While it is written, every format completes a chunk (or commits) at least every
-    :data:`FLUSH_INTERVAL_S`, so the temporary output of a killed process holds all but its
-    last moments.
+    Chunks (SQLite transactions) are completed by size, so the same messages always give
+    the same bytes. A live writer (:attr:`live`: messages arrive as they happen, as in a
+    recording) also completes one at least every :data:`FLUSH_INTERVAL_S`, so the temporary
+    output of a killed process holds all but its last moments.
     """
 
     format_name: str = ""
@@ -211,6 +213,8 @@ class LogWriter:
     profile: str = "ros2"
     #: what the output is compressed with, for reports (e.g. "zstd chunks")
     compression: str = "none"
+    #: flush at least every :data:`FLUSH_INTERVAL_S` (see the class docstring)
+    live: bool = False
 
     def __init__(self, path: Path, *, overwrite: bool = False,
                  inputs: Iterable[Path] = ()) -> None:
@@ -287,10 +291,11 @@ class LogWriter:
             raise LogWriteError(f"{self.path} is closed")
         try:
             self._write(raw, msgdef)
-            now = time.monotonic()
-            if now - self._flushed_at >= FLUSH_INTERVAL_S:
-                self._flush()
-                self._flushed_at = now
+            if self.live:
+                now = time.monotonic()
+                if now - self._flushed_at >= FLUSH_INTERVAL_S:
+                    self._flush()
+                    self._flushed_at = now
         except OSError as err:
             raise LogWriteError(f"cannot write {self.path}: {err.strerror or err}") from None
 

@@ -1,7 +1,8 @@
 """Writing MCAP files with ROS 2 (CDR) messages (or Foxglove schemas) through ``mcap``.
 
-Chunks are zstd-compressed by default and carry CRCs; a chunk is completed at least every
-:data:`~.base.FLUSH_INTERVAL_S` so that a killed writer's file keeps all but its last moments.
+Chunks are zstd-compressed by default and carry CRCs; a live writer completes a chunk at least
+every :data:`~.base.FLUSH_INTERVAL_S` so that a killed writer's file keeps all but its last
+moments.
 """
 
 from __future__ import annotations

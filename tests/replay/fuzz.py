@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import math
 import random
 import shutil
 import signal
@@ -34,7 +33,6 @@ import numpy as np
 
 from replay import CameraInfo, CompressedImage, Image, Text, open_reader, open_writer
 from replay.errors import ReplayError
-from replay.formats import base as formats_base
 from replay.frames import decode_frame, encode_compressed
 from replay.info import summarize
 
@@ -60,12 +58,7 @@ def write_seed(name: str, folder: Path) -> Path:
     """The valid log of one fuzzed format, written under ``folder``."""
     fmt, output, options = SEEDS[name]
     path = folder / output
-    # chunks (commits) only where the seed asks, however slowly a busy machine writes it
-    interval, formats_base.FLUSH_INTERVAL_S = formats_base.FLUSH_INTERVAL_S, math.inf
-    try:
-        _write_seed(path, fmt, options)
-    finally:
-        formats_base.FLUSH_INTERVAL_S = interval
+    _write_seed(path, fmt, options)  # chunks (commits) by size only: the same bytes each time
     return path
 
 

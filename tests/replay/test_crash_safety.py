@@ -1,4 +1,5 @@
-"""Crash safety of every writer: a killed writer loses at most its last second, its output
+"""Crash safety of every writer: a live writer killed mid-way loses at most its last second,
+the others give the same bytes for the same messages however slowly they run, the output
 carries checksums where the format has them, and asked-for compression is honoured."""
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ import sys
 import textwrap
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 from mcap.reader import make_reader
@@ -17,6 +19,7 @@ from mcap.stream_reader import CRCValidationError
 from rosbags.rosbag2 import Reader as Rosbags2Reader
 
 from replay import LogWriteError, Text, open_reader, open_writer
+from replay.formats import base as formats_base
 from replay.formats.base import FLUSH_INTERVAL_S
 
 from .samples import OUTPUT_NAMES, T0_NS, WRITE_FORMATS, read_log, write_log
@@ -29,7 +32,7 @@ CHILD = textwrap.dedent(
     import numpy as np
     from replay import Image, open_writer
 
-    writer = open_writer(sys.argv[1], fmt=sys.argv[2])
+    writer = open_writer(sys.argv[1], fmt=sys.argv[2], live=True)
     for index in range(100_000):
         pixels = np.random.default_rng(index).integers(0, 256, (60, 80), dtype=np.uint8)
         stamp_ns = {t0} + index * 33_000_000
@@ -213,3 +216,30 @@ def test_disk_errors_name_the_output_and_leave_nothing(tmp_path: Path) -> None:
         assert result.stdout.count("\n") == 1
         assert list(out.iterdir()) == [], fmt
         shutil.rmtree(out)
+
+
+def _files(output: Path) -> dict[str, bytes]:
+    """The bytes of a log file, or of each file in a rosbag2 folder."""
+    if output.is_file():
+        return {output.name: output.read_bytes()}
+    return {p.name: p.read_bytes() for p in sorted(output.iterdir())}
+
+
+@pytest.mark.parametrize("fmt", WRITE_FORMATS)
+def test_the_same_messages_give_the_same_bytes_however_slow_the_writer(
+        tmp_path: Path, fmt: str, monkeypatch: pytest.MonkeyPatch) -> None:
+    entries = numbered_images(30)
+
+    def write(folder: str, *, live: bool = False) -> dict[str, bytes]:
+        (tmp_path / folder).mkdir()
+        path = tmp_path / folder / OUTPUT_NAMES[fmt]
+        with open_writer(path, fmt=fmt, live=live) as writer:
+            for topic, log_time_ns, message in entries:
+                writer.write(topic, message, log_time_ns=log_time_ns)
+        return _files(path)
+
+    steady = write("steady")
+    ticks = iter(range(10**6))  # every reading of the clock a second after the last
+    monkeypatch.setattr(formats_base, "time", SimpleNamespace(monotonic=lambda: next(ticks)))
+    assert write("slow") == steady
+    assert write("slow_live", live=True) != steady  # a live writer completes more chunks
