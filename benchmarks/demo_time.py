@@ -33,8 +33,8 @@ def timed(argv: list[str]) -> tuple[float, float]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--duration", type=float, default=10.0,
-                        help="the demo's stereo recording in seconds (its default: 10)")
+    parser.add_argument("--duration", type=float, default=8.0,
+                        help="the demo's stereo recording in seconds (its default: 8)")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)

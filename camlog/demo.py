@@ -90,7 +90,7 @@ def _stereo_chain(out_dir: Path, duration_s: float, seed: int, progress: bool | 
     return calibration
 
 
-def run_demo(out_dir: Path, *, duration_s: float = 10.0, seed: int = 0,
+def run_demo(out_dir: Path, *, duration_s: float = 8.0, seed: int = 0,
              progress: bool | None = None,
              say: Callable[[str], None] = print) -> DemoResult:
     """Run the whole demo into ``out_dir``; ``say`` reports each step as it finishes."""

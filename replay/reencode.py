@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import EncodingError, ReplayError, UnsupportedEncodingError
+from .format_names import STILL_CODECS
 from .frames import (
     Color,
     Frame,
@@ -32,7 +33,7 @@ from .messages import CompressedImage, CompressedVideo, Message
 __all__ = ["STILLS", "TopicReencoder", "compressed_format_for"]
 
 #: compressed still formats
-STILLS = ("jpeg", "png")
+STILLS = STILL_CODECS
 
 
 def compressed_format_for(frame: Frame, wanted: str) -> str | None:

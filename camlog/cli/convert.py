@@ -5,8 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from replay.convert import COMPRESSIONS, convert_log
-from replay.frames.video import DEFAULT_CRF
+from replay.format_names import DEFAULT_CRF, STILL_CODECS, VIDEO_CODEC_NAMES
 
 from .args import (
     add_format_argument,
@@ -37,7 +36,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_format_argument(p, default_from="OUT")
     add_selection(p)
     codec = p.add_mutually_exclusive_group()
-    codec.add_argument("--compress", choices=COMPRESSIONS,
+    codec.add_argument("--compress", choices=(*STILL_CODECS, *VIDEO_CODEC_NAMES),
                        help="store raw images compressed on TOPIC/compressed")
     codec.add_argument("--decompress", action="store_true",
                        help="store compressed images raw (TOPIC/compressed -> TOPIC)")
@@ -54,6 +53,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Call :func:`replay.convert.convert_log`."""
+    from replay.convert import convert_log
+
     result = convert_log(
         args.input, args.output, fmt=args.format, topics=args.topics, start_s=args.start,
         end_s=args.end, compress=args.compress, decompress=args.decompress,

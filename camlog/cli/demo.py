@@ -17,8 +17,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                 "size. Re-running replaces the folder's files.")
     p.add_argument("-o", "--output", type=Path, default=Path("demo"), metavar="OUTDIR",
                    help="folder for every output (default ./demo)")
-    p.add_argument("--duration", type=positive, default=10.0, metavar="S",
-                   help="length of the stereo recording in seconds (default 10)")
+    p.add_argument("--duration", type=positive, default=8.0, metavar="S",
+                   help="length of the stereo recording in seconds (default 8)")
     p.add_argument("--seed", type=int, default=0, help="random seed of both scenarios")
     add_no_progress(p)
 

@@ -13,6 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import EncodingError, UnsupportedEncodingError
+from ..format_names import DEFAULT_CRF, VIDEO_CODEC_NAMES
 from ..messages import CompressedVideo
 from .frame import Color, Frame
 
@@ -20,6 +21,7 @@ __all__ = ["DEFAULT_CRF", "VIDEO_CODECS", "VideoDecoder", "VideoEncoder", "psnr_
 
 #: CompressedVideo format -> (FFmpeg decoder, FFmpeg encoder)
 VIDEO_CODECS = {"h264": ("h264", "libx264"), "h265": ("hevc", "libx265")}
+assert tuple(VIDEO_CODECS) == VIDEO_CODEC_NAMES
 
 
 def _av() -> Any:
@@ -56,10 +58,6 @@ class VideoDecoder:
         return Frame(message.stamp_ns, message.frame_id, rgb, Color.RGB, self.format)
 
 
-#: the encoder's constant rate factor by default: 18, x264's "visually lossless", keeps
-#: 39-40 dB PSNR on 640x480 images with 2 levels of sensor noise and still shrinks such a
-#: log far more than tenfold (``benchmarks.video_size``)
-DEFAULT_CRF = 18
 
 
 class VideoEncoder:

@@ -49,6 +49,8 @@ def loaded_by(*argv: str) -> set[str]:
     ["process", "--help"],
     ["resync", "--help"],
     ["throttle", "--help"],
+    ["convert", "--help"],
+    ["convert", "IN.mcap"],
 ], ids=" ".join)
 def test_help_and_argument_errors_load_no_heavy_library(argv: list[str]) -> None:
     assert loaded_by(*argv) & set(HEAVY) == set()
