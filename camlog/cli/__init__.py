@@ -14,8 +14,8 @@ import importlib
 import os
 import signal
 import sys
-from collections.abc import Collection, Sequence
-from typing import NoReturn
+from collections.abc import Callable, Collection, Sequence
+from typing import Any, NoReturn
 
 #: subcommand name -> (one-line help, module under camlog.cli with add_arguments and run)
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -98,6 +98,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     is then ignored, so that one arriving during the interpreter's exit (libraries' exit
     handlers, e.g. tqdm's monitor) prints no traceback."""
     as_program = argv is None
+    if as_program:
+        sys.unraisablehook = _interrupt_where_it_can_be_handled(sys.unraisablehook)
     argv = sys.argv[1:] if argv is None else list(argv)
     command = _command_in(argv)
     where = f"camlog {command}" if command else "camlog"
@@ -106,6 +108,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         if as_program:
             signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _interrupt_where_it_can_be_handled(
+        previous: Callable[[Any], object]) -> Callable[[Any], object]:
+    """An unraisable-exception hook: a Ctrl-C that lands in a callback Python cannot raise
+    from (e.g. an import lock's cleanup at start-up) is delivered again to the main thread,
+    where it ends the command in one line, instead of printing "Exception ignored"."""
+    def hook(unraisable: Any) -> object:
+        if isinstance(unraisable.exc_value, KeyboardInterrupt):
+            signal.raise_signal(signal.SIGINT)
+            return None
+        return previous(unraisable)
+    return hook
 
 
 def _run(argv: list[str], command: str | None, where: str) -> int:
