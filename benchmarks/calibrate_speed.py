@@ -16,14 +16,14 @@ Recordings last the scenarios' 20 s (``--duration`` to change) at 30 Hz, except 
 it renders 19-26 pinhole views a frame (about 0.5-1.4 fps on 2 cores), so it is recorded at
 ``--fisheye-rate`` 4 Hz for ``--fisheye-duration`` 30 s: 120 frames, two or three a held pose
 of 0.5 s, 60 poses (about 2-4 minutes a seed). Cases run cheapest first; ``--cases`` picks
-some.
+some; ``--logs DIR`` keeps the recordings there and reuses them in later runs.
 
 Speed (case ``speed``): ``mono_checkerboard`` and ``stereo_checkerboard`` recorded for
 ``--speed-duration`` (60 s) at 30 Hz, decode-only (read and decode every image, the floor of
 any offline calibrator) against ``calibrate`` with its full report, and the peak memory of the
 command on a log a third as long and on the full one (flat in log length).
 
-    python -m benchmarks.calibrate_speed [--cases mono,stereo,speed] [--seeds N] [--quick]
+    python -m benchmarks.calibrate_speed [--cases mono,stereo,speed] [--seeds N] [--logs DIR] [--quick]
 """
 
 from __future__ import annotations
@@ -156,9 +156,10 @@ class Worst:
         return "  ".join(f"{k} {v:.4g}" for k, v in self.values.items())
 
 
-def accuracy_case(case: Case, seeds: range, duration: float | None, tmp: Path,
+def accuracy_case(case: Case, seeds: range, duration: float | None, logs: Path, tmp: Path,
                   fisheye: dict[str, float]) -> None:
-    """Record, calibrate and compare one case over the seeds; print its rows and its worst."""
+    """Record (into ``logs``, unless there already), calibrate and compare one case over the
+    seeds; print its rows and its worst."""
     mine, theirs = Worst(), Worst()
     for seed in seeds:
         overrides: dict[str, Any] = {"seed": seed, **case.overrides}
@@ -166,7 +167,8 @@ def accuracy_case(case: Case, seeds: range, duration: float | None, tmp: Path,
             overrides.update(fisheye)
         elif duration is not None:
             overrides["duration_s"] = duration
-        path = tmp / f"{case.scenario}_{seed}.mcap"
+        tag = "" if case.scenario == "mono_fisheye" or duration is None else f"_{duration:g}s"
+        path = logs / f"{case.scenario}_{seed}{tag}.mcap"
         if not path.exists():
             record(load_scenario(case.scenario, overrides), path, progress=False)
         started = time.perf_counter()
@@ -252,6 +254,9 @@ def main() -> None:
     parser.add_argument("--speed-duration", type=float, default=60.0,
                         help="seconds of the speed case's recordings (default 60)")
     parser.add_argument("--seeds", type=int, default=3, help="seeds per case (default 3)")
+    parser.add_argument("--logs", type=Path, default=None,
+                        help="keep the recordings in this folder and reuse those already "
+                             "there (default: a temporary folder)")
     parser.add_argument("--quick", action="store_true",
                         help="one seed, 10 s recordings, mono, stereo and speed (smoke test)")
     args = parser.parse_args()
@@ -270,9 +275,11 @@ def main() -> None:
           f"{'maxdiff px':>13} {'rot °':>7} {'base %':>8} err/σ unc/t  cv/t frames calib s")
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
+        logs = args.logs or tmp
+        logs.mkdir(parents=True, exist_ok=True)
         for case in CASES:
             if case.name in chosen:
-                accuracy_case(case, seeds, duration, tmp, fisheye)
+                accuracy_case(case, seeds, duration, logs, tmp, fisheye)
         if "speed" in chosen:
             speed(speed_duration, tmp)
     print(f"load average {os.getloadavg()[0]:.1f} at the end")
