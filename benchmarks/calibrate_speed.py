@@ -23,7 +23,8 @@ Speed (case ``speed``): ``mono_checkerboard`` and ``stereo_checkerboard`` record
 any offline calibrator) against ``calibrate`` with its full report, and the peak memory of the
 command on a log a third as long and on the full one (flat in log length).
 
-    python -m benchmarks.calibrate_speed [--cases mono,stereo,speed] [--seeds N] [--logs DIR] [--quick]
+    python -m benchmarks.calibrate_speed [--cases mono,stereo,speed] [--seeds N] [--logs DIR]
+        [--quick]
 """
 
 from __future__ import annotations
@@ -156,8 +157,8 @@ class Worst:
         return "  ".join(f"{k} {v:.4g}" for k, v in self.values.items())
 
 
-def accuracy_case(case: Case, seeds: range, duration: float | None, logs: Path, tmp: Path,
-                  fisheye: dict[str, float]) -> None:
+def accuracy_case(case: Case, seeds: range, duration: float | None, *, logs: Path,
+                  tmp: Path, fisheye: dict[str, float]) -> None:
     """Record (into ``logs``, unless there already), calibrate and compare one case over the
     seeds; print its rows and its worst."""
     mine, theirs = Worst(), Worst()
@@ -279,7 +280,7 @@ def main() -> None:
         logs.mkdir(parents=True, exist_ok=True)
         for case in CASES:
             if case.name in chosen:
-                accuracy_case(case, seeds, duration, logs, tmp, fisheye)
+                accuracy_case(case, seeds, duration, logs=logs, tmp=tmp, fisheye=fisheye)
         if "speed" in chosen:
             speed(speed_duration, tmp)
     print(f"load average {os.getloadavg()[0]:.1f} at the end")
