@@ -184,10 +184,8 @@ def uncertainty_figure(size: tuple[int, int], grid_px: F64, sigma_px: F64, title
     img, m = _canvas(w + 90, h)
     img[m:m + h, m:m + w] = colours
     bar_x = m + w + 20
-    for y in range(h):
-        value = (1.0 - y / max(h - 1, 1)) * 255
-        img[m + y, bar_x:bar_x + 16] = cv2.applyColorMap(np.array([[value]], np.uint8),
-                                                         cv2.COLORMAP_VIRIDIS)[0, 0]
+    values = ((1.0 - np.arange(h) / max(h - 1, 1)) * 255).astype(np.uint8)  # top: the largest
+    img[m:m + h, bar_x:bar_x + 16] = cv2.applyColorMap(values[:, None], cv2.COLORMAP_VIRIDIS)
     for frac in (0.0, 0.5, 1.0):
         _text(img, f"{frac * top:.3g}", (bar_x + 20, m + int((1 - frac) * (h - 1)) + 4), 0.4)
     _text(img, "px", (bar_x, m - 8), 0.45)
