@@ -10,7 +10,7 @@ from processors.calibration.uncertainty import grid
 
 
 def viridis(value: int) -> np.ndarray:
-    return cv2.applyColorMap(np.array([[value]], np.uint8), cv2.COLORMAP_VIRIDIS)[0, 0]
+    return np.asarray(cv2.applyColorMap(np.array([[value]], np.uint8), cv2.COLORMAP_VIRIDIS)[0, 0])
 
 
 def test_uncertainty_figure_colours_the_map_and_its_bar_by_value() -> None:
