@@ -24,9 +24,16 @@ from replay.storage import Location, local_paths
 from ..errors import InputError
 from .evidence import write_evidence
 from .report import output_names, write_files
-from .solving import CalibratedCamera, RigSolution, StereoSolution, calibrated_cameras, solve_rig
+from .solving import (
+    CalibratedCamera,
+    RigSolution,
+    StereoSolution,
+    calibrated_cameras,
+    guiding_models,
+    solve_rig,
+)
 from .summary import build_summary
-from .views import CameraViews, detect_views, resolve_camera, with_speed_limit
+from .views import CameraViews, LogViews, detect_views, resolve_camera, with_speed_limit
 
 __all__ = ["CalibrationRun", "calibrate_log"]
 
@@ -53,6 +60,16 @@ def _check_size(views: CameraViews) -> None:
         raise InputError(
             f"{views.source.image_topic} images are {views.size[0]}x{views.size[1]} but "
             f"{views.source.info_topic} says {info.width}x{info.height}")
+
+
+def _checked(found: LogViews, max_speed_px: float | None) -> list[CameraViews]:
+    """Every camera's views, their image size checked, past the speed limit if one is set."""
+    out = []
+    for detected in found.cameras:
+        _check_size(detected)
+        out.append(detected if max_speed_px is None else with_speed_limit(detected,
+                                                                          max_speed_px))
+    return out
 
 
 def calibrate_log(
@@ -82,13 +99,17 @@ def calibrate_log(
         if reader.message_count == 0:
             raise InputError(f"{log} is empty (no messages)")
         sources = [resolve_camera(reader, ns) for ns in cameras]
-        found = detect_views(reader, sources, board, workers=workers or os.cpu_count() or 2,
-                             progress=progress)
-        cameras_views = []
-        for detected in found.cameras:
-            _check_size(detected)
-            cameras_views.append(detected if max_speed_px is None else
-                                 with_speed_limit(detected, max_speed_px))
+        workers = workers or os.cpu_count() or 2
+        found = detect_views(reader, sources, board, workers=workers, progress=progress)
+        cameras_views = _checked(found, max_speed_px)
+        if board.pattern == "charuco":
+            # a first calibration places the corners a second detection refines (see
+            # processors.calibration.targets): more of them, and nearer the border
+            models = guiding_models(cameras_views, board, options, approximate_s=approximate_s)
+            if models:
+                found = detect_views(reader, sources, board, workers=workers,
+                                     progress=progress, models=models)
+                cameras_views = _checked(found, max_speed_px)
         solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s)
         solutions, stereo = solved.cameras, solved.stereo
         scenario = found.scenario

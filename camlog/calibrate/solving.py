@@ -21,6 +21,7 @@ from processors.calibration.seed import seed_model
 from processors.calibration.selection import Coverage, coverage, view_parameters
 from processors.calibration.solve import MonoResult
 from processors.calibration.stereo import StereoResult, orient_right_views, stereo_result
+from processors.calibration.targets import guides_charuco
 from processors.calibration.uncertainty import UncertaintyMap, projection_uncertainty
 from processors.calibration.validation import CrossValidation, cross_validate
 from replay.camera import CameraModel
@@ -163,6 +164,20 @@ def _oriented(rig: ViewsOfRig, board: Board, seeds: list[CameraModel]) -> ViewsO
         views[rv] = BoardView(views[rv].camera, views[rv].instant, views[rv].point_ids,
                               corners, speed_px=views[rv].speed_px)
     return ViewsOfRig(views, rig.frames_of, rig.pairs, rig.candidates, rig.frame_scatter_px)
+
+
+def guiding_models(cameras: list[CameraViews], board: Board, options: CalibrationOptions, *,
+                   approximate_s: float | None) -> dict[str, CameraModel]:
+    """A first calibration's models, by namespace, of the cameras whose model can guide a
+    second ChArUco detection (:func:`~processors.calibration.targets.guides_charuco`)."""
+    sizes = [c.size for c in cameras]
+    rig = rig_views(cameras, board, approximate_s=approximate_s, stereo_note=False)
+    seeds = _seeds(rig, board, sizes, options)
+    rig = _oriented(rig, board, seeds)
+    joint = calibrate_cameras(board.points_in_board(), rig.views, sizes, options, seeds=seeds)
+    return {views.source.namespace: model for views, model in zip(cameras, joint.models,
+                                                                  strict=True)
+            if guides_charuco(model)}
 
 
 def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOptions, *,

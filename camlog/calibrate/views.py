@@ -25,6 +25,7 @@ from tqdm import tqdm
 from processors.calibration.board import Board
 from processors.calibration.detect import Detection
 from processors.calibration.targets import SEGMENT_FRAMES, detect_segment, find_board
+from replay.camera import CameraModel
 from replay.errors import RecordError
 from replay.formats import LogReader
 from replay.messages import CameraInfo
@@ -216,8 +217,10 @@ def board_speeds(detections: list[Detection | None], duplicates: list[bool]) -> 
 
 
 def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *,
-                 workers: int, progress: bool | None) -> LogViews:
-    """Detect the board in every distinct frame of ``sources`` (one pass over the log)."""
+                 workers: int, progress: bool | None,
+                 models: dict[str, CameraModel] | None = None) -> LogViews:
+    """Detect the board in every distinct frame of ``sources`` (one pass over the log);
+    ``models`` (by namespace, from a first calibration) guide a ChArUco detection."""
     seen = {s.namespace: _Seen(s, max(1, reader.topics[s.image_topic].count // HINT_SAMPLES))
             for s in sources}
     by_image = {s.image_topic: seen[s.namespace] for s in sources}
@@ -226,12 +229,14 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
     wanted = [*by_image, *by_info, *([SCENARIO] if SCENARIO in reader.topics else [])]
     pending: deque[tuple[_Seen, list[int], Future[list[Detection | None]]]] = deque()
     bar = tqdm(total=sum(reader.topics[s.image_topic].count for s in sources), unit="frame",
-               desc="detect", disable=None if progress is None else not progress, leave=False)
+               desc="detect" if models is None else "detect again (guided)",
+               disable=None if progress is None else not progress, leave=False)
 
     def submit(camera: _Seen) -> None:
         indices = [i for i, _ in camera.run]
+        model = (models or {}).get(camera.source.namespace)
         pending.append((camera, indices, pool.submit(detect_segment,
-                                                     [g for _, g in camera.run], board)))
+                                                     [g for _, g in camera.run], board, model)))
         camera.run = []
         while len(pending) > 2 * workers + 2:
             done, at, future = pending.popleft()

@@ -3,7 +3,12 @@
 Chessboards go through :func:`~.detect.find_chessboard` (with its square-by-square checks).
 ChArUco boards through ``cv2.aruco.CharucoDetector``: every inner corner is identified by the
 markers around it, so a board cut by the image border still gives the corners it shows —
-the views near the border, where distortion is learnt. Circle grids through
+the views near the border, where distortion is learnt. Without a camera model each corner is
+placed by the homographies of its two neighbouring markers (both must be found) before its
+sub-pixel refinement; given a model (a first calibration), OpenCV places every corner by the
+board's pose from all the markers found and the model's projection, which is close enough on a
+strongly distorted lens for a corner beside a single found marker — the corners nearest the
+image border, whose second marker the border cuts. Circle grids through
 ``cv2.findCirclesGrid`` (symmetric or asymmetric), which needs every circle.
 """
 
@@ -14,36 +19,59 @@ import threading
 import cv2
 import numpy as np
 
+from replay.camera import CameraModel
+
+from ..errors import ProcessorError
 from .board import Board
 from .detect import BORDER_PX, Detection, canonical_order, find_chessboard, track_chessboard
 
 #: fewest ChArUco corners worth a view (a board pose has 6 unknowns)
 MIN_CHARUCO_CORNERS = 6
+#: lens models OpenCV's ChArUco detector can project through (its pinhole distortion)
+GUIDING_MODELS = ("plumb_bob", "rational_polynomial")
 _LOCAL = threading.local()
 
 
-def find_board(gray: np.ndarray, board: Board) -> Detection | None:
-    """Detect ``board`` in a ``(H, W)`` uint8 image; None when no board is found."""
+def find_board(gray: np.ndarray, board: Board, model: CameraModel | None = None
+               ) -> Detection | None:
+    """Detect ``board`` in a ``(H, W)`` uint8 image; None when no board is found. ``model``
+    (the camera's, from a first calibration) guides a ChArUco detection (see the module)."""
     if board.pattern == "charuco":
-        return find_charuco(gray, board)
+        return find_charuco(gray, board, model)
     if board.pattern in ("circles", "acircles"):
         return find_circles(gray, board)
     return find_chessboard(gray, board)
 
 
-def _charuco_detector(board: Board) -> cv2.aruco.CharucoDetector:
-    """One detector per thread and board (OpenCV's detectors keep state between calls)."""
-    cache: dict[Board, cv2.aruco.CharucoDetector] = getattr(_LOCAL, "charuco", {})
+def guides_charuco(model: CameraModel) -> bool:
+    """Whether OpenCV's ChArUco detector can use ``model`` (a pinhole lens model)."""
+    return model.distortion_model in GUIDING_MODELS
+
+
+def _charuco_detector(board: Board, model: CameraModel | None) -> cv2.aruco.CharucoDetector:
+    """One detector per thread, board and guiding model (OpenCV's detectors keep state
+    between calls)."""
+    cache: dict[tuple[Board, bytes], cv2.aruco.CharucoDetector] = getattr(_LOCAL, "charuco", {})
     _LOCAL.charuco = cache
-    if board not in cache:
-        cache[board] = cv2.aruco.CharucoDetector(board.charuco())
-    return cache[board]
+    key = (board, b"" if model is None else model.k.tobytes() + model.d.tobytes())
+    if key not in cache:
+        parameters = cv2.aruco.CharucoParameters()
+        if model is not None:
+            parameters.cameraMatrix = np.asarray(model.k, dtype=np.float64)
+            parameters.distCoeffs = np.asarray(model.d, dtype=np.float64).reshape(1, -1)
+            parameters.minMarkers = 1
+        cache[key] = cv2.aruco.CharucoDetector(board.charuco(), parameters)
+    return cache[key]
 
 
-def find_charuco(gray: np.ndarray, board: Board) -> Detection | None:
+def find_charuco(gray: np.ndarray, board: Board, model: CameraModel | None = None
+                 ) -> Detection | None:
     """The ChArUco corners seen, identified by their markers; corners within
-    :data:`~.detect.BORDER_PX` of the image border are left out."""
-    corners, ids, _markers, _marker_ids = _charuco_detector(board).detectBoard(gray)
+    :data:`~.detect.BORDER_PX` of the image border are left out. A ``model`` (pinhole lens
+    models only, :func:`guides_charuco`) places the corners by the board's pose."""
+    if model is not None and not guides_charuco(model):
+        raise ProcessorError(f"a {model.distortion_model} model cannot guide ChArUco detection")
+    corners, ids, _markers, _marker_ids = _charuco_detector(board, model).detectBoard(gray)
     if corners is None or ids is None or len(ids) == 0:
         return None
     point_ids = np.asarray(ids, dtype=np.int64).reshape(-1)
@@ -91,10 +119,12 @@ def find_circles(gray: np.ndarray, board: Board) -> Detection | None:
 SEGMENT_FRAMES = 8
 
 
-def detect_segment(grays: list[np.ndarray], board: Board) -> list[Detection | None]:
+def detect_segment(grays: list[np.ndarray], board: Board, model: CameraModel | None = None
+                   ) -> list[Detection | None]:
     """Detections of consecutive frames ``(H, W)`` uint8: the first found afresh, each next
     chessboard tracked from the previous two (their motion carried on) and found afresh
-    only when tracking fails; other targets found afresh in every frame."""
+    only when tracking fails; other targets found afresh in every frame (a ChArUco board
+    guided by ``model`` when given)."""
     out: list[Detection | None] = []
     for gray in grays:
         last = out[-1] if out else None
@@ -105,5 +135,5 @@ def detect_segment(grays: list[np.ndarray], board: Board) -> list[Detection | No
                 if before is not None and before.accepted \
                 and np.abs(last.corners_px - before.corners_px).max() < 50 else 0.0
             found = track_chessboard(gray, last.corners_px + velocity, board)
-        out.append(found if found is not None else find_board(gray, board))
+        out.append(found if found is not None else find_board(gray, board, model))
     return out

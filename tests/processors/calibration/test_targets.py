@@ -8,6 +8,8 @@ import pytest
 
 from processors.calibration.board import make_board
 from processors.calibration.targets import find_board
+from processors.errors import ProcessorError
+from replay.camera import CameraModel
 
 from .synthetic import K_TRUE, circle_texture, pose, warp_texture
 
@@ -68,3 +70,22 @@ def test_circle_grid_centres(pattern: str) -> None:
     truth = in_camera[:, :2] / in_camera[:, 2:] * np.diag(K_TRUE)[:2] + K_TRUE[:2, 2]
     # blob centroids sit off the projected centres by the perspective of each disc
     assert np.linalg.norm(found.corners_px - truth, axis=1).max() < 0.2
+
+
+def test_a_camera_model_guides_charuco_corners_beside_a_single_marker() -> None:
+    camera_from_board = pose(np.array([0.0, 0.0, 0.3]), np.array([0.13, 0.0, 0.45]))
+    image, truth = charuco_view(camera_from_board)
+    model = CameraModel(640, 480, K_TRUE, "plumb_bob", np.zeros(5))
+    unguided = find_board(image, CHARUCO)
+    guided = find_board(image, CHARUCO, model)
+    assert unguided is not None and guided is not None and guided.accepted
+    # the border cuts the second marker of some corners: only the guided detection has them
+    assert set(unguided.ids.tolist()) < set(guided.ids.tolist())
+    assert np.linalg.norm(guided.corners_px - truth[guided.ids], axis=1).max() < 0.15
+
+
+def test_a_fisheye_model_cannot_guide_a_charuco_detection() -> None:
+    image, _ = charuco_view(pose(np.array([0.3, -0.2, 0.1]), np.array([-0.07, -0.05, 0.45])))
+    fisheye = CameraModel(640, 480, K_TRUE, "equidistant", np.zeros(4))
+    with pytest.raises(ProcessorError, match="equidistant"):
+        find_board(image, CHARUCO, fisheye)

@@ -1,0 +1,79 @@
+"""The detection pass over a recorded log: a ChArUco detection guided by a camera model finds
+more corners (beside a single marker, near the border) and places them where the truth says."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from camlog.calibrate.views import detect_views, resolve_camera
+from processors.calibration.board import make_board
+from replay import PoseStamped, open_reader
+from replay.geometry import rotation_from_quat_xyzw
+from replay.records import Scenario
+from replay.topics import SCENARIO
+
+from ..conftest import record, spec_variant
+
+NAMESPACE = "/charuco_camera"
+BOARD = make_board("8x6", 0.011, "charuco", marker_m=0.008)
+
+
+@pytest.fixture(scope="module")
+def charuco_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """mono_charuco (strongly distorted rational lens), 60 frames: 20 poses, a third of them
+    cut by the image border."""
+    tmp = tmp_path_factory.mktemp("charuco")
+    spec = spec_variant("mono_charuco", tmp, {"hold_s = 0.25": "hold_s = 0.1"})
+    return record(spec, tmp / "charuco.mcap", "--frames", "60")
+
+
+def true_corners(path: Path) -> tuple[Scenario, dict[int, np.ndarray]]:
+    """The scenario and, per frame stamp, where the true camera images every board corner."""
+    scenario, poses = None, {}
+    with open_reader(path) as reader:
+        for raw in reader.raw_messages():
+            if raw.topic == SCENARIO:
+                scenario = Scenario.from_message(reader.decode(raw))
+            elif raw.topic.startswith(f"{NAMESPACE}/ground_truth/"):
+                message = reader.decode(raw)
+                assert isinstance(message, PoseStamped)
+                poses[message.stamp_ns] = message
+    assert scenario is not None
+    camera = scenario.camera_for(NAMESPACE)
+    assert camera is not None
+    points = scenario.targets[0].points_in_target()  # the detector's order, target frame
+    assert points is not None
+    model = camera.model()
+    out = {}
+    for stamp, pose in poses.items():
+        rotation = rotation_from_quat_xyzw(pose.orientation_xyzw)
+        out[stamp] = model.project(points @ rotation.T + pose.position_m)
+    return scenario, out
+
+
+def test_guided_charuco_detection_finds_more_corners_where_the_truth_says(
+        charuco_log: Path) -> None:
+    scenario, truth = true_corners(charuco_log)
+    camera = scenario.camera_for(NAMESPACE)
+    assert camera is not None
+    with open_reader(charuco_log) as reader:
+        source = resolve_camera(reader, NAMESPACE)
+        plain = detect_views(reader, [source], BOARD, workers=2, progress=False)
+        guided = detect_views(reader, [source], BOARD, workers=2, progress=False,
+                              models={NAMESPACE: camera.model()})
+    counts, errors = [0, 0], []
+    for frame_plain, frame_guided in zip(plain.cameras[0].distinct(),
+                                         guided.cameras[0].distinct(), strict=True):
+        for n, frame in enumerate((frame_plain, frame_guided)):
+            if frame.detection is not None and frame.detection.accepted:
+                counts[n] += len(frame.detection.ids)
+        d = frame_guided.detection
+        if d is not None and d.accepted:
+            errors.append(d.corners_px - truth[frame_guided.stamp_ns][d.ids])
+    error = np.linalg.norm(np.concatenate(errors), axis=1)
+    assert counts[1] > 1.03 * counts[0], counts
+    assert np.sqrt(np.mean(error ** 2)) < 0.2 and error.max() < 0.6, (
+        np.sqrt(np.mean(error ** 2)), error.max())
