@@ -81,6 +81,14 @@ def rotation_from_quat_xyzw(q: F64) -> F64:
     ])
 
 
+def transform_from_pose(position_m: F64, orientation_xyzw: F64) -> F64:
+    """Rigid transform (4, 4) of a position (3,) and a quaternion ``[x, y, z, w]``."""
+    out = np.eye(4)
+    out[:3, :3] = rotation_from_quat_xyzw(orientation_xyzw)
+    out[:3, 3] = position_m
+    return out
+
+
 def invert(transform: F64) -> F64:
     """Inverse of a rigid transform (4, 4)."""
     out = np.eye(4)

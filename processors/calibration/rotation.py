@@ -49,3 +49,22 @@ def rotation_vectors(rotations: F64) -> F64:
             continue
         out[i] = -out[i]
     return out
+
+
+def nearest_rotation(matrix: F64) -> F64:
+    """The rotation ``(3, 3)`` closest to ``matrix`` ``(3, 3)`` in the Frobenius norm (a sum of
+    rotations: their mean)."""
+    u, _s, vt = np.linalg.svd(np.asarray(matrix, dtype=np.float64))
+    out: F64 = u @ np.diag([1.0, 1.0, float(np.linalg.det(u @ vt))]) @ vt
+    return out
+
+
+def rigid_fit(points_in_a: F64, points_in_b: F64) -> F64:
+    """``b_from_a`` ``(4, 4)``: the rigid transform that best maps ``points_in_a`` ``(N, 3)``
+    onto ``points_in_b`` ``(N, 3)`` in the least-squares sense (Kabsch)."""
+    centre_a, centre_b = points_in_a.mean(axis=0), points_in_b.mean(axis=0)
+    rotation = nearest_rotation((points_in_b - centre_b).T @ (points_in_a - centre_a))
+    out = np.eye(4)
+    out[:3, :3] = rotation
+    out[:3, 3] = centre_b - rotation @ centre_a
+    return out

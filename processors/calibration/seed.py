@@ -162,8 +162,7 @@ def rig_transform(camera_from_board: list[F64], reference_from_board: list[F64])
     support = np.arccos(cos) < RIG_AGREEMENT_RAD
     best = int(np.argmax(support.sum(axis=1)))
     agree = support[best]
-    u, _s, vt = np.linalg.svd(candidates[agree, :3, :3].sum(axis=0))
-    mean = u @ np.diag([1, 1, np.linalg.det(u @ vt)]) @ vt
+    mean = rotation.nearest_rotation(candidates[agree, :3, :3].sum(axis=0))
     out = np.eye(4)
     out[:3, :3] = mean if np.all(np.isfinite(mean)) else rotation.matrices(rvecs[best:best + 1])[0]
     out[:3, 3] = np.median(candidates[agree, :3, 3], axis=0)

@@ -83,3 +83,17 @@ def test_rotation_matrices_and_vectors_are_opencv_rodrigues() -> None:
         np.testing.assert_allclose(matrix, cv2.Rodrigues(rvec)[0], atol=1e-12)
     back = rotation.rotation_vectors(ours)
     np.testing.assert_allclose(rotation.matrices(back), ours, atol=1e-9)
+
+
+def test_rigid_fit_recovers_a_transform_and_the_mean_of_rotations_is_one() -> None:
+    rng = np.random.default_rng(3)
+    points = rng.normal(0, 0.1, (12, 3))
+    turn = rotation.matrices(rng.normal(0, 1.0, (1, 3)))[0]
+    shift = rng.normal(0, 1.0, 3)
+    fit = rotation.rigid_fit(points, points @ turn.T + shift)
+    np.testing.assert_allclose(fit[:3, :3], turn, atol=1e-12)
+    np.testing.assert_allclose(fit[:3, 3], shift, atol=1e-12)
+    # a small turn either way about one axis averages to no turn at all
+    either = rotation.matrices(np.array([[0.0, 0.0, 0.1], [0.0, 0.0, -0.1]]))
+    np.testing.assert_allclose(rotation.nearest_rotation(either.sum(axis=0)), np.eye(3),
+                               atol=1e-12)
