@@ -68,14 +68,24 @@ def _camera_lines(camera: CameraSummary) -> list[str]:
             f"{u.rays_median_px:.3f} px and {u.rays_worst_px:.3f} px.")
         if u.cross_validation_worst_px is not None:
             lines.append(
-                "Cross-validation: two disjoint halves of the views, calibrated separately, "
-                "differ by twice the expected error of the whole; half their difference is "
+                "Cross-validation: two halves of the evidence (every other board point of "
+                "every view), calibrated separately, differ by twice the expected error of "
+                "the whole; half their difference for rays, measured as the uncertainty is, is "
                 f"{u.cross_validation_median_px:.3f} px (median) and "
-                f"{u.cross_validation_worst_px:.3f} px (worst), camera frames aligned.")
-        if u.true_error_worst_px is not None:
-            lines.append(f"Against the simulator's truth the same way: "
-                         f"{u.true_error_median_px:.3f} px (median) and "
-                         f"{u.true_error_worst_px:.3f} px (worst).")
+                f"{u.cross_validation_worst_px:.3f} px (worst).")
+        if u.true_error_median_px is not None and u.rays_true_error_median_px is not None:
+            lines.append(
+                "Against the simulator's truth, measured as the uncertainty predicts it (the "
+                "point carried through the estimated board poses and back through the true "
+                f"ones): {u.true_error_median_px:.3f} px (median) and "
+                f"{u.true_error_worst_px:.3f} px (worst) at {u.range_m:.3f} m; for rays "
+                f"{u.rays_true_error_median_px:.3f} px and {u.rays_true_error_worst_px:.3f} px.")
+        if u.aligned_true_error_median_px is not None:
+            lines.append(
+                "Against the simulator's truth for rays after the rotation that best aligns "
+                "the camera frames (as the max projection difference): "
+                f"{u.aligned_true_error_median_px:.3f} px (median) and "
+                f"{u.aligned_true_error_worst_px:.3f} px (worst).")
     if camera.max_projection_difference_vs_truth_px is not None:
         lines.append(
             "Against the simulator's true model, max projection difference: "

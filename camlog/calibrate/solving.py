@@ -32,7 +32,7 @@ from ..errors import CalibrationError
 from .instants import ViewsOfRig, rig_views
 from .views import CameraViews, Frame
 
-#: "far away": the uncertainty of rays, comparable to projection differences of rays
+#: "far away": the uncertainty and cross-validation of rays
 FAR_M = 1e4
 
 __all__ = ["CalibratedCamera", "CameraSolution", "RigSolution", "StereoSolution",
@@ -57,7 +57,7 @@ class CameraSolution:
 
     @property
     def cross_validation_px(self) -> float | None:
-        """Expected worst error of the calibration from the two halves' difference."""
+        """Expected worst error of the calibration (rays) from the halves' cross-validation."""
         return None if self.cross_validation is None else self.cross_validation.worst_px
 
     def used_corners(self) -> list[F64]:
@@ -190,7 +190,7 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
     rig = _oriented(rig, board, seeds)
     points = board.points_in_board()
     joint = calibrate_cameras(points, rig.views, sizes, options, seeds=seeds)
-    validation = cross_validate(points, rig.views, sizes, joint.options)
+    validation = cross_validate(points, rig.views, sizes, joint.options, range_m=FAR_M)
     solutions = []
     for index, views in enumerate(cameras):
         result = _mono_result(joint, rig, index)

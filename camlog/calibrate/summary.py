@@ -14,11 +14,14 @@ from processors.calibration.solve import (
     MonoResult,
     max_projection_difference,
 )
+from processors.calibration.uncertainty import error_against
 from processors.calibration.validation import projection_difference
+from replay.messages import F64
 from replay.records import calibration as records
 from replay.records.scenario import Scenario
 
 from .solving import CalibratedCamera, RigSolution, StereoSolution
+from .truth import TrueRig, true_rig
 
 __all__ = ["build_summary"]
 
@@ -74,23 +77,43 @@ def _evidence(camera: CalibratedCamera, index: int, solved: RigSolution) -> reco
         blur=joint.blur.describe() if joint.blur is not None else None)
 
 
-def _uncertainty(camera: CalibratedCamera) -> records.UncertaintySummary:
+def _median_worst(error_px: F64) -> tuple[float, float]:
+    """Median and largest length of pixel errors ``(..., 2)``."""
+    length = np.linalg.norm(error_px, axis=-1)
+    return float(np.nanmedian(length)), float(np.nanmax(length))
+
+
+def _uncertainty(camera: CalibratedCamera, index: int, solved: RigSolution,
+                 truth: TrueRig | None) -> records.UncertaintySummary:
     solution = camera.solution
-    u, validation = solution.uncertainty, solution.cross_validation
-    true_median = true_worst = None
+    u, far, validation = solution.uncertainty, solution.rays_uncertainty, \
+        solution.cross_validation
+    true: dict[str, float] = {}
     if camera.truth is not None:
-        error = projection_difference(solution.result.model, camera.truth.model(), u.pixels)
-        true_median, true_worst = float(np.nanmedian(error)), float(np.nanmax(error))
-    far = solution.rays_uncertainty
+        true_model = camera.truth.model()
+        aligned = projection_difference(solution.result.model, true_model, far.pixels)
+        true["aligned_true_error_median_px"] = float(np.nanmedian(aligned))
+        true["aligned_true_error_worst_px"] = float(np.nanmax(aligned))
+        if truth is not None and truth.reference_from_board:
+            for prefix, umap in (("", u), ("rays_", far)):
+                error = error_against(
+                    solved.joint.problem, index, true_model,
+                    true_camera_from_reference=truth.camera_from_reference[index],
+                    true_reference_from_board=truth.reference_from_board,
+                    range_m=umap.range_m, pixels=umap.pixels)
+                median, worst = _median_worst(error)
+                true[f"{prefix}true_error_median_px"] = median
+                true[f"{prefix}true_error_worst_px"] = worst
     return records.UncertaintySummary(
         range_m=u.range_m, median_px=u.median_px, worst_px=u.worst_px,
         rays_median_px=far.median_px, rays_worst_px=far.worst_px,
         cross_validation_median_px=validation.median_px if validation is not None else None,
         cross_validation_worst_px=validation.worst_px if validation is not None else None,
-        true_error_median_px=true_median, true_error_worst_px=true_worst)
+        **true)
 
 
-def _camera(camera: CalibratedCamera, index: int, solved: RigSolution) -> records.CameraSummary:
+def _camera(camera: CalibratedCamera, index: int, solved: RigSolution,
+            truth: TrueRig | None) -> records.CameraSummary:
     solution, views = camera.solution, camera.views
     result = solution.result
     distinct = list(views.distinct())
@@ -118,7 +141,8 @@ def _camera(camera: CalibratedCamera, index: int, solved: RigSolution) -> record
              for name, (lo, hi, p) in solution.coverage.ranges.items()},
             solution.coverage.image_cells),
         **differences,
-        evidence=_evidence(camera, index, solved), uncertainty=_uncertainty(camera),
+        evidence=_evidence(camera, index, solved),
+        uncertainty=_uncertainty(camera, index, solved, truth),
     )
 
 
@@ -148,12 +172,14 @@ def build_summary(cameras: list[CalibratedCamera], solved: RigSolution, *,
                   scenario: Scenario | None) -> records.CalibrationSummary:
     """The summary of a run; ``scenario``: the simulator's record, when the log has one."""
     stereo = solved.stereo
+    truth = true_rig(solved.rig, [c.views for c in cameras], [c.truth for c in cameras],
+                     board=board, scenario=scenario)
     return records.CalibrationSummary(
         board=records.BoardSummary(board.pattern, board.cols, board.rows, board.square_m),
         options=records.OptionsSummary(options.fix_principal_point, options.fix_aspect_ratio,
                                options.tangential, options.radial_count,
                                options.distortion_model),
-        cameras=[_camera(c, i, solved) for i, c in enumerate(cameras)],
+        cameras=[_camera(c, i, solved, truth) for i, c in enumerate(cameras)],
         ground_truth=scenario is not None,
         stereo=_stereo(cameras, stereo) if stereo is not None else None,
     )

@@ -6,8 +6,8 @@ its detection and count once), and detects the board on a thread pool (OpenCV re
 GIL) in runs of consecutive frames: the first frame of a run is searched, the next ones
 follow the board from frame to frame (a chessboard's corners refined where its motion says
 they are, a twentieth of the cost) and are searched afresh only when that fails. Only corners
-are kept, so memory does not grow with the number of images. The camera_info and the
-simulator's scenario record are read in the same pass.
+are kept, so memory does not grow with the number of images. The camera_info, the
+simulator's scenario record and its true target poses are read in the same pass.
 """
 
 from __future__ import annotations
@@ -28,9 +28,10 @@ from processors.calibration.targets import SEGMENT_FRAMES, detect_segment, find_
 from replay.camera import CameraModel
 from replay.errors import RecordError
 from replay.formats import LogReader
-from replay.messages import CameraInfo
+from replay.geometry import transform_from_pose
+from replay.messages import F64, CameraInfo, PoseStamped
 from replay.records import Scenario
-from replay.topics import SCENARIO, CameraTopics
+from replay.topics import SCENARIO, CameraTopics, split_ground_truth
 
 from ..errors import InputError
 from ..processing.checks import IMAGE_SUFFIXES, IMAGE_TYPES, camera_info_topic
@@ -114,6 +115,9 @@ class CameraViews:
     size: tuple[int, int]  # (width, height)
     log_info: CameraInfo | None
     samples: tuple[np.ndarray, ...] = field(default=(), repr=False)
+    #: simulated logs: target name -> image stamp (ns) -> true ``camera_from_target`` (4, 4)
+    true_camera_from_target: dict[str, dict[int, F64]] = field(default_factory=dict,
+                                                               repr=False)
 
     @property
     def frame_id(self) -> str:
@@ -157,6 +161,7 @@ class _Seen:
     size: tuple[int, int] | None = None
     log_info: CameraInfo | None = None
     samples: list[np.ndarray] = field(default_factory=list)
+    truth: dict[str, dict[int, F64]] = field(default_factory=dict)
     last: bytes = b""
     run: list[tuple[int, np.ndarray]] = field(default_factory=list)  # frames to detect
 
@@ -193,7 +198,8 @@ class _Seen:
         frames = tuple(Frame(i, stamp, duplicate, detection, speed_px=speed)
                        for i, (stamp, duplicate, detection, speed) in enumerate(zip(
                            self.stamps, self.duplicates, detections, speeds, strict=True)))
-        return CameraViews(self.source, frames, self.size, self.log_info, tuple(self.samples))
+        return CameraViews(self.source, frames, self.size, self.log_info, tuple(self.samples),
+                           self.truth)
 
 
 def board_speeds(detections: list[Detection | None], duplicates: list[bool]) -> list[float | None]:
@@ -226,7 +232,10 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
     by_image = {s.image_topic: seen[s.namespace] for s in sources}
     by_info = {s.info_topic: seen[s.namespace] for s in sources if s.info_topic}
     scenario: Scenario | None = None
-    wanted = [*by_image, *by_info, *([SCENARIO] if SCENARIO in reader.topics else [])]
+    by_truth = {topic: (seen[named[0]], named[1]) for topic in reader.topics
+                if (named := split_ground_truth(topic)) is not None and named[0] in seen}
+    wanted = [*by_image, *by_info, *by_truth,
+              *([SCENARIO] if SCENARIO in reader.topics else [])]
     pending: deque[tuple[_Seen, list[int], Future[list[Detection | None]]]] = deque()
     bar = tqdm(total=sum(reader.topics[s.image_topic].count for s in sources), unit="frame",
                desc="detect" if models is None else "detect again (guided)",
@@ -247,6 +256,13 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
         for raw in reader.raw_messages(wanted):
             if raw.topic == SCENARIO:
                 scenario = scenario or _scenario(reader.decode(raw))
+                continue
+            if raw.topic in by_truth:
+                camera, target = by_truth[raw.topic]
+                pose = reader.decode(raw)
+                if isinstance(pose, PoseStamped):
+                    camera.truth.setdefault(target, {})[pose.stamp_ns] = \
+                        transform_from_pose(pose.position_m, pose.orientation_xyzw)
                 continue
             if raw.topic in by_info:
                 camera = by_info[raw.topic]

@@ -117,10 +117,10 @@ def cameras_from(args: argparse.Namespace) -> list[str]:
 
 def _truth_error(camera: Any) -> str:
     u = camera.uncertainty
-    if u.true_error_worst_px is None:
+    if u.rays_true_error_worst_px is None:
         return ""
-    return (f"; vs truth (frames aligned) median {u.true_error_median_px:.3f} px, worst "
-            f"{u.true_error_worst_px:.3f} px")
+    return (f"; vs truth: rays median {u.rays_true_error_median_px:.3f} px, worst "
+            f"{u.rays_true_error_worst_px:.3f} px")
 
 
 def board_and_options(args: argparse.Namespace) -> tuple[Board, CalibrationOptions]:

@@ -143,19 +143,22 @@ def error_against(problem: Problem, camera: int, true_model: CameraModel, *,
     minus ``pixels``: the error :func:`projection_uncertainty` predicts.
 
     The point at ``range_m`` on the estimated ray is carried into every board frame by the
-    estimated poses and back by the true ones (the mean over the poses both know).
+    estimated poses and back by the true ones (the mean over the poses both know; NaN
+    when they know none in common).
     """
     flat = pixels.reshape(-1, 2)
     state = problem.state
     _in_camera, in_reference, _r = _points_in_reference(problem, camera, flat, range_m)
     seen = [p for p in np.flatnonzero(problem.normal.seen)
             if int(problem.instants[p]) in true_reference_from_board]
+    if not seen:
+        return np.full(pixels.shape, np.nan)
     total = np.zeros_like(in_reference)
     for p in seen:
         in_board = (in_reference - state.board_translation[p]) @ state.board_rotation[p]
         true = true_reference_from_board[int(problem.instants[p])]
         total += in_board @ true[:3, :3].T + true[:3, 3]
-    in_true_reference = total / max(len(seen), 1)
+    in_true_reference = total / len(seen)
     in_true_camera = in_true_reference @ true_camera_from_reference[:3, :3].T \
         + true_camera_from_reference[:3, 3]
     error = true_model.project(in_true_camera) - flat

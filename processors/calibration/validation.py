@@ -1,12 +1,23 @@
-"""Cross-validation: two disjoint halves of the instants, calibrated separately, compared.
+"""Cross-validation: the evidence split in two disjoint halves, calibrated separately, compared
+in the terms of the projection uncertainty.
 
-Each half has half the evidence, so each is off by about sqrt(2) times the full
-calibration's error, independently; the halves differ by about twice the full calibration's
-error. The reported figure is that difference over the image, halved: it estimates the
-error of the calibration from every view, in the same units as the projection uncertainty
-(:mod:`.uncertainty`), without trusting the noise model. The halves know nothing of each
-other's board poses, so the difference is taken after the rotation that best aligns their
-camera frames (mrcal's implied rotation), for rays (points far away).
+The halves are every other board point of every view: both see every board pose, so they can
+be compared as :mod:`.uncertainty` measures an error (mrcal's mean frames): the point half A
+puts at a pixel (at ``range_m``: far away, rays) is carried into every board frame by A's
+poses and back by B's, then imaged by B (:func:`~.uncertainty.error_against`). Splitting by
+views instead leaves the halves no pose in common; compared through the full calibration's
+poses they cannot show the error of the mean over the poses (each view's pose error is the
+same in a half and in the whole), and compared after the rotation that best aligns the
+cameras (mrcal's implied rotation, :func:`projection_difference`) they leave out every error
+that turns the camera frame, which the mean over the poses keeps.
+
+Scaling, to first order: each half has half the corners, so its estimate is off by ``d_A``
+with covariance ``2 S`` (``S``: the full calibration's covariance; half the information,
+twice the variance), independently of the other. Their difference ``d_A - d_B`` has ``4 S``:
+half of it, a factor ``sqrt(4 S / S) = 2``, is distributed as the full calibration's own error,
+without trusting the noise model's scale. It does assume the corners' errors independent: an
+error shared by a view's corners, or a lens model that fits every view alike, is the same in
+both halves and invisible here.
 """
 
 from __future__ import annotations
@@ -18,29 +29,31 @@ import numpy as np
 from replay.camera import CameraModel
 from replay.messages import F64
 
-from .joint import MIN_VIEWS, BoardView, calibrate_cameras
+from .joint import MIN_VIEWS, BoardView, JointResult, calibrate_cameras
 from .options import CalibrationOptions
-from .uncertainty import GRID_STEP_PX, grid
+from .robust import MIN_VIEW_POINTS
+from .uncertainty import GRID_STEP_PX, error_against, grid
 
 
 @dataclass(frozen=True)
 class CrossValidation:
-    """``difference_px`` ``(rows, cols)``: how far apart the two halves image the rays of
-    the grid pixels ``pixels`` ``(rows, cols, 2)`` of one camera."""
+    """``error_px`` ``(rows, cols)``: the full calibration's error expected at the grid pixels
+    ``pixels`` ``(rows, cols, 2)`` of one camera, half the halves' difference there (RMS of
+    the two directions of comparison)."""
 
     camera: int
     pixels: F64
-    difference_px: F64
+    error_px: F64
 
     @property
     def worst_px(self) -> float:
-        """Expected worst error of the full calibration: half the worst difference."""
-        return float(np.nanmax(self.difference_px)) / 2.0
+        """Expected worst error of the full calibration over the image (px)."""
+        return float(np.nanmax(self.error_px))
 
     @property
     def median_px(self) -> float:
-        """Expected median error of the full calibration: half the median difference."""
-        return float(np.nanmedian(self.difference_px)) / 2.0
+        """Expected median error of the full calibration over the image (px)."""
+        return float(np.nanmedian(self.error_px))
 
 
 def projection_difference(a: CameraModel, b: CameraModel, pixels: F64, *,
@@ -58,21 +71,47 @@ def projection_difference(a: CameraModel, b: CameraModel, pixels: F64, *,
     return out.reshape(pixels.shape[:-1])
 
 
+def halves(views: list[BoardView]) -> list[list[BoardView]]:
+    """Every view split into its even- and odd-numbered points (a view's half with fewer than
+    :data:`~.robust.MIN_VIEW_POINTS` points left out)."""
+    out: list[list[BoardView]] = [[], []]
+    for view in views:
+        for half, part in enumerate(out):
+            keep = view.point_ids % 2 == half
+            if keep.sum() >= MIN_VIEW_POINTS:
+                part.append(BoardView(view.camera, view.instant, view.point_ids[keep],
+                                      view.corners_px[keep], speed_px=view.speed_px))
+    return out
+
+
+def _difference_px(a: JointResult, b: JointResult, camera: int, pixels: F64,
+                   range_m: float) -> F64:
+    """Length ``(rows, cols)`` of where ``b`` images the points ``a`` puts at ``pixels``,
+    carried through the poses of the instants both solved, minus ``pixels``."""
+    problem = b.problem
+    poses = {int(problem.instants[p]): b.reference_from_board[int(problem.instants[p])]
+             for p in np.flatnonzero(problem.normal.seen)}
+    error = error_against(a.problem, camera, b.models[camera],
+                          true_camera_from_reference=b.camera_from_reference[camera],
+                          true_reference_from_board=poses, range_m=range_m, pixels=pixels)
+    return np.asarray(np.linalg.norm(error, axis=-1), dtype=np.float64)
+
+
 def cross_validate(points_in_board: F64, views: list[BoardView], sizes: list[tuple[int, int]],
-                   options: list[CalibrationOptions], *, seed: int = 0,
+                   options: list[CalibrationOptions], *, range_m: float,
                    step_px: int = GRID_STEP_PX) -> list[CrossValidation] | None:
-    """Per camera, the halves' difference; None when a half would have fewer than
-    :data:`~.joint.MIN_VIEWS` views of some camera."""
-    instants = np.unique([v.instant for v in views])
-    order = np.random.default_rng(seed).permutation(instants)
-    halves = [set(order[: len(order) // 2].tolist()), set(order[len(order) // 2:].tolist())]
-    parts = [[v for v in views if v.instant in half] for half in halves]
+    """Per camera, half the halves' difference for points at ``range_m``; None when a half
+    would have fewer than :data:`~.joint.MIN_VIEWS` views of some camera."""
+    parts = halves(views)
     for part in parts:
         for camera in range(len(sizes)):
             if sum(v.camera == camera for v in part) < MIN_VIEWS:
                 return None
-    models = [calibrate_cameras(points_in_board, part, sizes, options).models for part in parts]
-    return [CrossValidation(camera, grid(size, step_px),
-                            projection_difference(models[0][camera], models[1][camera],
-                                                  grid(size, step_px)))
-            for camera, size in enumerate(sizes)]
+    a, b = (calibrate_cameras(points_in_board, part, sizes, options) for part in parts)
+    out = []
+    for camera, size in enumerate(sizes):
+        pixels = grid(size, step_px)
+        squared = [_difference_px(a, b, camera, pixels, range_m) ** 2,
+                   _difference_px(b, a, camera, pixels, range_m) ** 2]
+        out.append(CrossValidation(camera, pixels, np.sqrt(np.mean(squared, axis=0)) / 2))
+    return out

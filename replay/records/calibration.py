@@ -168,9 +168,15 @@ class EvidenceSummary:
 class UncertaintySummary:
     """Projection uncertainty over the image (1 sigma, worst direction) at ``range_m`` and
     for rays (points far away), the calibration's error expected from cross-validation
-    (half the two halves' difference, camera frames aligned by a rotation, rays) and, in
-    simulated logs, the true error measured the same way; median and worst over the image,
-    px."""
+    (half the difference of two halves of the evidence, rays, measured as the uncertainty) and, in
+    simulated logs, the true error; median and worst over the image, px.
+
+    ``true_error_*`` and ``rays_true_error_*`` measure what the uncertainty predicts (mrcal's
+    mean frames): the point the estimate puts at a pixel is carried into every board frame
+    by the estimated poses and back by the true ones, then imaged by the true camera.
+    ``aligned_true_error_*`` compares only the lenses, for rays, after the rotation that best
+    aligns the camera frames (as the max projection difference does).
+    """
 
     range_m: float
     median_px: float
@@ -181,6 +187,10 @@ class UncertaintySummary:
     cross_validation_worst_px: float | None = field(default=None, metadata=OMIT_NONE)
     true_error_median_px: float | None = field(default=None, metadata=OMIT_NONE)
     true_error_worst_px: float | None = field(default=None, metadata=OMIT_NONE)
+    rays_true_error_median_px: float | None = field(default=None, metadata=OMIT_NONE)
+    rays_true_error_worst_px: float | None = field(default=None, metadata=OMIT_NONE)
+    aligned_true_error_median_px: float | None = field(default=None, metadata=OMIT_NONE)
+    aligned_true_error_worst_px: float | None = field(default=None, metadata=OMIT_NONE)
 
 
 @dataclass(frozen=True)

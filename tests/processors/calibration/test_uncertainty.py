@@ -8,6 +8,7 @@ import pytest
 from processors.calibration import uncertainty
 from processors.calibration.joint import BoardView, calibrate_cameras
 from processors.calibration.options import CalibrationOptions
+from processors.calibration.validation import cross_validate
 
 from .synthetic import BOARD, H, W, random_poses, true_model, views
 
@@ -41,6 +42,27 @@ def test_true_errors_follow_the_predicted_covariance() -> None:
                                  error))
     mean = float(np.mean(squared))
     assert 1.4 < mean < 2.8, mean
+
+
+def test_uncertainty_and_cross_validation_match_the_true_error_over_noise_draws() -> None:
+    """Over draws, the true error of rays is as large as the uncertainty says (1 sigma in the
+    worst direction: the 2-D error's RMS is 1 to sqrt(2) times it) and as the cross-validation
+    says (RMS over the image and the draws)."""
+    over_sigma, true_squared, cross_squared = [], [], []
+    for seed in range(12):
+        result, _u, _e = solve(0.1, 700 + seed)
+        far = uncertainty.projection_uncertainty(result.problem, 0, range_m=1e4, step_px=80)
+        error = np.linalg.norm(uncertainty.error_against(
+            result.problem, 0, true_model(), true_camera_from_reference=np.eye(4),
+            true_reference_from_board=TRUTH, range_m=far.range_m, pixels=far.pixels), axis=2)
+        over_sigma.append(error / far.sigma_px)
+        found = cross_validate(POINTS, result.views, [(W, H)], result.options,
+                               range_m=far.range_m, step_px=80)
+        assert found is not None
+        true_squared.append(np.mean(error ** 2))
+        cross_squared.append(np.mean(found[0].error_px ** 2))
+    assert 0.6 < np.sqrt(np.mean(np.square(over_sigma))) < 1.6
+    assert 0.6 < np.sqrt(np.sum(true_squared) / np.sum(cross_squared)) < 1.6
 
 
 def test_map_covers_the_image_and_scales_with_the_noise() -> None:
