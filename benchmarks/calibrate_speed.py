@@ -7,8 +7,9 @@ projection difference over the image (16 px margin, camera frames aligned by a r
 fisheye within 80° of its axis; stereo: left / right), stereo rotation (°) and baseline (%)
 errors, the worst error/sigma over every estimated parameter (≤ 3: the truth lies inside the
 reported 3-sigma intervals), and how the projection uncertainty and the cross-validation compare
-with the true error (ratios of their medians over the image, for rays). A plain OpenCV
-script on the same detections (``cv2.calibrateCamera`` / ``cv2.fisheye.calibrate`` with every
+with the true error (ratios of their medians over the image, for rays; the true error measured
+as they predict it, through the estimated board poses and back through the true ones). A plain
+OpenCV script on the same detections (``cv2.calibrateCamera`` / ``cv2.fisheye.calibrate`` with every
 detected frame and default flags, ``cv2.stereoCalibrate`` with default flags) follows each
 case as a reference row, with the ratio of the max projection differences.
 
@@ -114,16 +115,17 @@ def sigma_ratio(run: CalibrationRun) -> float:
 
 
 def agreement(run: CalibrationRun) -> tuple[float, float]:
-    """Projection uncertainty (rays, 1 sigma) and cross-validation over the true error (rays),
-    ratios of their medians over the image; the one furthest from 1 over the cameras."""
+    """Projection uncertainty (rays, 1 sigma) and cross-validation over the true error (rays,
+    measured as both predict it: through the estimated board poses and back through the true
+    ones), ratios of their medians over the image; the one furthest from 1 over the cameras."""
     unc, cv = [], []
     for camera in run.summary.cameras:
         u = camera.uncertainty
-        if u is None or not u.true_error_median_px:
+        if u is None or not u.rays_true_error_median_px:
             continue
-        unc.append(u.rays_median_px / u.true_error_median_px)
+        unc.append(u.rays_median_px / u.rays_true_error_median_px)
         if u.cross_validation_median_px is not None:
-            cv.append(u.cross_validation_median_px / u.true_error_median_px)
+            cv.append(u.cross_validation_median_px / u.rays_true_error_median_px)
 
     def furthest(values: list[float]) -> float:
         return max(values, key=lambda r: max(r, 1 / r)) if values else float("nan")
@@ -287,7 +289,8 @@ def main() -> None:
     print("maxdiff: max projection difference against the true model over the image (16 px "
           "margin; fisheye within 80° of the axis), camera frames aligned by a rotation; "
           "unc/t, cv/t: projection uncertainty (rays, 1σ) and cross-validation over the true "
-          "error, medians over the image")
+          "error (rays, through the estimated board poses and back through the true ones), "
+          "medians over the image")
 
 
 if __name__ == "__main__":
