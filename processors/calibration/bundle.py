@@ -13,6 +13,14 @@ block per board pose and their coupling. Levenberg-Marquardt steps eliminate the
 sparse least-squares solver (``scipy.optimize.least_squares`` with LSMR) needs minutes for the
 same problem and stops short of the optimum. The same blocks give the covariance
 (:class:`NormalEquations`). Rotations are updated on the manifold: ``R <- exp([d]x) R``.
+
+The rational model's radial factor (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2 + k5 r^4 +
+k6 r^6) is nearly unchanged when numerator and denominator gain the same factor (1 + a r^2):
+the corners cannot tell such solutions apart, and they part only beyond the corners, in the
+image corners. A prior (one residual per denominator coefficient, ``DENOMINATOR_PRIOR_PX``
+pixels per unit) picks the solution with the smallest denominator: it weighs as much as one
+corner 0.1 px off for a coefficient of 0.1, nothing beside thousands of corners wherever they
+decide, and it decides the trade they leave free (mrcal regularises its models likewise).
 """
 
 from __future__ import annotations
@@ -33,6 +41,10 @@ B8 = npt.NDArray[np.bool_]
 #: LM stops when a step lowers the cost by less than this fraction
 TOLERANCE = 1e-12
 MAX_ITERATIONS = 60
+#: the rational model's denominator coefficients, and the prior that holds them near zero: a
+#: residual of this many pixels per unit of each (see the module)
+RATIONAL_DENOMINATOR = ("k4", "k5", "k6")
+DENOMINATOR_PRIOR_PX = 1.0
 
 
 @dataclass(frozen=True)
@@ -147,6 +159,19 @@ class Layout:
     intrinsic_columns: list[I64]
     rig_columns: list[I64]  # (6,) per camera; empty for the reference
     global_count: int
+    prior_px: F64 = field(default_factory=lambda: np.zeros(0))  # (G,) see DENOMINATOR_PRIOR_PX
+
+    def prior_residual(self, state: RigState) -> F64:
+        """``(G,)`` the prior's residuals (px): ``prior_px`` times the parameter's value."""
+        out = np.zeros(self.global_count)
+        for camera, columns in enumerate(self.intrinsic_columns):
+            weights = self.prior_px[columns]
+            if np.any(weights):
+                names = INTRINSIC_NAMES[self.setups[camera].distortion_model]
+                values = np.array([state.intrinsics[camera][names.index(n)]
+                                   for n in self.names[camera]])
+                out[columns] = weights * values
+        return out
 
     @classmethod
     def of(cls, setups: list[CameraSetup], seed: RigState) -> Layout:
@@ -162,7 +187,13 @@ class Layout:
         for camera in range(len(setups)):
             rig_columns.append(np.arange(at, at + 6) if camera else np.zeros(0, np.int64))
             at += 6 if camera else 0
-        return cls(setups, bases, names, intrinsic_columns, rig_columns, at)
+        prior = np.zeros(at)
+        for setup, labels, columns in zip(setups, names, intrinsic_columns, strict=True):
+            if setup.distortion_model == "rational_polynomial":
+                for label, column in zip(labels, columns, strict=True):
+                    if label in RATIONAL_DENOMINATOR:
+                        prior[column] = DENOMINATOR_PRIOR_PX
+        return cls(setups, bases, names, intrinsic_columns, rig_columns, at, prior)
 
     def global_columns(self, camera: int) -> I64:
         """Columns of one camera's intrinsics and rig transform in the global block."""
@@ -193,11 +224,12 @@ class Linearization:
     residuals: F64
     pose: F64
     global_blocks: list[F64]  # per camera, for its views (a slice of the views)
+    prior: F64 = field(default_factory=lambda: np.zeros(0))  # (G,) the prior's residuals
 
     @property
     def cost(self) -> float:
-        """Sum of squared residuals."""
-        return float(np.sum(self.residuals ** 2))
+        """Sum of squared residuals, the prior's included."""
+        return float(np.sum(self.residuals ** 2) + np.sum(self.prior ** 2))
 
 
 def times(a: F64, b: F64) -> F64:
@@ -259,7 +291,8 @@ def linearize(state: RigState, layout: Layout, obs: Observations, points_in_boar
             block[:, :, width:width + 3] = cross(turned_c.reshape(-1, 1, 3), d_point)
             block[:, :, width + 3:] = d_point
         blocks.append(block.reshape(count, 2 * n, -1))
-    return Linearization(residuals, pose.reshape(len(pose), 2 * n, 6), blocks)
+    return Linearization(residuals, pose.reshape(len(pose), 2 * n, 6), blocks,
+                         layout.prior_residual(state))
 
 
 @dataclass
@@ -331,6 +364,9 @@ def normal_equations(lin: Linearization, layout: Layout, obs: Observations,
         per_pose = np.zeros((pose_count, len(columns), 6))
         np.add.at(per_pose, obs.instant[views], coupling)
         c[:, columns, :] += per_pose
+    if len(lin.prior):
+        a[np.diag_indices(g)] += layout.prior_px ** 2
+        g_global += layout.prior_px * lin.prior
     seen = np.abs(b).sum(axis=(1, 2)) > 0
     b[~seen] = np.eye(6)
     return NormalEquations(a, c, b, g_global, g_pose, seen)

@@ -13,7 +13,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
+from processors.calibration import bundle
 from processors.calibration.board import Board
 from processors.calibration.joint import BoardView, JointResult, calibrate_cameras
 from processors.calibration.lens import INTRINSIC_NAMES, intrinsics_of
@@ -123,6 +125,24 @@ def test_rational_polynomial_lens_from_partial_views() -> None:
     result = calibrate_cameras(board.points_in_board(), observed, [(W, H)],
                                CalibrationOptions(model="rational_polynomial"))
     assert_meets_the_targets(result, 0, RATIONAL)
+
+
+def test_rational_denominator_held_by_its_prior(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Boards over the middle 70 % of the image: numerator and denominator can grow together
+    (the corners cannot tell), which the prior on k4, k5, k6 stops; without it the image
+    corners are off by pixels."""
+    board = Board(7, 5, 0.011, "charuco", 0.008)
+    poses = aimed_poses(RATIONAL, 40, np.random.default_rng(5), board=board,
+                        distance_m=(0.14, 0.26), spread=0.7)
+    observed = observe(RATIONAL, poses, board, seed=6, partial=True)
+    options = CalibrationOptions(model="rational_polynomial")
+    held = calibrate_cameras(board.points_in_board(), observed, [(W, H)], options).models[0]
+    assert np.abs(held.d[5:]).max() < 0.05  # k4, k5, k6 (truth 0.02, 0.01, -0.004)
+    assert max_difference_px(held, RATIONAL) < 0.3
+    monkeypatch.setattr(bundle, "DENOMINATOR_PRIOR_PX", 0.0)
+    free = calibrate_cameras(board.points_in_board(), observed, [(W, H)], options).models[0]
+    assert np.abs(free.d[5:]).max() > 1.0
+    assert max_difference_px(free, RATIONAL) > 1.0
 
 
 def test_fisheye_lens_within_80_degrees() -> None:
