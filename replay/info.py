@@ -13,19 +13,21 @@ import io
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from . import storage
+from .buffer_layout import check_buffer
 from .errors import ReplayError
 from .formats.base import ROS_SERIALIZATIONS, LogReader, RawMessage
-from .frames import FrameStream
-from .messages import CameraInfo, CompressedImage, CompressedVideo, Image
-from .wire import CDR, DECODABLE, FRAME_TYPES, RECORD_TYPES
-from .wire.layout import image_from_buffer
+from .msgtypes import CAMERA_INFO_TYPES, CDR, DECODABLE, FRAME_TYPES
+
+if TYPE_CHECKING:
+    from .frames import FrameStream
 
 __all__ = ["FrameCheck", "LogSummary", "TopicSummary", "format_summary", "summarize"]
 
 #: topics whose first message is decoded to describe the stream (ROS and Foxglove types)
-DESCRIBED_TYPES = FRAME_TYPES | {t for t, kind in RECORD_TYPES.items() if kind is CameraInfo}
+DESCRIBED_TYPES = FRAME_TYPES | CAMERA_INFO_TYPES
 
 
 @dataclass(frozen=True, slots=True)
@@ -160,6 +162,8 @@ class _FrameChecker:
         self.undecodable: dict[str, int] = {}
 
     def __call__(self, reader: LogReader, raw: RawMessage) -> None:
+        from .frames import FrameStream
+
         self.frames += 1
         stream = self._streams.setdefault(raw.topic, FrameStream())
         try:
@@ -192,6 +196,9 @@ def describe(reader: LogReader, raw: RawMessage) -> str:
 
 def _describe_decoded(reader: LogReader, raw: RawMessage) -> str:
     """:func:`describe` through the reader's own decode (every format and schema)."""
+    from .frames import FrameStream
+    from .messages import CameraInfo, CompressedImage, CompressedVideo, Image
+
     where = "" if raw.serialization in ROS_SERIALIZATIONS else f" ({raw.serialization})"
     try:
         message = reader.decode(raw)
@@ -233,12 +240,12 @@ def _describe_by_schema(raw: RawMessage) -> str | None:
             return None
         if raw.msgtype == "sensor_msgs/msg/CameraInfo":
             return f"{int(msg.width)}x{int(msg.height)} {msg.distortion_model}"
-        image = image_from_buffer(0, "", width=int(msg.width), height=int(msg.height),
-                                  encoding=str(msg.encoding), step=int(msg.step),
-                                  data=bytes(msg.data), bigendian=bool(msg.is_bigendian))
+        encoding, width, height = str(msg.encoding), int(msg.width), int(msg.height)
+        check_buffer(encoding, width=width, height=height, step=int(msg.step),
+                     size=len(msg.data))
     except Exception:  # any failure of this shortcut: the full decode reports it
         return None
-    return f"{image.encoding} {image.width}x{image.height}"
+    return f"{encoding} {width}x{height}"
 
 
 def size_on_disk(path: Path | str) -> int:

@@ -7,28 +7,22 @@ from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from types import TracebackType
-from typing import Self
-
-from mcap.records import Schema
+from typing import TYPE_CHECKING, Self
 
 from ..atomic import AtomicOutput
 from ..errors import LogWriteError, ReplayError, TopicError
-from ..frames import Frame, FrameStream
-from ..messages import CameraInfo, CompressedImage, CompressedVideo, Image, Message
-from ..wire import (
-    CDR,
-    FRAME_TYPES,
-    PROTOBUF,
-    ROS1,
-    Decoder,
-    convert_serialization,
-    decoder_for,
-    foxglove_schema,
-    msgtype_of,
-    ros_schema,
-    serialize,
-    to_foxglove,
-)
+from ..msgtypes import CDR, FRAME_TYPES, PROTOBUF, ROS1
+
+if TYPE_CHECKING:
+    from mcap.records import Schema
+
+    from ..frames import Frame
+    from ..messages import Message
+    from ..wire import Decoder
+
+# The typed records, their pixels and their serialization (numpy, rosbags) are imported by
+# the methods that decode or encode, so that opening a log and reading its index does not
+# load them.
 
 #: serializations every format can hold (others, e.g. protobuf or JSON, only MCAP)
 ROS_SERIALIZATIONS = frozenset({CDR, ROS1})
@@ -112,8 +106,11 @@ class LogReader:
     def schema(self, raw: RawMessage) -> Schema | None:
         """The schema record a raw message's channel was written with (formats without
         schema records: the ROS type's name, whose definition the typestore knows)."""
-        return raw.schema if raw.schema is not None else ros_schema(raw.msgtype,
-                                                                      raw.serialization)
+        if raw.schema is not None:
+            return raw.schema
+        from ..wire import ros_schema
+
+        return ros_schema(raw.msgtype, raw.serialization)
 
     def decode(self, raw: RawMessage) -> Message:
         """Typed record of a raw message; errors name the log and topic."""
@@ -121,6 +118,8 @@ class LogReader:
         try:
             decoder = self._decoders.get(key)
             if decoder is None:
+                from ..wire import decoder_for
+
                 decoder = self._decoders[key] = decoder_for(raw.serialization, self.schema(raw))
             return decoder(raw.data)
         except ReplayError as err:
@@ -148,6 +147,9 @@ class LogReader:
 
         With ``skipped``, a frame that does not decode is counted there (topic -> count)
         instead of raising."""
+        from ..frames import FrameStream
+        from ..messages import CompressedImage, CompressedVideo, Image
+
         if topics is None:
             topics = [t.name for t in self.topics.values() if t.msgtype in FRAME_TYPES]
         streams: dict[str, FrameStream] = {}
@@ -242,6 +244,8 @@ class LogWriter:
             if stamp is None:
                 raise LogWriteError(f"{topic}: {type(message).__name__} needs log_time_ns")
             log_time_ns = stamp
+        from ..wire import foxglove_schema, msgtype_of, serialize, to_foxglove
+
         if self.writes_foxglove(message):
             proto = to_foxglove(message)
             schema = foxglove_schema(proto)
@@ -256,6 +260,9 @@ class LogWriter:
     def writes_foxglove(self, message: Message) -> bool:
         """Whether a record is stored with its Foxglove schema: video (it has no ROS type),
         and every camera record under the ``foxglove`` profile (MCAP)."""
+        from ..messages import CameraInfo, CompressedImage, CompressedVideo, Image
+        from ..wire import msgtype_of
+
         if self.profile == "foxglove" and isinstance(
                 message, Image | CompressedImage | CompressedVideo | CameraInfo):
             return True
@@ -279,6 +286,8 @@ class LogWriter:
             return
         self._check_type(raw.topic, raw.msgtype)
         if raw.serialization != self.serialization:
+            from ..wire import convert_serialization
+
             data = convert_serialization(raw.data, raw.msgtype, raw.serialization,
                                          self.serialization)
             raw = RawMessage(raw.topic, raw.msgtype, raw.log_time_ns, data, self.serialization)

@@ -22,7 +22,7 @@ from mcap.records import Channel, Chunk, DataEnd, Footer, Message, MessageIndex,
 from mcap.stream_reader import StreamReader, breakup_chunk
 
 from ..errors import LogReadError
-from ..wire import CDR, ROS1, normalize_msgtype
+from ..msgtypes import CDR, ROS1, normalize_msgtype
 from .base import LogReader, RawMessage, TopicInfo
 from .bounded import BoundedFile
 from .mcap_checks import check_chunk_size, summary_problem

@@ -1,5 +1,6 @@
 """Raw image encodings (``sensor_msgs/Image``, ``foxglove.RawImage``): the layout of each
-buffer and the frame it makes. A new raw encoding is one :data:`RAW_ENCODINGS` entry.
+buffer and the frame it makes. A new raw encoding is one :data:`RAW_ENCODINGS` entry and
+its buffer's layout in :data:`replay.buffer_layout.LAYOUTS`.
 
 The entries say how ROS's image_encodings.hpp and cv_bridge read the encodings: 3- and
 4-channel 8UC are BGR(A), 16UC1 is depth in millimetres and 32FC1 depth in metres (REP 118);
@@ -16,6 +17,7 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from ..buffer_layout import LAYOUTS
 from ..errors import EncodingError
 from .frame import Color, Frame, Pixels
 
@@ -46,16 +48,11 @@ class RawImage(Protocol):
         ...
 
 
-U8, U16, I16, F32 = (np.dtype(t) for t in (np.uint8, np.uint16, np.int16, np.float32))
-
-
 @dataclass(frozen=True, slots=True)
 class Raw:
     """One raw image encoding: ``channels`` values of ``dtype`` per pixel, decoded to a
-    ``color`` frame by ``convert`` (None: the pixels as they are).
-
-    Semi-planar YUV (nv21, nv24) holds its chroma plane below the luma plane: its buffer
-    has ``rows`` times as many rows of ``width`` values as the image has rows."""
+    ``color`` frame by ``convert`` (None: the pixels as they are); ``rows`` buffer rows per
+    image row (see :class:`replay.buffer_layout.Layout`)."""
 
     dtype: np.dtype[Any]
     channels: int
@@ -114,31 +111,41 @@ def _first_channel(pixels: Pixels) -> Pixels:
 _BAYER = {"rggb": "COLOR_BayerRGGB2RGB", "bggr": "COLOR_BayerBGGR2RGB",
           "gbrg": "COLOR_BayerGBRG2RGB", "grbg": "COLOR_BayerGRBG2RGB"}
 
+
+def _raw(encoding: str, color: Color, convert: Callable[[Pixels], Pixels] | None = None, *,
+         depth_unit_m: float | None = None) -> Raw:
+    """The entry of ``encoding``: its buffer's layout (:data:`LAYOUTS`), decoded to a
+    ``color`` frame by ``convert``."""
+    layout = LAYOUTS[encoding]
+    return Raw(np.dtype(layout.value), layout.channels, color, convert, depth_unit_m,
+               layout.rows)
+
+
 #: raw encoding name -> its entry
 RAW_ENCODINGS: dict[str, Raw] = {
-    "rgb8": Raw(U8, 3, Color.RGB),
-    "bgr8": Raw(U8, 3, Color.BGR),
-    "rgba8": Raw(U8, 4, Color.RGBA),
-    "bgra8": Raw(U8, 4, Color.BGRA),
-    "rgb16": Raw(U16, 3, Color.RGB),
-    "bgr16": Raw(U16, 3, Color.BGR),
-    "rgba16": Raw(U16, 4, Color.RGBA),
-    "bgra16": Raw(U16, 4, Color.BGRA),
-    "mono8": Raw(U8, 1, Color.MONO),
-    "mono16": Raw(U16, 1, Color.MONO),
-    "8UC1": Raw(U8, 1, Color.MONO),
-    "8UC2": Raw(U8, 2, Color.MONO, _first_channel),
-    "8UC3": Raw(U8, 3, Color.BGR),
-    "8UC4": Raw(U8, 4, Color.BGRA),
-    "16UC1": Raw(U16, 1, Color.DEPTH, depth_unit_m=0.001),
-    "16SC1": Raw(I16, 1, Color.MONO),
-    "32FC1": Raw(F32, 1, Color.DEPTH, depth_unit_m=1.0),
-    **{f"bayer_{pattern}{bits}": Raw(dtype, 1, Color.RGB, _cv(code))
-       for pattern, code in _BAYER.items() for bits, dtype in ((8, U8), (16, U16))},
-    "yuv422": Raw(U8, 2, Color.RGB, _cv("COLOR_YUV2RGB_UYVY")),
-    "uyvy": Raw(U8, 2, Color.RGB, _cv("COLOR_YUV2RGB_UYVY")),
-    "yuv422_yuy2": Raw(U8, 2, Color.RGB, _cv("COLOR_YUV2RGB_YUY2")),
-    "yuyv": Raw(U8, 2, Color.RGB, _cv("COLOR_YUV2RGB_YUY2")),
-    "nv21": Raw(U8, 1, Color.RGB, _cv("COLOR_YUV2RGB_NV21"), rows=Fraction(3, 2)),
-    "nv24": Raw(U8, 1, Color.RGB, _nv24_to_rgb, rows=Fraction(3)),
+    "rgb8": _raw("rgb8", Color.RGB),
+    "bgr8": _raw("bgr8", Color.BGR),
+    "rgba8": _raw("rgba8", Color.RGBA),
+    "bgra8": _raw("bgra8", Color.BGRA),
+    "rgb16": _raw("rgb16", Color.RGB),
+    "bgr16": _raw("bgr16", Color.BGR),
+    "rgba16": _raw("rgba16", Color.RGBA),
+    "bgra16": _raw("bgra16", Color.BGRA),
+    "mono8": _raw("mono8", Color.MONO),
+    "mono16": _raw("mono16", Color.MONO),
+    "8UC1": _raw("8UC1", Color.MONO),
+    "8UC2": _raw("8UC2", Color.MONO, _first_channel),
+    "8UC3": _raw("8UC3", Color.BGR),
+    "8UC4": _raw("8UC4", Color.BGRA),
+    "16UC1": _raw("16UC1", Color.DEPTH, depth_unit_m=0.001),
+    "16SC1": _raw("16SC1", Color.MONO),
+    "32FC1": _raw("32FC1", Color.DEPTH, depth_unit_m=1.0),
+    **{name: _raw(name, Color.RGB, _cv(code))
+       for pattern, code in _BAYER.items() for name in (f"bayer_{pattern}8", f"bayer_{pattern}16")},
+    "yuv422": _raw("yuv422", Color.RGB, _cv("COLOR_YUV2RGB_UYVY")),
+    "uyvy": _raw("uyvy", Color.RGB, _cv("COLOR_YUV2RGB_UYVY")),
+    "yuv422_yuy2": _raw("yuv422_yuy2", Color.RGB, _cv("COLOR_YUV2RGB_YUY2")),
+    "yuyv": _raw("yuyv", Color.RGB, _cv("COLOR_YUV2RGB_YUY2")),
+    "nv21": _raw("nv21", Color.RGB, _cv("COLOR_YUV2RGB_NV21")),
+    "nv24": _raw("nv24", Color.RGB, _nv24_to_rgb),
 }

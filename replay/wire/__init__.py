@@ -2,6 +2,7 @@
 rosbags' typestore, Foxglove's protobuf and JSON camera schemas, and the MCAP decoder
 factories every reader decodes through."""
 
+from ..msgtypes import CDR, DECODABLE, JSON, PROTOBUF, ROS1, normalize_msgtype
 from .decoders import (
     DECODER_FACTORIES,
     FRAME_TYPES,
@@ -12,16 +13,12 @@ from .decoders import (
     record_msgtype,
     ros_schema,
 )
-from .foxglove import JSON, PROTOBUF, foxglove_schema, to_foxglove
+from .foxglove import foxglove_schema, to_foxglove
 from .ros import (
-    CDR,
-    DECODABLE,
-    ROS1,
     convert_serialization,
     deserialize,
     from_ros,
     msgtype_of,
-    normalize_msgtype,
     ros1_typestore,
     ros2_typestore,
     serialize,

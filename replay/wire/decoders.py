@@ -16,10 +16,12 @@ from typing import cast
 from mcap.decoder import DecoderFactory
 from mcap.records import Schema
 
+from .. import messages
 from ..errors import ReplayError
-from ..messages import MSGTYPES, CameraInfo, CompressedImage, CompressedVideo, Image, Message
+from ..messages import MSGTYPES, Message
+from ..msgtypes import CDR, DECODABLE, FRAME_TYPES, RECORD_KINDS, ROS1, normalize_msgtype
 from .foxglove import FoxgloveJsonFactory, FoxgloveProtobufFactory
-from .ros import CDR, DECODABLE, ROS1, deserialize, normalize_msgtype
+from .ros import deserialize
 
 __all__ = [
     "DECODER_FACTORIES",
@@ -33,15 +35,8 @@ __all__ = [
 ]
 
 #: type (schema) name -> the typed record its messages decode to
-RECORD_TYPES: dict[str, type] = {
-    **{name: kind for kind, name in MSGTYPES.items()},
-    "foxglove.RawImage": Image,
-    "foxglove.CompressedImage": CompressedImage,
-    "foxglove.CameraCalibration": CameraInfo,
-}
-#: type names whose messages decode to camera frames
-FRAME_TYPES = frozenset(name for name, kind in RECORD_TYPES.items()
-                        if kind in (Image, CompressedImage, CompressedVideo))
+RECORD_TYPES: dict[str, type] = {name: getattr(messages, kind)
+                                 for name, kind in RECORD_KINDS.items()}
 
 
 def record_msgtype(msgtype: str) -> str:

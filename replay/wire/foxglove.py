@@ -23,6 +23,7 @@ from mcap.records import Schema
 
 from ..errors import ReplayError
 from ..messages import CameraInfo, CompressedImage, CompressedVideo, Image, Message
+from ..msgtypes import JSON, PROTOBUF
 from .layout import image_from_buffer
 
 __all__ = [
@@ -34,9 +35,6 @@ __all__ = [
     "foxglove_schema",
     "to_foxglove",
 ]
-
-PROTOBUF = "protobuf"
-JSON = "json"
 
 #: field values by name, bytes as bytes, the timestamp as integer nanoseconds
 Fields = dict[str, Any]

@@ -26,11 +26,8 @@ from ..messages import (
     PoseStamped,
     Text,
 )
+from ..msgtypes import CDR, DECODABLE, ROS1
 from .layout import image_from_buffer
-
-#: serialization of raw bytes in a log
-CDR = "cdr"
-ROS1 = "ros1"
 
 
 @cache
@@ -43,12 +40,6 @@ def ros2_typestore() -> Typestore:
 def ros1_typestore() -> Typestore:
     """Typestore used for ROS1 message definitions (Header carries ``seq``)."""
     return get_typestore(Stores.ROS1_NOETIC)
-
-
-def normalize_msgtype(name: str) -> str:
-    """``sensor_msgs/Image`` (ROS1 spelling) -> ``sensor_msgs/msg/Image``."""
-    parts = name.split("/")
-    return f"{parts[0]}/msg/{parts[1]}" if len(parts) == 2 else name
 
 
 def msgtype_of(message: Message) -> str:
@@ -194,10 +185,6 @@ def from_ros(msg: Any) -> Message:
         case "std_msgs/msg/String":
             return Text(str(msg.data))
     raise ReplayError(f"camlog has no typed record for {msgtype}")
-
-
-#: ROS types camlog has records for
-DECODABLE = frozenset(t for t in MSGTYPES.values() if "/msg/" in t)
 
 
 def deserialize(

@@ -74,6 +74,14 @@ def test_info_on_a_log_loads_no_opencv_protobuf_or_viewer() -> None:
     assert "mcap" in loaded  # the log was read
 
 
+def test_info_on_an_mcap_log_loads_neither_numpy_nor_rosbags() -> None:
+    """Counts and spans come from the index, the first image is described from its bytes."""
+    log = GOLDEN / "stereo_unsynced-seed0-640x480-f240.mcap"
+    loaded = loaded_by("info", str(log))
+    assert {"numpy", "rosbags"} & loaded == set()
+    assert "mcap_ros2" in loaded  # the first image and camera info were decoded
+
+
 def test_reading_an_mcap_log_loads_no_other_format_library() -> None:
     log = GOLDEN / "red_block-seed0-640x480-f10.mcap"
     loaded = loaded_by("info", str(log))
