@@ -146,7 +146,7 @@ class _RosbagsWriter(LogWriter):
                 conn = self._writer.add_connection(raw.topic, raw.msgtype,
                                                    typestore=self._typestore())
                 self._conns[raw.topic] = conn
-            self._writer.write(conn, raw.log_time_ns, bytes(raw.data))
+            self._writer.write(conn, raw.log_time_ns, raw.data)  # copied into its chunk
         except (OSError, LogWriteError):
             raise
         except Exception as err:  # sqlite3.Error, rosbags' WriterError

@@ -203,11 +203,13 @@ def deserialize(
     return from_ros(msg)
 
 
-def convert_serialization(data: bytes | memoryview, msgtype: str, src: str, dst: str) -> bytes:
-    """Re-serialize raw bytes between CDR and ROS1 wire format (no-op when equal)."""
+def convert_serialization(data: bytes | memoryview, msgtype: str, src: str,
+                          dst: str) -> bytes | memoryview:
+    """Re-serialize raw bytes between CDR and ROS1 wire format, byte by byte (``data`` itself
+    when equal); the result is a buffer of its own, not copied again."""
     if src == dst:
-        return bytes(data)
+        return data
     ts = ros2_typestore()
     if src == ROS1:
-        return bytes(ts.ros1_to_cdr(data, msgtype))
-    return bytes(ts.cdr_to_ros1(data, msgtype))
+        return ts.ros1_to_cdr(data, msgtype)
+    return ts.cdr_to_ros1(data, msgtype)
