@@ -15,26 +15,27 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
-
-from tqdm import tqdm
+from typing import TYPE_CHECKING, Any
 
 from .atomic import check_not_input
 from .errors import LogReadError, OptionError, ReplayError, TopicError
+from .format_names import DEFAULT_CRF, STILL_CODECS, VIDEO_CODEC_NAMES
 from .formats import format_for_output, open_reader, open_writer
 from .formats.base import LogReader
-from .frames.video import DEFAULT_CRF, VIDEO_CODECS
 from .messages import MSGTYPES, CameraInfo, CompressedImage, CompressedVideo, Image, Message
-from .reencode import STILLS, TopicReencoder
+from .progress import progress_bar
 from .selection import select_topics, window_ns
 from .wire import record_msgtype, ros2_typestore
+
+if TYPE_CHECKING:
+    from .reencode import TopicReencoder
 
 #: camera types stored in Foxglove's schemas under ``--profile foxglove``
 FOXGLOVE_CAMERA_TYPES = frozenset(MSGTYPES[kind] for kind in (Image, CompressedImage, CameraInfo))
 
 __all__ = ["COMPRESSIONS", "ConvertResult", "convert_log", "renamed_topics"]
 
-COMPRESSIONS = (*STILLS, *VIDEO_CODECS)
+COMPRESSIONS = (*STILL_CODECS, *VIDEO_CODEC_NAMES)
 IMAGE = MSGTYPES[Image]
 COMPRESSED = MSGTYPES[CompressedImage]
 VIDEO = MSGTYPES[CompressedVideo]
@@ -71,7 +72,7 @@ def renamed_topics(
         raise OptionError("--compress and --decompress exclude each other")
     if compress is not None and compress not in COMPRESSIONS:
         raise OptionError(f"unknown compression {compress!r} (use {', '.join(COMPRESSIONS)})")
-    suffix = "/video" if compress in VIDEO_CODECS else "/compressed"
+    suffix = "/video" if compress in VIDEO_CODEC_NAMES else "/compressed"
     renamed: dict[str, str] = {}
     for topic, msgtype in msgtypes.items():
         kind = record_msgtype(msgtype)
@@ -92,6 +93,16 @@ def _msgdef(reader: LogReader, topic: str) -> str:
     others, in the schema encoding it declares)."""
     info = reader.topics[topic]
     return "" if info.msgtype in ros2_typestore().types else info.msgdef
+
+
+def _reencoders(renamed: dict[str, str], compress: str | None,
+                crf: int) -> dict[str, TopicReencoder]:
+    """A re-encoder per renamed topic (images are decoded only for these)."""
+    if not renamed:
+        return {}
+    from .reencode import TopicReencoder
+
+    return {t: TopicReencoder(t, compress, crf) for t in renamed}
 
 
 def convert_log(
@@ -120,8 +131,8 @@ def convert_log(
     started = time.perf_counter()
     check_not_input(Path(output), [Path(input_path)])
     fmt = format_for_output(Path(output), fmt)
-    if fmt != "mcap" and (profile != "ros2" or compress in VIDEO_CODECS):
-        what = f"--compress {compress}" if compress in VIDEO_CODECS else f"--profile {profile}"
+    if fmt != "mcap" and (profile != "ros2" or compress in VIDEO_CODEC_NAMES):
+        what = f"--compress {compress}" if compress in VIDEO_CODEC_NAMES else f"--profile {profile}"
         raise OptionError(f"{what} writes Foxglove schemas, which only MCAP holds")
     with open_reader(input_path, recover=recover) as reader:
         if reader.message_count == 0:
@@ -133,12 +144,11 @@ def convert_log(
         start_ns, end_ns = window_ns(reader.start_ns, start_s, end_s)
         total = sum(reader.topics[t].count for t in names)
         options: dict[str, Any] = {"profile": profile} if fmt == "mcap" else {}
-        codecs = {t: TopicReencoder(t, compress, crf) for t in renamed}
+        codecs = _reencoders(renamed, compress, crf)
         written = reencoded = 0
         with open_writer(output, fmt=fmt, overwrite=overwrite, inputs=[input_path],
                          **options) as writer, \
-                tqdm(total=total, unit="msg", desc="convert", leave=False,
-                     disable=None if progress is None else not progress) as bar:
+                progress_bar(total=total, unit="msg", desc="convert", progress=progress) as bar:
             for name, values in reader.metadata.items():
                 writer.set_metadata(name, values)
             for raw in reader.raw_messages(chosen, start_ns, end_ns):

@@ -82,6 +82,15 @@ def test_info_on_an_mcap_log_loads_neither_numpy_nor_rosbags() -> None:
     assert "mcap_ros2" in loaded  # the first image and camera info were decoded
 
 
+def test_convert_without_progress_loads_neither_tqdm_nor_an_image_codec(tmp_path: Path) -> None:
+    """Messages are copied as bytes: no image is decoded, no bar is shown."""
+    log = GOLDEN / "red_block-seed0-640x480-f10.mcap"
+    loaded = loaded_by("convert", str(log), str(tmp_path / "out.bag"), "--no-progress")
+    assert (tmp_path / "out.bag").is_file()
+    assert {"tqdm", "cv2", "av"} & loaded == set()
+    assert "rosbags" in loaded
+
+
 def test_reading_an_mcap_log_loads_no_other_format_library() -> None:
     log = GOLDEN / "red_block-seed0-640x480-f10.mcap"
     loaded = loaded_by("info", str(log))
