@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+from collections.abc import Iterator
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
@@ -26,6 +27,8 @@ if TYPE_CHECKING:
 
 __all__ = ["FrameCheck", "LogSummary", "TopicSummary", "format_summary", "summarize"]
 
+#: topics whose first messages lie this close in log time are read together
+FIRST_MESSAGES_WINDOW_NS = 1_000_000_000
 #: topics whose first message is decoded to describe the stream (ROS and Foxglove types)
 DESCRIBED_TYPES = FRAME_TYPES | CAMERA_INFO_TYPES
 
@@ -106,15 +109,16 @@ def summarize(reader: LogReader, *, verify: bool = False) -> LogSummary:
         counts = {name: info.count for name, info in reader.topics.items() if name in spans}
         first_ns = {name: first for name, (first, _last) in spans.items()}
         last_ns = {name: last for name, (_first, last) in spans.items()}
+        described = {}  # only these need their first message
         for name, info in reader.topics.items():
             if name not in spans:
                 continue
-            if info.msgtype in DESCRIBED_TYPES:  # only these need their first message
-                raw = next(iter(reader.raw_messages([name])), None)
-                if raw is not None:
-                    details[name] = describe(reader, raw)
+            if info.msgtype in DESCRIBED_TYPES:
+                described[name] = first_ns[name]
             elif info.serialization not in ROS_SERIALIZATIONS or info.msgtype not in DECODABLE:
                 details[name] = f"({info.serialization or 'no encoding'}; copied, not decoded)"
+        for raw in first_messages(reader, described):
+            details[raw.topic] = describe(reader, raw)
     else:
         for raw in reader.raw_messages():
             topic = raw.topic
@@ -150,6 +154,26 @@ def summarize(reader: LogReader, *, verify: bool = False) -> LogSummary:
         warnings=tuple(reader.warnings) + (() if check is None else check.result.warnings),
         frames=None if check is None else check.result,
     )
+
+
+def first_messages(reader: LogReader, first_ns: dict[str, int]) -> Iterator[RawMessage]:
+    """The first message of each topic of ``first_ns`` (topic -> its first log time, from
+    the index). Topics that begin within :data:`FIRST_MESSAGES_WINDOW_NS` of each other are
+    read in one pass over that stretch of the log, so that a chunk holding the first
+    messages of several topics (the cameras of a rig) is read once."""
+    pending = sorted(first_ns, key=lambda topic: first_ns[topic])
+    while pending:
+        start_ns = first_ns[pending[0]]
+        group = [t for t in pending if first_ns[t] - start_ns <= FIRST_MESSAGES_WINDOW_NS]
+        pending = pending[len(group):]
+        wanted = set(group)
+        end_ns = first_ns[group[-1]] + 1
+        for raw in reader.raw_messages(group, start_ns, end_ns):
+            if raw.topic in wanted:
+                wanted.discard(raw.topic)
+                yield raw
+                if not wanted:
+                    break
 
 
 class _FrameChecker:

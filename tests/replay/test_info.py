@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -23,9 +23,11 @@ from replay import (
 )
 from replay.frames import decode_frame, encode_compressed
 from replay.info import (
+    FIRST_MESSAGES_WINDOW_NS,
     FrameCheck,
     LogSummary,
     TopicSummary,
+    first_messages,
     format_size,
     format_stamp,
     format_summary,
@@ -129,6 +131,34 @@ def test_only_the_first_image_of_a_topic_is_decoded(
     assert sorted(decoded) == ["sensor_msgs/msg/CameraInfo", "sensor_msgs/msg/CompressedImage",
                                "sensor_msgs/msg/Image"]
     assert summary.message_count == 6 * 3 + 11 + 1
+
+
+@pytest.mark.parametrize("fmt", WRITE_FORMATS)
+def test_first_messages_of_topics_that_begin_together_are_read_in_one_pass(
+    fmt: str, log_path: Callable[[str], Path]
+) -> None:
+    late_ns = T0_NS + 3 * FIRST_MESSAGES_WINDOW_NS  # a camera switched on later
+    entries = camera_entries(frames=4) + [
+        ("/late/image_raw", late_ns + i, Image(late_ns + i, "late", "mono8",
+                                               random_pixels("mono8", height=8, width=8, seed=i)))
+        for i in range(2)]
+    path = log_path(fmt)
+    write_log(path, entries, fmt=fmt)
+    first_ns = {"/cam/camera_info": T0_NS, "/cam/image_raw": T0_NS, "/late/image_raw": late_ns,
+                "/rig/pose": T0_NS}
+    with open_reader(path) as reader:
+        passes: list[list[str]] = []
+        read = reader.raw_messages
+
+        def counting(topics: Iterable[str] | None = None, start_ns: int | None = None,
+                     end_ns: int | None = None) -> Iterator[RawMessage]:
+            passes.append(sorted(topics or ()))
+            return read(topics, start_ns, end_ns)
+
+        reader.raw_messages = counting  # type: ignore[method-assign]
+        found = {raw.topic: raw.log_time_ns for raw in first_messages(reader, first_ns)}
+    assert found == first_ns
+    assert passes == [["/cam/camera_info", "/cam/image_raw", "/rig/pose"], ["/late/image_raw"]]
 
 
 def test_undecodable_image_is_described_not_fatal(tmp_path: Path) -> None:
