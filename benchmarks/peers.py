@@ -20,12 +20,17 @@ The stereo log is ``stereo_checkerboard`` recorded for ``--duration`` s (4) at 6
 (320x240 mono8 to keep the uncompressed outputs small on disk; the recording repeated back to
 back, see :mod:`benchmarks.longlog`) to show time linear and memory flat in log length.
 
+camlog's own modules are compiled to bytecode first, as installing its wheel does (an editable
+checkout compiles them on first use, or never where ``PYTHONDONTWRITEBYTECODE`` is set, which
+would add that compilation to every start-up measured).
+
     python -m benchmarks.peers [--duration S] [--runs N] [--growth 4,40,400] [--keep DIR]
 """
 
 from __future__ import annotations
 
 import argparse
+import compileall
 import os
 import shutil
 import statistics
@@ -295,6 +300,8 @@ def main() -> None:
     parser.add_argument("--growth-runs", type=int, default=3, help="runs per growth command")
     parser.add_argument("--keep", type=Path, help="work in this folder and keep the inputs")
     args = parser.parse_args()
+    for package in ("camlog", "replay", "processors", "recorder"):
+        compileall.compile_dir(REPO / package, quiet=1)
     with tempfile.TemporaryDirectory(prefix="camlog-peers-") as tmp_name:
         tmp = args.keep or Path(tmp_name)
         tmp.mkdir(parents=True, exist_ok=True)
