@@ -14,13 +14,7 @@ sparse least-squares solver (``scipy.optimize.least_squares`` with LSMR) needs m
 same problem and stops short of the optimum. The same blocks give the covariance
 (:class:`NormalEquations`). Rotations are updated on the manifold: ``R <- exp([d]x) R``.
 
-The rational model's radial factor (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2 + k5 r^4 +
-k6 r^6) is nearly unchanged when numerator and denominator gain the same factor (1 + a r^2):
-the corners cannot tell such solutions apart, and they part only beyond the corners, in the
-image corners. A prior (one residual per denominator coefficient, ``DENOMINATOR_PRIOR_PX``
-pixels per unit) picks the solution with the smallest denominator: it weighs as much as one
-corner 0.1 px off for a coefficient of 0.1, nothing beside thousands of corners wherever they
-decide, and it decides the trade they leave free (mrcal regularises its models likewise).
+A light prior on some intrinsics (:mod:`.prior`) adds one residual per parameter.
 """
 
 from __future__ import annotations
@@ -33,7 +27,7 @@ import numpy.typing as npt
 from replay.messages import F64
 
 from ..errors import ProcessorError
-from . import rotation
+from . import prior, rotation
 from .lens import INTRINSIC_NAMES, project
 
 I64 = npt.NDArray[np.int64]
@@ -41,10 +35,6 @@ B8 = npt.NDArray[np.bool_]
 #: LM stops when a step lowers the cost by less than this fraction
 TOLERANCE = 1e-12
 MAX_ITERATIONS = 60
-#: the rational model's denominator coefficients, and the prior that holds them near zero: a
-#: residual of this many pixels per unit of each (see the module)
-RATIONAL_DENOMINATOR = ("k4", "k5", "k6")
-DENOMINATOR_PRIOR_PX = 1.0
 
 
 @dataclass(frozen=True)
@@ -159,7 +149,7 @@ class Layout:
     intrinsic_columns: list[I64]
     rig_columns: list[I64]  # (6,) per camera; empty for the reference
     global_count: int
-    prior_px: F64 = field(default_factory=lambda: np.zeros(0))  # (G,) see DENOMINATOR_PRIOR_PX
+    prior_px: F64 = field(default_factory=lambda: np.zeros(0))  # (G,) see .prior
 
     def prior_residual(self, state: RigState) -> F64:
         """``(G,)`` the prior's residuals (px): ``prior_px`` times the parameter's value."""
@@ -187,13 +177,9 @@ class Layout:
         for camera in range(len(setups)):
             rig_columns.append(np.arange(at, at + 6) if camera else np.zeros(0, np.int64))
             at += 6 if camera else 0
-        prior = np.zeros(at)
-        for setup, labels, columns in zip(setups, names, intrinsic_columns, strict=True):
-            if setup.distortion_model == "rational_polynomial":
-                for label, column in zip(labels, columns, strict=True):
-                    if label in RATIONAL_DENOMINATOR:
-                        prior[column] = DENOMINATOR_PRIOR_PX
-        return cls(setups, bases, names, intrinsic_columns, rig_columns, at, prior)
+        weights = prior.weights([s.distortion_model for s in setups], names,
+                                intrinsic_columns, at)
+        return cls(setups, bases, names, intrinsic_columns, rig_columns, at, weights)
 
     def global_columns(self, camera: int) -> I64:
         """Columns of one camera's intrinsics and rig transform in the global block."""

@@ -15,7 +15,7 @@ import math
 import numpy as np
 import pytest
 
-from processors.calibration import bundle
+from processors.calibration import prior
 from processors.calibration.board import Board
 from processors.calibration.joint import BoardView, JointResult, calibrate_cameras
 from processors.calibration.lens import INTRINSIC_NAMES, intrinsics_of
@@ -139,7 +139,7 @@ def test_rational_denominator_held_by_its_prior(monkeypatch: pytest.MonkeyPatch)
     held = calibrate_cameras(board.points_in_board(), observed, [(W, H)], options).models[0]
     assert np.abs(held.d[5:]).max() < 0.05  # k4, k5, k6 (truth 0.02, 0.01, -0.004)
     assert max_difference_px(held, RATIONAL) < 0.3
-    monkeypatch.setattr(bundle, "DENOMINATOR_PRIOR_PX", 0.0)
+    monkeypatch.setattr(prior, "DENOMINATOR_PRIOR_PX", 0.0)
     free = calibrate_cameras(board.points_in_board(), observed, [(W, H)], options).models[0]
     assert np.abs(free.d[5:]).max() > 1.0
     assert max_difference_px(free, RATIONAL) > 1.0
