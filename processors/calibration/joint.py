@@ -85,11 +85,14 @@ def calibrate_cameras(points_in_board: F64, views: list[BoardView],
                       sizes: list[tuple[int, int]],
                       options: CalibrationOptions | list[CalibrationOptions], *,
                       seeds: list[CameraModel] | None = None,
-                      reject_outliers: bool = True) -> JointResult:
+                      reject_outliers: bool = True,
+                      disc_diameter_m: float | None = None) -> JointResult:
     """Calibrate cameras ``0 .. len(sizes) - 1`` from ``views`` of the board points
     ``points_in_board`` ``(N, 3)``; camera 0 is the rig's reference. ``options`` apply to
     every camera, or one each; ``seeds`` (one model per camera) replace OpenCV's seed
-    calibration; without ``reject_outliers`` every corner counts."""
+    calibration; without ``reject_outliers`` every corner counts. With ``disc_diameter_m``
+    the points are the centres of circles that diameter across, seen as the centroids of
+    their images (see :mod:`.discs`)."""
     cameras = len(sizes)
     wanted = options if isinstance(options, list) else [options] * cameras
     for camera in range(cameras):
@@ -101,14 +104,15 @@ def calibrate_cameras(points_in_board: F64, views: list[BoardView],
     auto = [o.tangential == "auto" and o.has_tangential for o in wanted]
     final = [o.with_tangential("estimate") if a else o for o, a in zip(wanted, auto, strict=True)]
     problem, evidence, rounds = robust_solve(points_in_board, views, sizes, final, seeds=seeds,
-                                             reject=reject_outliers)
+                                             reject=reject_outliers,
+                                             disc_diameter_m=disc_diameter_m)
     tests: list[TangentialTest | None] = [None] * cameras
     for camera in (c for c in range(cameras) if auto[c]):
         trial = list(final)
         trial[camera] = wanted[camera].with_tangential("zero")
         without, _e, _r = robust_solve(points_in_board, views, sizes, trial,
                                        state=_without_tangential(problem.state, camera),
-                                       evidence=evidence)
+                                       evidence=evidence, disc_diameter_m=disc_diameter_m)
         chi2 = (without.cost - problem.cost) / problem.sigma_px ** 2
         tests[camera] = TangentialTest(chi2, math.exp(-max(chi2, 0.0) / 2) < TANGENTIAL_P_VALUE)
     if any(t is not None and not t.estimated for t in tests):
@@ -118,7 +122,7 @@ def calibrate_cameras(points_in_board: F64, views: list[BoardView],
                 final[camera] = wanted[camera].with_tangential("zero")
                 state = _without_tangential(state, camera)
         problem, _e, more = robust_solve(points_in_board, views, sizes, final, state=state,
-                                         evidence=evidence)
+                                         evidence=evidence, disc_diameter_m=disc_diameter_m)
         rounds += more
     return _result(problem, views, evidence, options=final, tests=tests, rounds=rounds)
 
@@ -133,7 +137,7 @@ def _without_tangential(state: bundle.RigState, camera: int) -> bundle.RigState:
 def _result(problem: Problem, views: list[BoardView], evidence: Evidence, *,
             options: list[CalibrationOptions], tests: list[TangentialTest | None],
             rounds: int) -> JointResult:
-    state, layout, obs = problem.state, problem.layout, evidence.observations
+    state, layout, obs = problem.state, problem.layout, problem.observations
     models = [model_of(s.distortion_model, i, s.size)
               for s, i in zip(layout.setups, state.intrinsics, strict=True)]
     residual = bundle.linearize(state, layout, obs.with_mask(np.ones_like(obs.mask)),

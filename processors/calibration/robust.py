@@ -7,7 +7,9 @@ stable. ``t`` makes a false rejection unlikely over the whole data set (``n exp(
 was not the board (a wrong detection, or two frames of a stereo pair that show the board at
 different poses) and is dropped whole. Views of a moving board carry their speed; after the
 first solve the blur law of :mod:`.motion` is fitted to their residuals, weights them and
-leaves out views too blurred to help.
+leaves out views too blurred to help. The centres of a circle grid's circles are measured as
+the centroids of their images; each round moves them by the shift :mod:`.discs` computes at
+the current solution, until the shift settles.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from replay.camera import CameraModel
 from replay.messages import F64
 
 from . import bundle
+from .discs import centroid_shifts
 from .lens import intrinsics_of
 from .motion import BlurModel, fit_blur
 from .options import CalibrationOptions
@@ -37,6 +40,8 @@ MAX_ROUNDS = 8
 MIN_THRESHOLD_SIGMA = 3.0
 #: the seed's own errors (px) never make a corner an outlier before the first solve
 SEED_FLOOR_PX = 1.0
+#: the circle centres' shifts of two rounds agree within this (px): the fixed point is reached
+SHIFT_TOLERANCE_PX = 1e-4
 
 
 @dataclass(frozen=True)
@@ -106,7 +111,7 @@ class Problem:
 
     state: bundle.RigState
     layout: bundle.Layout
-    observations: bundle.Observations  # masked to the inliers
+    observations: bundle.Observations  # masked to the inliers; circle centres, not centroids
     normal: bundle.NormalEquations
     points_in_board: F64
     sigma_px: float
@@ -135,11 +140,14 @@ def threshold_sigma(corners: int) -> float:
 def robust_solve(points_in_board: F64, views: list[BoardView], sizes: list[tuple[int, int]],
                  options: list[CalibrationOptions], *, seeds: list[CameraModel] | None = None,
                  state: bundle.RigState | None = None, evidence: Evidence | None = None,
-                 reject: bool = True) -> tuple[Problem, Evidence, int]:
+                 reject: bool = True, disc_diameter_m: float | None = None
+                 ) -> tuple[Problem, Evidence, int]:
     """Seed (from ``seeds`` or OpenCV, or start at a previous solve's ``state``) and refine.
 
     Without ``evidence`` outliers and blur are decided here (unless ``reject`` is off); with
-    a previous solve's ``evidence`` its inliers and weights are kept.
+    a previous solve's ``evidence`` its inliers and weights are kept. With
+    ``disc_diameter_m`` the points are centres of circles that diameter across, and the
+    views show the centroids of their images (a circle grid's detections).
     """
     fresh = evidence is None
     evidence = evidence or Evidence.of(views, points_in_board)
@@ -151,9 +159,17 @@ def robust_solve(points_in_board: F64, views: list[BoardView], sizes: list[tuple
     setups = [bundle.CameraSetup(o.distortion_model, s, o.free, o.fix_aspect_ratio)
               for o, s in zip(options, sizes, strict=True)]
     layout = bundle.Layout.of(setups, state)
+
+    def shift_at(at: bundle.RigState) -> F64:
+        """What moves the observations onto the points' projections at ``at``."""
+        if disc_diameter_m is None:
+            return np.zeros_like(obs.observed)
+        return -centroid_shifts(at, layout, obs, points_in_board, disc_diameter_m / 2.0)
+
+    shift = shift_at(state)
     if fresh and reject:
         # gross outliers would drag the first solve away: judge the seed robustly first
-        norm = _residual_norms(state, layout, obs, points_in_board)
+        norm = _residual_norms(state, layout, obs.moved(shift), points_in_board)
         robust_sigma = float(np.median(norm[evidence.inliers])) / math.sqrt(2 * math.log(2))
         limit = max(threshold_sigma(int(evidence.inliers.sum())) * robust_sigma, SEED_FLOOR_PX)
         evidence.inliers &= norm <= limit / obs.weight[:, None]
@@ -161,19 +177,27 @@ def robust_solve(points_in_board: F64, views: list[BoardView], sizes: list[tuple
     rounds = 0
     while True:
         rounds += 1
-        refinement = bundle.refine(state, layout, obs.with_mask(evidence.inliers),
+        refinement = bundle.refine(state, layout,
+                                   obs.moved(shift).with_mask(evidence.inliers),
                                    points_in_board)
         state = refinement.state
-        norm = _residual_norms(state, layout, obs, points_in_board)
+        previous, shift = shift, shift_at(state)
+        settled = float(np.abs(shift - previous).max(initial=0.0)) <= SHIFT_TOLERANCE_PX
+        norm = _residual_norms(state, layout, obs.moved(shift), points_in_board)
         sigma = _sigma(norm * obs.weight[:, None], evidence.inliers, layout)
-        if not (fresh and reject) or rounds >= MAX_ROUNDS:
+        if rounds >= MAX_ROUNDS:
             break
+        if not (fresh and reject):
+            if settled:
+                break
+            continue
         if rounds == 1 and np.any(speeds > 0) and _weigh_blur(evidence, norm, speeds):
             continue
-        if not _reject_outliers(evidence, norm, sigma):
+        if not _reject_outliers(evidence, norm, sigma) and settled:
             break
-    problem = Problem(state, layout, obs.with_mask(evidence.inliers), refinement.normal,
-                      points_in_board, sigma, evidence.instants, evidence.order)
+    problem = Problem(state, layout, obs.moved(shift).with_mask(evidence.inliers),
+                      refinement.normal, points_in_board, sigma, evidence.instants,
+                      evidence.order)
     return problem, evidence, rounds
 
 

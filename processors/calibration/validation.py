@@ -99,15 +99,18 @@ def _difference_px(a: JointResult, b: JointResult, camera: int, pixels: F64,
 
 def cross_validate(points_in_board: F64, views: list[BoardView], sizes: list[tuple[int, int]],
                    options: list[CalibrationOptions], *, range_m: float,
-                   step_px: int = GRID_STEP_PX) -> list[CrossValidation] | None:
+                   step_px: int = GRID_STEP_PX,
+                   disc_diameter_m: float | None = None) -> list[CrossValidation] | None:
     """Per camera, half the halves' difference for points at ``range_m``; None when a half
-    would have fewer than :data:`~.joint.MIN_VIEWS` views of some camera."""
+    would have fewer than :data:`~.joint.MIN_VIEWS` views of some camera.
+    ``disc_diameter_m``: as :func:`~.joint.calibrate_cameras`'s."""
     parts = halves(views)
     for part in parts:
         for camera in range(len(sizes)):
             if sum(v.camera == camera for v in part) < MIN_VIEWS:
                 return None
-    a, b = (calibrate_cameras(points_in_board, part, sizes, options) for part in parts)
+    a, b = (calibrate_cameras(points_in_board, part, sizes, options,
+                              disc_diameter_m=disc_diameter_m) for part in parts)
     out = []
     for camera, size in enumerate(sizes):
         pixels = grid(size, step_px)
