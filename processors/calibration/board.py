@@ -11,6 +11,7 @@ OpenCV's and ROS's calibration.
 
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -58,6 +59,17 @@ class Board:
         return self.pattern == "charuco"
 
     @property
+    def circle_grid(self) -> bool:
+        """Whether the points are the centres of circles (symmetric or asymmetric grid)."""
+        return self.pattern in ("circles", "acircles")
+
+    @property
+    def nearest_m(self) -> float:
+        """The smallest distance between two points (m); a circle grid's circles are
+        narrower."""
+        return self.square_m * (math.sqrt(2.0) if self.pattern == "acircles" else 1.0)
+
+    @property
     def symmetric(self) -> bool:
         """Whether a half turn maps the board onto itself, so that a detector may number it
         from either end (chessboard and symmetric circle grid)."""
@@ -90,7 +102,7 @@ class Board:
             return (f"{self.cols + 1}x{self.rows + 1} squares ChArUco ({self.cols}x{self.rows} "
                     f"inner corners), {self.square_m:g} m squares, {self.marker_m:g} m "
                     f"{self.dictionary} markers")
-        if self.pattern in ("circles", "acircles"):
+        if self.circle_grid:
             kind = "asymmetric " if self.pattern == "acircles" else ""
             return f"{self.cols}x{self.rows} {kind}circle grid, {self.square_m:g} m spacing"
         return f"{self.cols}x{self.rows} inner corners, {self.square_m:g} m squares"

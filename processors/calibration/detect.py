@@ -30,12 +30,14 @@ MIN_CONTRAST = 12.0
 @dataclass(frozen=True)
 class Detection:
     """A board found in one image: ``corners_px`` ``(M, 2)`` of the board points
-    ``point_ids`` ``(M,)`` (None: every point, in board order)."""
+    ``point_ids`` ``(M,)`` (None: every point, in board order); a circle grid's also the
+    circles' diameter the image shows (m, None when not measured)."""
 
     corners_px: F64
     accepted: bool
     reason: str = ""  # why a found board was rejected
     point_ids: npt.NDArray[np.int64] | None = None
+    diameter_m: float | None = None
 
     @property
     def ids(self) -> npt.NDArray[np.int64]:

@@ -9,7 +9,8 @@ sub-pixel refinement; given a model (a first calibration), OpenCV places every c
 board's pose from all the markers found and the model's projection, which is close enough on a
 strongly distorted lens for a corner beside a single found marker — the corners nearest the
 image border, whose second marker the border cuts. Circle grids through
-``cv2.findCirclesGrid`` (symmetric or asymmetric), which needs every circle.
+``cv2.findCirclesGrid`` (symmetric or asymmetric), which needs every circle; each circle's
+centre is then measured again from grey levels, with the circles' diameter (:mod:`.moments`).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from replay.camera import CameraModel
 from ..errors import ProcessorError
 from .board import Board
 from .detect import BORDER_PX, Detection, canonical_order, find_chessboard, track_chessboard
+from .moments import disc_moments
 
 #: fewest ChArUco corners worth a view (a board pose has 6 unknowns)
 MIN_CHARUCO_CORNERS = 6
@@ -38,7 +40,7 @@ def find_board(gray: np.ndarray, board: Board, model: CameraModel | None = None
     (the camera's, from a first calibration) guides a ChArUco detection (see the module)."""
     if board.pattern == "charuco":
         return find_charuco(gray, board, model)
-    if board.pattern in ("circles", "acircles"):
+    if board.circle_grid:
         return find_circles(gray, board)
     return find_chessboard(gray, board)
 
@@ -92,7 +94,9 @@ def find_charuco(gray: np.ndarray, board: Board, model: CameraModel | None = Non
 
 
 def find_circles(gray: np.ndarray, board: Board) -> Detection | None:
-    """The circle centres of a symmetric or asymmetric grid, all of them or none."""
+    """The circles of a symmetric or asymmetric grid, all of them or none: the area centroids
+    of their discs' images (grey-level moments where a circle can be measured, else the blob
+    detector's), and the circles' diameter (the median over the circles)."""
     flags = cv2.CALIB_CB_ASYMMETRIC_GRID if board.pattern == "acircles" \
         else cv2.CALIB_CB_SYMMETRIC_GRID
     params = cv2.SimpleBlobDetector.Params()
@@ -111,7 +115,12 @@ def find_circles(gray: np.ndarray, board: Board) -> Detection | None:
     if (centres_px < BORDER_PX).any() or (centres_px[:, 0] > w - 1 - BORDER_PX).any() \
             or (centres_px[:, 1] > h - 1 - BORDER_PX).any():
         return Detection(centres_px, False, "touches the image border")
-    return Detection(centres_px, True)
+    discs = disc_moments(gray, centres_px, board)
+    measured = discs.measured
+    if not measured.any():
+        return Detection(centres_px, True)
+    centres_px = np.where(measured[:, None], discs.centroid_px, centres_px)
+    return Detection(centres_px, True, diameter_m=float(np.median(discs.diameter_m[measured])))
 
 
 #: consecutive frames one detection job handles: the first is found afresh, the others

@@ -134,17 +134,24 @@ def warp_texture(texture: np.ndarray, px_per_m: float, origin_px: tuple[float, f
     return np.asarray(cv2.resize(big, size, interpolation=cv2.INTER_AREA))
 
 
-def circle_texture(board: Board, px_per_m: float, radius_m: float) -> tuple[np.ndarray,
-                                                                          tuple[float, float]]:
-    """A white card with black circles at the board's points, and the texture pixel of the
-    first point."""
+def circle_texture(board: Board, px_per_m: float, radius_m: float, supersample: int = 8
+                   ) -> tuple[np.ndarray, tuple[float, float]]:
+    """A white card with black discs of ``radius_m`` at the board's points, and the texture
+    pixel of the first point. Each pixel's darkness is the share of it a disc covers
+    (``supersample`` x ``supersample`` samples), so the discs are exactly that size."""
     points = board.points_in_board()[:, :2]
     margin = 2 * radius_m
     extent = points.max(axis=0) + 2 * margin
-    texture = np.full((int(extent[1] * px_per_m), int(extent[0] * px_per_m)), 245, np.uint8)
+    texture = np.full((int(extent[1] * px_per_m), int(extent[0] * px_per_m)), 245.0)
     origin = (margin * px_per_m - 0.5, margin * px_per_m - 0.5)
+    r = radius_m * px_per_m
+    s = supersample
     for x, y in points:
-        centre = ((x * px_per_m + origin[0]) * 16, (y * px_per_m + origin[1]) * 16)
-        cv2.circle(texture, (round(centre[0]), round(centre[1])), round(radius_m * px_per_m * 16),
-                   15, -1, cv2.LINE_AA, shift=4)
-    return texture, origin
+        cu, cv = x * px_per_m + origin[0], y * px_per_m + origin[1]
+        u0, v0 = int(cu - r) - 1, int(cv - r) - 1
+        n = int(2 * r) + 3
+        sub = (np.arange(n * s) + 0.5) / s - 0.5  # sample offsets from the patch's first pixel
+        du, dv = np.meshgrid(u0 + sub - cu, v0 + sub - cv)
+        covered = (du * du + dv * dv <= r * r).reshape(n, s, n, s).mean(axis=(1, 3))
+        texture[v0:v0 + n, u0:u0 + n] -= covered * (245.0 - 15.0)
+    return np.asarray(np.rint(texture), dtype=np.uint8), origin
