@@ -103,8 +103,8 @@ def calibrate(path: Path, flags: str, out: Path, *, report: bool) -> Calibration
     board, options = board_and_options(args)
     cameras = [args.left, args.right] if args.left else [args.camera]
     return calibrate_log(path, board=board, cameras=cameras, output_dir=out, options=options,
-                         approximate_s=args.approximate, overwrite=True, progress=False,
-                         report=report)
+                         approximate_s=args.approximate, diameter_m=args.diameter,
+                         overwrite=True, progress=False, report=report)
 
 
 def sigma_ratio(run: CalibrationRun) -> float:

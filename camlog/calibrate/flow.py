@@ -82,6 +82,7 @@ def calibrate_log(
     approximate_s: float | None = None,
     camera_name: str | None = None,
     max_speed_px: float | None = None,
+    diameter_m: float | None = None,
     overwrite: bool = False,
     workers: int | None = None,
     progress: bool | None = None,
@@ -89,6 +90,7 @@ def calibrate_log(
     report: bool = True,
 ) -> CalibrationRun:
     """Calibrate one camera (``cameras=[ns]``) or a stereo pair (``[left_ns, right_ns]``);
+    a circle grid's circles are ``diameter_m`` across (None: measured in the images);
     without ``report`` only the calibration files and calibration.json are written (no
     second pass over the log, no figures)."""
     started = time.perf_counter()
@@ -110,7 +112,8 @@ def calibrate_log(
                 found = detect_views(reader, sources, board, workers=workers,
                                      progress=progress, models=models)
                 cameras_views = _checked(found, max_speed_px)
-        solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s)
+        solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s,
+                           diameter_m=diameter_m)
         solutions, stereo = solved.cameras, solved.stereo
         scenario = found.scenario
         truth = [scenario.camera_for(s.views.source.namespace,
@@ -124,6 +127,8 @@ def calibrate_log(
                                   progress=progress) if report else None
         write_files(staged.path, calibrated, stereo=stereo, summary=summary,
                     evidence=evidence, camera_name=camera_name)
+    diameter_warning = solved.circles.warning() if solved.circles is not None else None
     return CalibrationRun(calibrated, stereo, solved, output_dir, staged.files,
                           time.perf_counter() - started, summary,
-                          [*reader.warnings, *found.warnings])
+                          [*reader.warnings, *found.warnings,
+                           *([diameter_warning] if diameter_warning else [])])

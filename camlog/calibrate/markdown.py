@@ -139,10 +139,13 @@ def markdown_report(summary: CalibrationSummary, figures: list[str]) -> str:
     flags = ", ".join(name.replace("_", "-") for name, on in (
         ("fix_principal_point", options.fix_principal_point),
         ("fix_aspect_ratio", options.fix_aspect_ratio)) if on)
+    circles = "" if board.diameter_m is None else (
+        f"Circles {board.diameter_m:.5f} m across "
+        f"({'measured from the images' if board.diameter_measured else 'given'}). ")
     lines = [
         "# Calibration report", "",
         f"Board: {board.pattern} {board.cols}x{board.rows} points, {board.square_m:g} m "
-        "spacing. "
+        f"spacing. {circles}"
         f"Model: {options.distortion_model} with {options.k_coefficients} radial "
         f"coefficients; options: {flags or 'none'}; tangential distortion: "
         f"{options.tangential}.", "",

@@ -2,9 +2,11 @@
 
 Every view of every camera goes into one least-squares problem
 (:func:`processors.calibration.joint.calibrate_cameras`): intrinsics of all cameras, the rig
-and every board pose, outlier corners left out, blurred views weighted down. The solvers know
-nothing of frames; here their views are mapped back to frame indices, a view being named by
-its first frame, which is what every later step (summary, evidence, report) speaks.
+and every board pose, outlier corners left out, blurred views weighted down; a circle grid's
+circles are modelled as discs of the diameter given or measured in the views (their
+detections are the centroids of the discs' images). The solvers know nothing of frames;
+here their views are mapped back to frame indices, a view being named by its first frame,
+which is what every later step (summary, evidence, report) speaks.
 """
 
 from __future__ import annotations
@@ -35,8 +37,11 @@ from .views import CameraViews, Frame
 #: "far away": the uncertainty and cross-validation of rays
 FAR_M = 1e4
 
-__all__ = ["CalibratedCamera", "CameraSolution", "RigSolution", "StereoSolution",
-           "calibrated_cameras", "solve_rig"]
+#: a given circle diameter this far (relative) from the measured one earns a warning
+DIAMETER_WARNING = 0.05
+
+__all__ = ["CalibratedCamera", "CameraSolution", "CircleSize", "RigSolution", "StereoSolution",
+           "calibrated_cameras", "circle_size", "solve_rig"]
 
 
 @dataclass(frozen=True)
@@ -107,6 +112,53 @@ class StereoSolution:
 
 
 @dataclass(frozen=True)
+class CircleSize:
+    """The diameter of a circle grid's circles the solve used: given, or ``measured`` in the
+    views (``measured_m``: the median over the candidate views, None when none measured)."""
+
+    diameter_m: float
+    measured: bool
+    measured_m: float | None
+
+    def describe(self) -> str:
+        """The diameter and where it came from, e.g. ``0.01000 m (measured from the
+        images)``."""
+        if self.measured:
+            return f"{self.diameter_m:.5f} m (measured from the images)"
+        seen = f"; the images show {self.measured_m:.5f} m" if self.measured_m else ""
+        return f"{self.diameter_m:.5f} m (given{seen})"
+
+    def warning(self) -> str | None:
+        """What the user should know when the given diameter is not what the images show."""
+        if self.measured or self.measured_m is None or \
+                abs(self.diameter_m / self.measured_m - 1) <= DIAMETER_WARNING:
+            return None
+        return (f"--diameter {self.diameter_m:g} m, but the images show circles "
+                f"{self.measured_m:.5f} m across")
+
+
+def circle_size(cameras: list[CameraViews], board: Board,
+                diameter_m: float | None) -> CircleSize | None:
+    """The circles' diameter: ``diameter_m`` when given, else the median of what the
+    candidate views measured; None when the board is not a circle grid."""
+    if not board.circle_grid:
+        return None
+    seen = [f.detection.diameter_m for c in cameras for f in c.frames
+            if f.candidate and f.detection is not None and f.detection.diameter_m is not None]
+    measured_m = float(np.median(seen)) if seen else None
+    if diameter_m is not None:
+        return CircleSize(diameter_m, False, measured_m)
+    if measured_m is None:
+        raise CalibrationError("the circles' diameter could not be measured in any view: "
+                               "give it with --diameter")
+    if not 0 < measured_m < board.nearest_m:
+        raise CalibrationError(f"the images show circles {measured_m:.5f} m across, which "
+                               f"would overlap at a spacing of {board.square_m:g} m: check "
+                               "--square, or give --diameter")
+    return CircleSize(measured_m, True, measured_m)
+
+
+@dataclass(frozen=True)
 class RigSolution:
     """Everything the joint solve found."""
 
@@ -114,6 +166,7 @@ class RigSolution:
     stereo: StereoSolution | None
     joint: JointResult
     rig: ViewsOfRig
+    circles: CircleSize | None = None
 
 
 def _mono_result(joint: JointResult, rig: ViewsOfRig, camera: int) -> MonoResult:
@@ -181,16 +234,21 @@ def guiding_models(cameras: list[CameraViews], board: Board, options: Calibratio
 
 
 def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOptions, *,
-              approximate_s: float | None) -> RigSolution:
-    """Calibrate every camera, and for two the stereo rig, from every view."""
+              approximate_s: float | None, diameter_m: float | None = None) -> RigSolution:
+    """Calibrate every camera, and for two the stereo rig, from every view; a circle grid's
+    circles are ``diameter_m`` across, or as the views measure them."""
+    circles = circle_size(cameras, board, diameter_m)
+    disc_diameter_m = circles.diameter_m if circles is not None else None
     sizes = [c.size for c in cameras]
     rig = rig_views(cameras, board, approximate_s=approximate_s,
                     stereo_note=len(cameras) > 1)
     seeds = _seeds(rig, board, sizes, options)
     rig = _oriented(rig, board, seeds)
     points = board.points_in_board()
-    joint = calibrate_cameras(points, rig.views, sizes, options, seeds=seeds)
-    validation = cross_validate(points, rig.views, sizes, joint.options, range_m=FAR_M)
+    joint = calibrate_cameras(points, rig.views, sizes, options, seeds=seeds,
+                              disc_diameter_m=disc_diameter_m)
+    validation = cross_validate(points, rig.views, sizes, joint.options, range_m=FAR_M,
+                                disc_diameter_m=disc_diameter_m)
     solutions = []
     for index, views in enumerate(cameras):
         result = _mono_result(joint, rig, index)
@@ -214,7 +272,7 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
         stereo = StereoSolution(rectified, [names[i] for i in rectified.view_ids],
                                 [(names[i], why) for i, why in
                                  sorted(rectified.rejected.items())])
-    return RigSolution(solutions, stereo, joint, rig)
+    return RigSolution(solutions, stereo, joint, rig, circles)
 
 
 @dataclass(frozen=True)

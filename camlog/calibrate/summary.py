@@ -171,11 +171,14 @@ def build_summary(cameras: list[CalibratedCamera], solved: RigSolution, *,
                   board: Board, options: CalibrationOptions,
                   scenario: Scenario | None) -> records.CalibrationSummary:
     """The summary of a run; ``scenario``: the simulator's record, when the log has one."""
-    stereo = solved.stereo
+    stereo, circles = solved.stereo, solved.circles
     truth = true_rig(solved.rig, [c.views for c in cameras], [c.truth for c in cameras],
                      board=board, scenario=scenario)
     return records.CalibrationSummary(
-        board=records.BoardSummary(board.pattern, board.cols, board.rows, board.square_m),
+        board=records.BoardSummary(
+            board.pattern, board.cols, board.rows, board.square_m,
+            circles.diameter_m if circles is not None else None,
+            circles.measured if circles is not None else None),
         options=records.OptionsSummary(options.fix_principal_point, options.fix_aspect_ratio,
                                options.tangential, options.radial_count,
                                options.distortion_model),

@@ -71,6 +71,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                         "(OpenCV's fisheye; 'fisheye' is accepted for it)")
     p.add_argument("--marker", type=float, metavar="M",
                    help="--pattern charuco: marker side in metres (--size counts squares)")
+    p.add_argument("--diameter", type=positive, metavar="METRES",
+                   help="--pattern circles/acircles: circle diameter in metres (default: "
+                        "measured from the images)")
     p.add_argument("--dictionary", metavar="NAME",
                    help=f"--pattern charuco: OpenCV ArUco dictionary (default "
                         f"{DEFAULT_DICTIONARY})")
@@ -130,6 +133,13 @@ def board_and_options(args: argparse.Namespace) -> tuple[Board, CalibrationOptio
 
     board = make_board(args.size, args.square, args.pattern, marker_m=args.marker,
                        dictionary=args.dictionary)
+    if args.diameter is not None:
+        if not board.circle_grid:
+            raise UsageError("--diameter belongs to circle grids (--pattern circles or "
+                             "acircles)")
+        if args.diameter >= board.nearest_m:
+            raise UsageError(f"circles {args.diameter:g} m across would overlap at a spacing "
+                             f"of {board.square_m:g} m (at most {board.nearest_m:.4g} m)")
     options = CalibrationOptions(
         fix_principal_point=args.fix_principal_point, fix_aspect_ratio=args.fix_aspect_ratio,
         tangential=tangential_mode(args.zero_tangent_dist, args.tangent_dist),
@@ -157,10 +167,12 @@ def run(args: argparse.Namespace) -> int:
     run_ = calibrate_log(
         args.log, board=board, cameras=cameras, output_dir=output, options=options,
         approximate_s=args.approximate, camera_name=args.camera_name,
-        max_speed_px=args.max_chessboard_speed,
+        max_speed_px=args.max_chessboard_speed, diameter_m=args.diameter,
         overwrite=args.overwrite, progress=progress, recover=args.recover,
         report=not args.no_report)
     print_warnings(run_.warnings)
+    if run_.solved.circles is not None:
+        print(f"circle diameter {run_.solved.circles.describe()}")
     for camera in run_.summary.cameras:
         p = camera.parameters
         print(f"{camera.namespace}: {camera.used_views} views "

@@ -63,12 +63,15 @@ class ViewResiduals(JsonRecord):
 
 @dataclass(frozen=True)
 class BoardSummary:
-    """The calibration target: ``cols`` x ``rows`` inner corners, ``square_m`` squares."""
+    """The calibration target: ``cols`` x ``rows`` inner corners, ``square_m`` squares; a
+    circle grid's circles ``diameter_m`` across, measured in the images or given."""
 
     pattern: str
     cols: int
     rows: int
     square_m: float
+    diameter_m: float | None = field(default=None, metadata=OMIT_NONE)
+    diameter_measured: bool | None = field(default=None, metadata=OMIT_NONE)
 
 
 @dataclass(frozen=True)

@@ -130,6 +130,19 @@ def test_calibration_summary_keeps_keys_order_and_optional_fields() -> None:
     assert summary.rejected_stamps() == {"/c": {3: "blurred"}}
 
 
+def test_a_circle_grid_summary_keeps_its_diameter() -> None:
+    board = {"pattern": "acircles", "cols": 4, "rows": 11, "square_m": 0.01,
+             "diameter_m": 0.01002, "diameter_measured": True}
+    text = json.dumps({"board": board,
+                       "options": {"fix_principal_point": False, "fix_aspect_ratio": False,
+                                   "tangential": "auto", "k_coefficients": 2,
+                                   "distortion_model": "plumb_bob"},
+                       "cameras": [_camera()], "ground_truth": False}, indent=1)
+    summary = CalibrationSummary.from_json_text(text)
+    assert summary.to_json_text(indent=1) == text
+    assert summary.board.diameter_m == 0.01002 and summary.board.diameter_measured is True
+
+
 def test_resync_stats_round_trip() -> None:
     text = json.dumps({
         "pairs": 3, "slop_ns": 16, "stamp_policy": "later of the two stamps", "left_frames": 4,
