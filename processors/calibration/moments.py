@@ -49,15 +49,16 @@ def disc_moments(gray: np.ndarray, centres_px: F64, board: Board) -> DiscMoments
     """The discs of a circle grid found at ``centres_px`` ``(N, 2)`` in a ``(H, W)`` uint8
     image (see the module docstring).
 
-    A first pass measures in windows half the smallest spacing wide; the second in windows
-    :data:`SKIRT_PX` wider than the discs the first found, so that what lies around the
-    grid (the card's edge, the background) stays out of the outer circles' windows.
+    A first pass measures every third circle in a window half the smallest spacing wide; the
+    second every circle in a window :data:`SKIRT_PX` wider than the discs the first found,
+    so that what lies around the grid (the card's edge, the background) stays out of the
+    outer circles' windows.
     """
     image_from_board = _local_maps(centres_px, board)
     half_gap = np.full(len(centres_px), board.nearest_m / 2.0)
-    first = _measure(gray, centres_px, image_from_board, half_gap)
+    first = _measure(gray, centres_px[::3], image_from_board[::3], half_gap[::3])
     if not first.measured.any():
-        return first
+        return _measure(gray, centres_px, image_from_board, half_gap)
     radius_m = float(np.median(first.diameter_m[first.measured])) / 2.0
     # the smallest scale of each map: SKIRT_PX on the board in the direction it is narrowest
     scale = np.linalg.svd(image_from_board, compute_uv=False)[:, -1]
@@ -117,7 +118,8 @@ def _measure(gray: np.ndarray, centres_px: F64, image_from_board: F64, window_m:
     measured = (high - low >= MIN_CONTRAST) & (area_px > 0)
     where = np.flatnonzero(fits)[measured]
     darkness, area_px = darkness[measured], area_px[measured]
-    centroid_px[where, 0] = np.sum(darkness * us[measured], axis=1) / area_px
-    centroid_px[where, 1] = np.sum(darkness * vs[measured], axis=1) / area_px
+    # about each window's middle pixel: small offsets, no cancellation
+    centroid_px[where] = base[where] + np.column_stack([darkness @ du, darkness @ dv]) \
+        / area_px[:, None]
     diameter_m[where] = 2.0 * np.sqrt(area_px / (np.pi * np.abs(det[where])))
     return DiscMoments(centroid_px, diameter_m)
