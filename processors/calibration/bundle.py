@@ -136,11 +136,6 @@ class Observations:
         """The same observations with another mask ``(V, N)`` of the corners that count."""
         return Observations(self.camera, self.instant, self.observed, mask, self.weight)
 
-    def moved(self, shift_px: F64) -> Observations:
-        """The same observations moved by ``shift_px`` ``(V, N, 2)``."""
-        return Observations(self.camera, self.instant, self.observed + shift_px, self.mask,
-                            self.weight)
-
 
 @dataclass
 class Layout:

@@ -14,6 +14,7 @@ the current solution, until the shift settles.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -169,7 +170,7 @@ def robust_solve(points_in_board: F64, views: list[BoardView], sizes: list[tuple
     shift = shift_at(state)
     if fresh and reject:
         # gross outliers would drag the first solve away: judge the seed robustly first
-        norm = _residual_norms(state, layout, obs.moved(shift), points_in_board)
+        norm = _residual_norms(state, layout, _moved(obs, shift), points_in_board)
         robust_sigma = float(np.median(norm[evidence.inliers])) / math.sqrt(2 * math.log(2))
         limit = max(threshold_sigma(int(evidence.inliers.sum())) * robust_sigma, SEED_FLOOR_PX)
         evidence.inliers &= norm <= limit / obs.weight[:, None]
@@ -178,12 +179,12 @@ def robust_solve(points_in_board: F64, views: list[BoardView], sizes: list[tuple
     while True:
         rounds += 1
         refinement = bundle.refine(state, layout,
-                                   obs.moved(shift).with_mask(evidence.inliers),
+                                   _moved(obs, shift).with_mask(evidence.inliers),
                                    points_in_board)
         state = refinement.state
         previous, shift = shift, shift_at(state)
         settled = float(np.abs(shift - previous).max(initial=0.0)) <= SHIFT_TOLERANCE_PX
-        norm = _residual_norms(state, layout, obs.moved(shift), points_in_board)
+        norm = _residual_norms(state, layout, _moved(obs, shift), points_in_board)
         sigma = _sigma(norm * obs.weight[:, None], evidence.inliers, layout)
         if rounds >= MAX_ROUNDS:
             break
@@ -195,7 +196,7 @@ def robust_solve(points_in_board: F64, views: list[BoardView], sizes: list[tuple
             continue
         if not _reject_outliers(evidence, norm, sigma) and settled:
             break
-    problem = Problem(state, layout, obs.moved(shift).with_mask(evidence.inliers),
+    problem = Problem(state, layout, _moved(obs, shift).with_mask(evidence.inliers),
                       refinement.normal, points_in_board, sigma, evidence.instants,
                       evidence.order)
     return problem, evidence, rounds
@@ -245,6 +246,11 @@ def _weigh_blur(evidence: Evidence, norm: F64, speeds: F64) -> bool:
                       f"(limit {blur.limit_px:.1f})")
         evidence.blurred += 1
     return True
+
+
+def _moved(obs: bundle.Observations, shift_px: F64) -> bundle.Observations:
+    """The same observations moved by ``shift_px`` ``(V, N, 2)``."""
+    return dataclasses.replace(obs, observed=obs.observed + shift_px)
 
 
 def _residual_norms(state: bundle.RigState, layout: bundle.Layout, obs: bundle.Observations,
