@@ -9,14 +9,16 @@ from pathlib import Path
 import numpy as np
 
 from processors.calibration.board import Board
-from processors.calibration.check import linearity_error, reprojection_rms
+from processors.calibration.check import ViewFit, fit_view, linearity_error
 from processors.calibration.stereo import epipolar_errors, orient_right_views
 from replay.calibration_yaml import load_calibration
 from replay.camera import CameraModel
 from replay.formats import open_reader
+from replay.messages import F64
 
 from ..errors import CalibrationError, InputError, UsageError
 from .instants import stereo_pairs
+from .solving import CircleSize, circle_size
 from .views import detect_views, resolve_camera, size_hint
 
 
@@ -28,6 +30,7 @@ class CheckResult:
     linearity_px: list[float]  # per view (mono: the one camera; stereo: the left camera)
     reprojection_px: list[float]
     epipolar_px: list[float]  # stereo only
+    circles: CircleSize | None = None  # a circle grid's circles, as modelled
 
     def lines(self) -> list[str]:
         """One line per figure: mean, median and max over the views."""
@@ -37,17 +40,24 @@ class CheckResult:
             return (f"{name}: mean {a.mean():.4f} px, median {np.median(a):.4f} px, "
                     f"max {a.max():.4f} px over {a.size} views")
 
-        out = [stats("linearity error", self.linearity_px),
-               stats("reprojection RMS", self.reprojection_px)]
+        out = [f"circle diameter {self.circles.describe()}"] if self.circles else []
+        out += [stats("linearity error", self.linearity_px),
+                stats("reprojection RMS", self.reprojection_px)]
         if self.epipolar_px:
             out.append(stats("epipolar error", self.epipolar_px))
         return out
 
 
 def check_log(log: Path, *, board: Board, cameras: list[str], calibrations: list[Path],
-              approximate_s: float | None = None, progress: bool | None = None,
-              recover: bool = False) -> CheckResult:
-    """Linearity and reprojection error per view (mono), plus epipolar error (stereo)."""
+              approximate_s: float | None = None, diameter_m: float | None = None,
+              progress: bool | None = None, recover: bool = False) -> CheckResult:
+    """Linearity and reprojection error per view (mono), plus epipolar error (stereo).
+
+    A circle grid's detections are the centroids of its discs' images, as in ``calibrate``:
+    the circles are ``diameter_m`` across (None: as the images measure them), the
+    reprojection compares the detections with the discs' centroids, and the rows and the
+    epipolar lines are those of the circles' centres (the detections moved by the disc
+    shift at each view's fitted pose)."""
     if len(calibrations) != len(cameras):
         raise UsageError(f"give one --calibration per camera ({len(cameras)}), "
                          f"got {len(calibrations)}")
@@ -67,11 +77,17 @@ def check_log(log: Path, *, board: Board, cameras: list[str], calibrations: list
     if not candidates:
         raise CalibrationError(f"no {board.cols}x{board.rows} board found in "
                                f"{streams[0].source.image_topic}{size_hint(streams[0], board)}")
+    circles = circle_size(streams, board, diameter_m)
+    disc_m = circles.diameter_m if circles is not None else None
+    points = board.points_in_board()
     first = [streams[0].detection(i) for i in candidates]
+    fits = [fit_view(d.corners_px, models[0], points[d.ids], disc_diameter_m=disc_m)
+            for d in first]
     # rows are straight lines only where a view shows them whole
-    linear = [linearity_error(d.corners_px, models[0], board) for d in first
+    linear = [linearity_error(_centres(d.corners_px, f), models[0], board)
+              for d, f in zip(first, fits, strict=True)
               if len(d.ids) == board.corner_count] or [float("nan")]
-    reproj = [reprojection_rms(d.corners_px, models[0], board, d.ids) for d in first]
+    reproj = [float("nan") if f is None else f.rms_px for f in fits]
     epipolar: list[float] = []
     if len(streams) == 2:
         left, right = streams
@@ -80,11 +96,22 @@ def check_log(log: Path, *, board: Board, cameras: list[str], calibrations: list
                  and np.array_equal(left.detection(li).ids, right.detection(ri).ids)]
         if not pairs:
             raise CalibrationError("no stereo pair shows the whole board in both cameras")
-        left_views = [left.corners(li) for li, _ in pairs]
         right_views = orient_right_views(
-            board.points_in_board(), left_views, [right.corners(ri) for _, ri in pairs],
+            points, [left.corners(li) for li, _ in pairs], [right.corners(ri) for _, ri in pairs],
             left_model=models[0], right_model=models[1])
-        epipolar = epipolar_errors(left_views, right_views, left_model=models[0],
+        fit_of = dict(zip(candidates, fits, strict=True))
+        left_centres = [_centres(left.corners(li), fit_of[li]) for li, _ in pairs]
+        right_centres = [
+            _centres(c, fit_view(c, models[1], points[left.detection(li).ids],
+                                 disc_diameter_m=disc_m))
+            for c, (li, _) in zip(right_views, pairs, strict=True)]
+        epipolar = epipolar_errors(left_centres, right_centres, left_model=models[0],
                                    right_model=models[1], r1=infos[0].r, p1=infos[0].p,
                                    r2=infos[1].r, p2=infos[1].p)
-    return CheckResult(len(first), linear, reproj, epipolar)
+    return CheckResult(len(first), linear, reproj, epipolar, circles)
+
+
+def _centres(corners_px: F64, fit: ViewFit | None) -> F64:
+    """Where a view shows the points themselves: a circle grid's detections moved by the
+    disc shift at the view's fitted pose (the detections when no pose was found)."""
+    return corners_px if fit is None else fit.centres_px

@@ -160,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
             raise UsageError("--check needs --calibration FILE (twice for stereo)")
         result = check_log(args.log, board=board, cameras=cameras,
                            calibrations=args.calibration, approximate_s=args.approximate,
-                           progress=progress, recover=args.recover)
+                           diameter_m=args.diameter, progress=progress, recover=args.recover)
         print("\n".join(result.lines()))
         return 0
     output = args.output or args.log.with_name(f"{args.log.stem}_calibration")

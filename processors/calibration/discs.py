@@ -28,10 +28,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from replay.camera import CameraModel
 from replay.messages import F64
 
 from . import bundle
-from .lens import project
+from .lens import intrinsics_of, project
 
 #: boundary samples per circle (see the module docstring)
 BOUNDARY_SAMPLES = 16
@@ -59,6 +60,17 @@ def disc_centroids(distortion_model: str, intrinsics: F64, centres: F64, axes: F
     first_v = -0.5 * np.sum(v * v * du, axis=1)
     shift = np.column_stack([first_u, first_v]) / area[:, None]
     return centre_px, centre_px + shift
+
+
+def view_centroids(model: CameraModel, camera_from_board: F64, points_in_board: F64, *,
+                   radius_m: float) -> tuple[F64, F64]:
+    """Projected centres ``(M, 2)`` and disc centroids ``(M, 2)`` of circles of ``radius_m``
+    about ``points_in_board`` ``(M, 3)``, the board at ``camera_from_board`` (4, 4)."""
+    rotation = camera_from_board[:3, :3]
+    centres = points_in_board @ rotation.T + camera_from_board[:3, 3]
+    axes = np.repeat(rotation[:, :2].T[None], len(points_in_board), axis=0)
+    return disc_centroids(model.distortion_model, intrinsics_of(model), centres, axes,
+                          radius_m=radius_m)
 
 
 def centroid_shifts(state: bundle.RigState, layout: bundle.Layout, obs: bundle.Observations,

@@ -55,3 +55,24 @@ def test_a_given_diameter_is_used_and_checked(circles_log: Path, tmp_path: Path)
     assert "--diameter 0.008 m, but the images show circles 0.0100" in result.err
     board = json.loads((tmp_path / "out" / "calibration.json").read_text())["board"]
     assert board["diameter_m"] == 0.008 and board["diameter_measured"] is False
+
+
+def reprojection_median(text: str) -> float:
+    """The median of ``--check``'s reprojection RMS line."""
+    line = next(t for t in text.splitlines() if t.startswith("reprojection RMS:"))
+    return float(line.split("median ")[1].split()[0])
+
+
+def test_check_predicts_the_discs_centroids(circles_log: Path, tmp_path: Path) -> None:
+    """``--check`` models the circles as ``calibrate`` does: with the diameter the images show
+    the reprojection is that of the discs' centroids; with circles far too small (nearly
+    points) the offset of the centroids from the centres shows as error."""
+    assert run("calibrate", circles_log, *FLAGS, "-o", tmp_path / "out").code == 0
+    check = [*FLAGS, "--check", "--calibration", tmp_path / "out" / "ost.yaml"]
+    measured = run("calibrate", circles_log, *check)
+    assert measured.code == 0, measured.err
+    assert "circle diameter 0.0100" in measured.out and "(measured from the images)" in measured.out
+    points = run("calibrate", circles_log, *check, "--diameter", "0.001")
+    assert points.code == 0, points.err
+    assert "circle diameter 0.00100 m (given; the images show 0.0100" in points.out
+    assert reprojection_median(measured.out) < 0.6 * reprojection_median(points.out)

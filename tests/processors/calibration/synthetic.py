@@ -10,6 +10,7 @@ import cv2
 import numpy as np
 
 from processors.calibration.board import Board
+from processors.calibration.discs import view_centroids
 from replay.camera import CameraModel
 from replay.messages import F64
 
@@ -80,6 +81,14 @@ def views(model: CameraModel, poses: list[F64], noise_px: float, seed: int,
     """Projected corners of every pose plus Gaussian noise of ``noise_px`` per coordinate."""
     rng = np.random.default_rng(seed)
     return [project(model, p, board) + rng.normal(0.0, noise_px, (board.corner_count, 2))
+            for p in poses]
+
+
+def disc_views(model: CameraModel, poses: list[F64], board: Board, radius_m: float
+               ) -> list[F64]:
+    """What a blob detector measures of a circle grid's circles of ``radius_m`` at every pose
+    ``camera_from_board``: the centroids ``(N, 2)`` of their discs' images (no noise)."""
+    return [view_centroids(model, p, board.points_in_board(), radius_m=radius_m)[1]
             for p in poses]
 
 

@@ -17,7 +17,7 @@ import pytest
 
 from processors.calibration import prior
 from processors.calibration.board import Board
-from processors.calibration.discs import disc_centroids
+from processors.calibration.discs import view_centroids
 from processors.calibration.joint import BoardView, JointResult, calibrate_cameras
 from processors.calibration.lens import INTRINSIC_NAMES, intrinsics_of
 from processors.calibration.options import CalibrationOptions
@@ -180,11 +180,8 @@ def test_circle_grid_seen_as_disc_centroids() -> None:
     points = board.points_in_board()
     views, shift = [], []
     for view in exact:
-        camera_from_board = poses[view.instant]
-        in_camera = points @ camera_from_board[:3, :3].T + camera_from_board[:3, 3]
-        axes = np.repeat(camera_from_board[:3, :2].T[None], len(points), axis=0)
-        projected, centroid = disc_centroids("plumb_bob", intrinsics_of(BARREL), in_camera,
-                                             axes, radius_m=0.005)
+        projected, centroid = view_centroids(BARREL, poses[view.instant], points,
+                                             radius_m=0.005)
         # the same noise as the exact views
         noise = view.corners_px - projected
         views.append(BoardView(0, view.instant, view.point_ids, centroid + noise))
