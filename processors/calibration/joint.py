@@ -75,6 +75,13 @@ class JointResult:
         return math.sqrt(float(np.mean(np.sum(residual ** 2, axis=1)))) if len(residual) \
             else float("nan")
 
+    def centres_px(self, view: int) -> F64:
+        """Corners ``(M, 2)`` of one view as the solver fitted them: a circle grid's
+        detections moved by the disc shift at the solution onto the circles' centres (the
+        detections themselves for other boards)."""
+        row = int(np.flatnonzero(self.problem.order == view)[0])
+        return np.asarray(self.problem.observations.observed[row, self.views[view].point_ids])
+
     @property
     def outlier_corners(self) -> int:
         """Corners of used views left out as outliers."""

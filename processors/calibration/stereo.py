@@ -5,7 +5,9 @@ Both cameras' intrinsics and the rig transform come out of one least-squares pro
 equidistant lens) with ``P2[0, 3] = -fx' * B``; the epipolar error of the joint views after
 rectification; the board square re-estimated by triangulating them (independent of
 ``--square`` but for the baseline's scale); and the standard deviations of the baseline and
-of the rig rotation from the joint covariance.
+of the rig rotation from the joint covariance. A circle grid's views enter both figures as the
+solver fitted them, at the circles' centres: each camera sees a disc's centroid off its
+centre by its own perspective, so the detections themselves would not meet.
 """
 
 from __future__ import annotations
@@ -143,8 +145,8 @@ def stereo_result(joint: JointResult, pairs: list[tuple[int, int]], *,
         if keep.sum() < 2:
             continue
         used.append(index)
-        left.append(_corners(joint, lv, li[keep]))
-        right.append(_corners(joint, rv, ri[keep]))
+        left.append(joint.centres_px(lv)[li[keep]])
+        right.append(joint.centres_px(rv)[ri[keep]])
         common.append(ids[keep])
     if not used:
         raise ProcessorError("no joint stereo view: both cameras must see the board at the "
@@ -164,21 +166,17 @@ def stereo_result(joint: JointResult, pairs: list[tuple[int, int]], *,
         baseline_std_m=math.sqrt(max(float(direction @ covariance[3:, 3:] @ direction), 0.0)),
         rotation_std_deg=math.degrees(math.sqrt(max(float(np.linalg.eigvalsh(
             covariance[:3, :3]).max()), 0.0))),
-        square_m=_square_size(left, right, common, left_model=left_model,
-                              right_model=right_model, r1=r1, p1=p1, r2=r2, p2=p2,
-                              points_in_board=points_in_board, square_m=square_m),
+        square_m=square_size(left, right, common, left_model=left_model,
+                             right_model=right_model, r1=r1, p1=p1, r2=r2, p2=p2,
+                             points_in_board=points_in_board, square_m=square_m),
         view_epipolar_px=view_errors, view_ids=used, rejected=rejected)
 
 
-def _corners(joint: JointResult, view: int, rows: np.ndarray) -> F64:
-    """Observed corners ``rows`` of one view of the joint calibration."""
-    return np.asarray(joint.views[view].corners_px[rows], dtype=np.float64)
-
-
-def _square_size(left: list[F64], right: list[F64], ids: list[np.ndarray], *,
-                 left_model: CameraModel, right_model: CameraModel, r1: F64, p1: F64, r2: F64,
-                 p2: F64, points_in_board: F64, square_m: float) -> float:
-    """The board's spacing from the rectified pair: mean distance between triangulated
+def square_size(left: list[F64], right: list[F64], ids: list[np.ndarray], *,
+                left_model: CameraModel, right_model: CameraModel, r1: F64, p1: F64, r2: F64,
+                p2: F64, points_in_board: F64, square_m: float) -> float:
+    """The board's spacing from the rectified pair (views ``(M, 2)`` of the board points
+    ``ids`` in each camera, per joint view): mean distance between triangulated
     nearest neighbours on the board, scaled from their distance to ``square_m`` (asymmetric
     circle grids have no neighbours one spacing apart)."""
     layout = np.linalg.norm(points_in_board[:, None, :] - points_in_board[None, :, :], axis=2)

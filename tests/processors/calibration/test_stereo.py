@@ -8,18 +8,20 @@ import math
 import numpy as np
 import pytest
 
+from processors.calibration.board import Board
 from processors.calibration.joint import BoardView, JointResult, calibrate_cameras
 from processors.calibration.options import CalibrationOptions
 from processors.calibration.stereo import (
     StereoResult,
     epipolar_errors,
     orient_right_views,
+    square_size,
     stereo_result,
 )
 from processors.errors import ProcessorError
 from replay.camera import CameraModel
 
-from .synthetic import BOARD, H, W, pose, random_poses, views
+from .synthetic import BOARD, H, W, disc_views, pose, project, random_poses, views
 
 BASELINE_M = 0.02
 NOISE_PX = 0.05
@@ -151,3 +153,35 @@ def test_right_views_numbered_from_the_other_end_are_turned_back(
                                   right_model=RIGHT)
     for a, b in zip(oriented, right, strict=True):
         np.testing.assert_array_equal(a, b)
+
+
+def test_a_circle_grid_is_measured_at_the_circles_centres() -> None:
+    """Noise-free detections of a circle grid are the centroids of its discs' images, which
+    the two cameras see differently: taken for the circles' centres, rows of a rectified pair
+    disagree and the triangulated spacing shrinks; moved by the disc shift at the solution,
+    both figures are exact."""
+    board, diameter_m = Board(5, 4, 0.05, "circles"), 0.04
+    points = board.points_in_board()
+    left_from_board = random_poses(np.random.default_rng(3), 12, [LEFT, RIGHT], board=board,
+                                   max_tilt_rad=1.0,
+                                   camera_from_reference=[np.eye(4), RIGHT_FROM_LEFT])
+    right_from_board = [RIGHT_FROM_LEFT @ p for p in left_from_board]
+    left = disc_views(LEFT, left_from_board, board, diameter_m / 2)
+    right = disc_views(RIGHT, right_from_board, board, diameter_m / 2)
+    assert max(np.abs(c - project(LEFT, p, board)).max()
+               for c, p in zip(left, left_from_board, strict=True)) > 0.5
+    every = np.arange(board.corner_count)
+    joint = calibrate_cameras(points, [BoardView(0, i, every, c) for i, c in enumerate(left)]
+                              + [BoardView(1, i, every, c) for i, c in enumerate(right)],
+                              [(W, H)] * 2, CalibrationOptions(tangential="zero"),
+                              disc_diameter_m=diameter_m)
+    result = stereo_result(joint, [(i, len(left) + i) for i in range(len(left))],
+                           points_in_board=points, square_m=board.square_m)
+    rig = {"left_model": joint.models[0], "right_model": joint.models[1], "r1": result.r1,
+           "p1": result.p1, "r2": result.r2, "p2": result.p2}
+    as_centres = epipolar_errors(left, right, **rig)
+    assert math.sqrt(np.mean(np.square(as_centres))) > 5e-3 and result.epipolar_rms_px < 1e-6
+    spacing = square_size(left, right, [every] * len(left), **rig, points_in_board=points,
+                          square_m=board.square_m)
+    assert abs(spacing / board.square_m - 1) > 1e-4
+    assert abs(result.square_m / board.square_m - 1) < 1e-8
