@@ -219,18 +219,28 @@ def _oriented(rig: ViewsOfRig, board: Board, seeds: list[CameraModel]) -> ViewsO
     return ViewsOfRig(views, rig.frames_of, rig.pairs, rig.candidates, rig.frame_scatter_px)
 
 
+def _prepared(cameras: list[CameraViews], board: Board, options: CalibrationOptions, *,
+              approximate_s: float | None, stereo_note: bool
+              ) -> tuple[ViewsOfRig, list[CameraModel], list[tuple[int, int]]]:
+    """The rig's views (right views oriented as the left ones), the seed models and the
+    image sizes."""
+    sizes = [c.size for c in cameras]
+    rig = rig_views(cameras, board, approximate_s=approximate_s, stereo_note=stereo_note)
+    seeds = _seeds(rig, board, sizes, options)
+    return _oriented(rig, board, seeds), seeds, sizes
+
+
 def guiding_models(cameras: list[CameraViews], board: Board, options: CalibrationOptions, *,
                    approximate_s: float | None) -> dict[str, CameraModel]:
-    """A first calibration's models, by namespace, of the cameras whose model can guide a
-    second ChArUco detection (:func:`~processors.calibration.targets.guides_charuco`)."""
-    sizes = [c.size for c in cameras]
-    rig = rig_views(cameras, board, approximate_s=approximate_s, stereo_note=False)
-    seeds = _seeds(rig, board, sizes, options)
-    rig = _oriented(rig, board, seeds)
+    """A first calibration's models, by namespace, to guide a second ChArUco detection; none
+    when the lens model cannot (:func:`~processors.calibration.targets.guides_charuco`)."""
+    if not guides_charuco(options.distortion_model):
+        return {}
+    rig, seeds, sizes = _prepared(cameras, board, options, approximate_s=approximate_s,
+                                  stereo_note=False)
     joint = calibrate_cameras(board.points_in_board(), rig.views, sizes, options, seeds=seeds)
-    return {views.source.namespace: model for views, model in zip(cameras, joint.models,
-                                                                  strict=True)
-            if guides_charuco(model)}
+    return {views.source.namespace: model
+            for views, model in zip(cameras, joint.models, strict=True)}
 
 
 def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOptions, *,
@@ -239,11 +249,8 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
     circles are ``diameter_m`` across, or as the views measure them."""
     circles = circle_size(cameras, board, diameter_m)
     disc_diameter_m = circles.diameter_m if circles is not None else None
-    sizes = [c.size for c in cameras]
-    rig = rig_views(cameras, board, approximate_s=approximate_s,
-                    stereo_note=len(cameras) > 1)
-    seeds = _seeds(rig, board, sizes, options)
-    rig = _oriented(rig, board, seeds)
+    rig, seeds, sizes = _prepared(cameras, board, options, approximate_s=approximate_s,
+                                  stereo_note=len(cameras) > 1)
     points = board.points_in_board()
     joint = calibrate_cameras(points, rig.views, sizes, options, seeds=seeds,
                               disc_diameter_m=disc_diameter_m)

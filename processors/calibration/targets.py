@@ -45,9 +45,10 @@ def find_board(gray: np.ndarray, board: Board, model: CameraModel | None = None
     return find_chessboard(gray, board)
 
 
-def guides_charuco(model: CameraModel) -> bool:
-    """Whether OpenCV's ChArUco detector can use ``model`` (a pinhole lens model)."""
-    return model.distortion_model in GUIDING_MODELS
+def guides_charuco(distortion_model: str) -> bool:
+    """Whether OpenCV's ChArUco detector can use a model of ``distortion_model`` (a pinhole
+    lens model)."""
+    return distortion_model in GUIDING_MODELS
 
 
 def _charuco_detector(board: Board, model: CameraModel | None) -> cv2.aruco.CharucoDetector:
@@ -71,7 +72,7 @@ def find_charuco(gray: np.ndarray, board: Board, model: CameraModel | None = Non
     """The ChArUco corners seen, identified by their markers; corners within
     :data:`~.detect.BORDER_PX` of the image border are left out. A ``model`` (pinhole lens
     models only, :func:`guides_charuco`) places the corners by the board's pose."""
-    if model is not None and not guides_charuco(model):
+    if model is not None and not guides_charuco(model.distortion_model):
         raise ProcessorError(f"a {model.distortion_model} model cannot guide ChArUco detection")
     corners, ids, _markers, _marker_ids = _charuco_detector(board, model).detectBoard(gray)
     if corners is None or ids is None or len(ids) == 0:

@@ -8,8 +8,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from camlog.calibrate.solving import guiding_models
 from camlog.calibrate.views import detect_views, resolve_camera
 from processors.calibration.board import make_board
+from processors.calibration.options import CalibrationOptions
 from replay import PoseStamped, open_reader
 from replay.geometry import rotation_from_quat_xyzw
 from replay.records import Scenario
@@ -77,3 +79,9 @@ def test_guided_charuco_detection_finds_more_corners_where_the_truth_says(
     assert counts[1] > 1.03 * counts[0], counts
     assert np.sqrt(np.mean(error ** 2)) < 0.2 and error.max() < 0.6, (
         np.sqrt(np.mean(error ** 2)), error.max())
+
+
+def test_a_fisheye_lens_skips_the_guiding_calibration() -> None:
+    # no views at all: a first calibration would fail, so this returning shows none was run
+    fisheye = CalibrationOptions(model="equidistant")
+    assert guiding_models([], BOARD, fisheye, approximate_s=None) == {}
