@@ -14,6 +14,7 @@ import importlib
 import os
 import signal
 import sys
+import threading
 from collections.abc import Callable, Collection, Sequence
 from typing import Any, NoReturn
 
@@ -110,14 +111,29 @@ def main(argv: Sequence[str] | None = None) -> int:
             signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
+#: how long after an undeliverable Ctrl-C it is sent again (the hook has returned by then)
+REDELIVER_S = 0.01
+
+
 def _interrupt_where_it_can_be_handled(
         previous: Callable[[Any], object]) -> Callable[[Any], object]:
     """An unraisable-exception hook: a Ctrl-C that lands in a callback Python cannot raise
     from (e.g. an import lock's cleanup at start-up) is delivered again to the main thread,
-    where it ends the command in one line, instead of printing "Exception ignored"."""
+    where it ends the command in one line, instead of printing "Exception ignored".
+
+    The signal is sent again from another thread, a moment later: raised here, in the main
+    thread, its handler would run inside this hook, which cannot raise either."""
+    main_thread = threading.main_thread().ident
+
+    def interrupt_again() -> None:
+        if main_thread is not None:
+            signal.pthread_kill(main_thread, signal.SIGINT)
+
     def hook(unraisable: Any) -> object:
         if isinstance(unraisable.exc_value, KeyboardInterrupt):
-            signal.raise_signal(signal.SIGINT)
+            later = threading.Timer(REDELIVER_S, interrupt_again)
+            later.daemon = True
+            later.start()
             return None
         return previous(unraisable)
     return hook

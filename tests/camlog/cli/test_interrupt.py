@@ -7,9 +7,11 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import pytest
 
+from camlog.cli import _interrupt_where_it_can_be_handled
 from tests.camlog.cli.test_record_crash import LAUNCH
 from tests.conftest import REPO_ROOT
 
@@ -55,3 +57,20 @@ def test_ctrl_c_ends_every_command_cleanly(
     assert process.returncode == 130, (process.returncode, stderr)
     assert stderr.splitlines()[-1] == f"camlog {command}: interrupted", stderr
     assert list(out.iterdir()) == []
+
+
+def test_a_ctrl_c_python_cannot_raise_arrives_once_the_hook_has_returned() -> None:
+    """In the main thread the re-sent signal must not go off inside the hook (where it would
+    be "Exception ignored in sys.unraisablehook" again) but right after it."""
+    passed_on: list[object] = []
+    hook = _interrupt_where_it_can_be_handled(passed_on.append)
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        assert hook(SimpleNamespace(exc_value=KeyboardInterrupt())) is None
+        with pytest.raises(KeyboardInterrupt):
+            time.sleep(5)
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    other = SimpleNamespace(exc_value=ValueError("not a Ctrl-C"))
+    hook(other)
+    assert passed_on == [other]  # other unraisable errors go to the previous hook
