@@ -67,8 +67,9 @@ def flush_recording(rec: rr.RecordingStream, watched: Path | None = None, *,
             raise
 
 
-def _disconnect(rec: rr.RecordingStream, wait_s: float) -> None:
-    """Drop a recording's sink; after its writer failed, rerun can block here for good, so
+def _disconnect(rec: rr.RecordingStream, wait_s: float) -> bool:
+    """Drop a recording's sink; whether that finished. rerun can block here for good (after
+    its writer failed, or with a viewer that takes the connection but never answers), so
     give it ``wait_s`` and then leave it behind (and skip rerun's flush at exit)."""
     done = threading.Thread(target=rec.disconnect, name="camlog-rerun-disconnect",
                             daemon=True)
@@ -77,6 +78,8 @@ def _disconnect(rec: rr.RecordingStream, wait_s: float) -> None:
     if done.is_alive():
         _ABANDONED.append(rec)  # never collected: dropping it would block as well
         rr.unregister_shutdown()
+        return False
+    return True
 
 
 #: recordings whose writer hung; kept alive so that nothing waits for them
@@ -152,7 +155,8 @@ class RecordingSink:
         return self
 
     def _discard(self, *, failed: bool = False) -> None:
-        _disconnect(self.rec, GIVE_UP_S if failed else STALL_S)
+        if not any(rec is self.rec for rec in _ABANDONED):  # left behind already
+            _disconnect(self.rec, GIVE_UP_S if failed else STALL_S)
         if self._atomic is not None:
             self._atomic.discard()
 
@@ -166,7 +170,9 @@ class RecordingSink:
             return
         try:
             self.flush()
-            self.rec.disconnect()
+            if not _disconnect(self.rec, STALL_S if self._atomic is not None
+                               else NETWORK_STALL_S):
+                raise RuntimeError("disconnecting timed out")  # said as a stall
             if self._atomic is not None:
                 self._atomic.commit()
         except (OSError, RuntimeError) as err:

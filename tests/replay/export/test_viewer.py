@@ -23,6 +23,9 @@ from pathlib import Path
 import pytest
 from rerun.error_utils import RerunWarning
 
+from replay.errors import ViewerError
+from replay.export import sink as sink_module
+from replay.export.sink import RecordingSink
 from tests.conftest import REPO_ROOT
 from tests.rrd import Receiver, load_rrd
 
@@ -146,3 +149,21 @@ def test_connect_to_a_viewer_that_never_answers_times_out(
     (line,) = result.stderr.splitlines()
     assert "accepted no data for" in line and f"127.0.0.1:{silent_server}" in line, line
     assert took_s < 90
+
+
+def test_a_viewer_that_takes_the_data_but_never_lets_go_is_a_stall(
+        silent_server: int, monkeypatch: pytest.MonkeyPatch) -> None:
+    """rerun's flush can return once the data sits in the socket's buffers, and its
+    disconnect then wait for the silent viewer for good: the sink gives up after the stall
+    time and says so in one error."""
+    monkeypatch.setattr(sink_module, "NETWORK_STALL_S", 0.5)
+    monkeypatch.setattr(sink_module, "GIVE_UP_S", 0.2)
+    released = threading.Event()
+    with pytest.raises(ViewerError, match="accepted no data") as raised, \
+            RecordingSink(connect=f"127.0.0.1:{silent_server}") as sink:
+        monkeypatch.setattr(sink.rec, "flush", lambda **_: None)
+        monkeypatch.setattr(sink.rec, "disconnect", lambda: released.wait(30))
+        started = time.perf_counter()
+    assert time.perf_counter() - started < 5
+    assert f"127.0.0.1:{silent_server}" in str(raised.value)
+    released.set()  # let the abandoned disconnect thread end
