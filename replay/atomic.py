@@ -32,6 +32,7 @@ __all__ = [
     "AtomicOutput",
     "check_not_input",
     "is_temp_output",
+    "refuse_existing",
     "temp_output_of",
     "temp_sibling",
     "write_bytes_atomic",
@@ -80,6 +81,14 @@ def check_not_input(output: Path, inputs: Iterable[Path]) -> None:
                               "choose a path outside it")
         if out in source.parents:
             raise OutputError(f"output {output} holds the input {given}; choose another path")
+
+
+def refuse_existing(final: Path, *, overwrite: bool, inputs: Iterable[Path] = ()) -> None:
+    """Refuse an output that is an input (see :func:`check_not_input`), or that exists
+    without ``overwrite``: the checks a command can make before its slow start-up."""
+    check_not_input(final, inputs)
+    if not overwrite and (final.exists() or final.is_symlink()):
+        raise OutputError(f"{final} exists (pass --overwrite to replace it)")
 
 
 def _check_parent(final: Path) -> None:
@@ -146,13 +155,10 @@ class AtomicOutput(_Staged):
                  replaceable_dir: Callable[[Path], bool] = _never,
                  what: str = "a log") -> None:
         self.final = self.target = final
-        check_not_input(final, inputs)
-        if final.exists() or final.is_symlink():
-            if not overwrite:
-                raise OutputError(f"{final} exists (pass --overwrite to replace it)")
-            if final.is_dir() and not final.is_symlink() and not replaceable_dir(final):
-                raise OutputError(f"refusing to replace {final}: it is a directory but not "
-                                  f"{what}")
+        refuse_existing(final, overwrite=overwrite, inputs=inputs)
+        if final.is_dir() and not final.is_symlink() and not replaceable_dir(final):
+            raise OutputError(f"refusing to replace {final}: it is a directory but not "
+                              f"{what}")
         _check_parent(final)
         self.temp = temp_sibling(final)
         self.done = False

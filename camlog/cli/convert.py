@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from replay.atomic import refuse_existing
 from replay.format_names import DEFAULT_CRF, STILL_CODECS, VIDEO_CODEC_NAMES
 
 from .args import (
@@ -53,6 +54,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Call :func:`replay.convert.convert_log`."""
+    refuse_existing(args.output, overwrite=args.overwrite, inputs=[args.input])
     from replay.convert import convert_log
 
     result = convert_log(

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from recorder.scenario import DEFAULT_SCENARIO, MAX_FRAMES, builtin_names
+from replay.atomic import refuse_existing
 from replay.camera import CAMERA_MODELS
 from replay.format_names import WRITE_FORMATS
 
@@ -135,11 +136,13 @@ def overrides_from(args: argparse.Namespace) -> dict[str, Any]:
 
 def run(args: argparse.Namespace) -> int:
     """Record the scenario and print what was written."""
-    from recorder.record import record
     from recorder.scenario import load_scenario
 
     scenario = load_scenario(args.scenario, overrides_from(args))
     output = args.output or Path("recordings") / f"{scenario.name}.mcap"
+    refuse_existing(output, overwrite=args.overwrite)
+    from recorder.record import record
+
     if args.output is None:
         output.parent.mkdir(parents=True, exist_ok=True)
     result = record(scenario, output, fmt=args.format, overwrite=args.overwrite,

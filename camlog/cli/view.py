@@ -14,6 +14,7 @@ from .args import (
     positive,
     print_warnings,
 )
+from .lean import without_pandas
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -50,6 +51,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Call :func:`replay.export.view_logs` and print what it logged."""
+    from replay.export.paths import refuse_output
+
+    refuse_output(args.logs, args.output, live=args.spawn or args.connect is not None,
+                  overwrite=args.overwrite)
+    without_pandas()
     from replay.export import LoggerOptions, view_logs
 
     options = LoggerOptions(every=args.every, jpeg_quality=args.jpeg_quality,

@@ -1,9 +1,40 @@
-"""rerun export of camlog logs: entity layout, overlays, default blueprint, recording sinks."""
+"""rerun export of camlog logs: entity layout, overlays, default blueprint, recording sinks.
 
-from .logger import LoggerOptions, SceneLogger
-from .scene import ScenePlan, plan_scene
-from .sink import RecordingSink, default_output
-from .view import ViewResult, view_logs
+Names are loaded from their modules on first use: :mod:`replay.export.paths` (where a view
+writes) is usable before the rerun SDK, which the other modules import, is loaded.
+"""
+
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from .logger import LoggerOptions, SceneLogger
+    from .paths import default_output
+    from .scene import ScenePlan, plan_scene
+    from .sink import RecordingSink
+    from .view import ViewResult, view_logs
+
+#: public name -> the module that defines it
+_MODULES = {
+    **dict.fromkeys(("LoggerOptions", "SceneLogger"), ".logger"),
+    "default_output": ".paths",
+    **dict.fromkeys(("ScenePlan", "plan_scene"), ".scene"),
+    "RecordingSink": ".sink",
+    **dict.fromkeys(("ViewResult", "view_logs"), ".view"),
+}
+
+
+def __getattr__(name: str) -> Any:
+    """Load a public name from its module on first use."""
+    module = _MODULES.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module, __name__), name)
+    globals()[name] = value
+    return value
+
 
 __all__ = [
     "LoggerOptions",

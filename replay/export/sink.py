@@ -23,14 +23,9 @@ from ..atomic import AtomicOutput
 from ..errors import ViewerError
 from .viewer import DEFAULT_PORT, LOCALHOST, grpc_url, require_listening, spawn_viewer
 
-__all__ = ["Destination", "RecordingSink", "default_output", "flush_recording"]
+__all__ = ["Destination", "RecordingSink", "flush_recording"]
 
 APPLICATION_ID = "camlog"
-
-
-def default_output(log: Path) -> Path:
-    """``run.mcap`` -> ``run.rrd``; a rosbag2 directory ``run`` -> ``run.rrd`` beside it."""
-    return log.with_name(log.name + ".rrd") if log.is_dir() else log.with_suffix(".rrd")
 
 
 #: rerun's file sink can hang when its first write fails: refuse a nearly full disk first

@@ -27,8 +27,9 @@ from ..selection import merge_in_time, select_topics, window_ns
 from .blueprint import make_blueprint
 from .groups import related_groups
 from .logger import LoggerOptions, SceneLogger
+from .paths import output_of
 from .scene import ScenePlan, plan_scene
-from .sink import Destination, RecordingSink, default_output
+from .sink import Destination, RecordingSink
 from .survey import Survey, survey
 from .viewer import DEFAULT_PORT, LOCALHOST
 
@@ -144,9 +145,8 @@ def view_logs(
     terminal. ``say`` is told, before anything is written, how large the images will be."""
     started = time.perf_counter()
     options = options or LoggerOptions()
-    if output is None and not spawn and connect is None:
-        output = default_output(Path(paths[0])) if paths else None
     paths = [Path(p) for p in paths]
+    output = output_of(paths, output, live=spawn or connect is not None)
     with contextlib.ExitStack() as stack:
         readers = _open_readers(stack, paths, recover=recover)
         where = str(paths[0]) if len(paths) == 1 else f"{len(paths)} logs"

@@ -96,3 +96,51 @@ def test_reading_an_mcap_log_loads_no_other_format_library() -> None:
     loaded = loaded_by("info", str(log))
     assert "mcap" in loaded
     assert "ruamel" not in loaded  # rosbag2's metadata reader (rosbags' bag formats)
+
+
+def run_loading(*argv: str) -> tuple[subprocess.CompletedProcess[str], set[str]]:
+    """``camlog ARGV...`` in a fresh interpreter: the finished process and the top-level
+    packages it loaded (None entries, marked absent, included)."""
+    done = subprocess.run([sys.executable, "-c", SCRIPT, *argv], capture_output=True,
+                          text=True, check=True)
+    return done, set(json.loads(done.stdout.splitlines()[-1]))
+
+
+@pytest.mark.parametrize("command", ["view", "convert", "record"])
+def test_an_existing_output_is_refused_before_the_heavy_start_up(
+        command: str, tmp_path: Path) -> None:
+    log = GOLDEN / "red_block-seed0-640x480-f10.mcap"
+    existing = tmp_path / {"view": "out.rrd", "convert": "out.bag", "record": "out.mcap"}[command]
+    existing.write_bytes(b"the user's file")
+    argv = {"view": ["view", str(log), "-o", str(existing)],
+            "convert": ["convert", str(log), str(existing)],
+            "record": ["record", "-o", str(existing), "--duration", "0.1"]}[command]
+    done, loaded = run_loading(*argv)
+    assert f"{existing} exists (pass --overwrite to replace it)" in done.stderr
+    assert existing.read_bytes() == b"the user's file"
+    assert {"rerun", "mujoco", "matplotlib"} & loaded == set()
+    if command != "record":  # the scenario loader (its camera models) does load OpenCV
+        assert {"cv2", "rosbags"} & loaded == set()
+
+
+def test_view_refuses_to_write_over_its_log_before_loading_rerun(tmp_path: Path) -> None:
+    log = tmp_path / "run.mcap"
+    log.write_bytes((GOLDEN / "red_block-seed0-640x480-f10.mcap").read_bytes())
+    done, loaded = run_loading("view", str(log), "-o", str(log), "--overwrite")
+    assert "is the input" in done.stderr
+    assert log.read_bytes() == (GOLDEN / "red_block-seed0-640x480-f10.mcap").read_bytes()
+    assert "rerun" not in loaded
+
+
+def test_view_keeps_pyarrow_from_loading_pandas(tmp_path: Path) -> None:
+    """pyarrow imports an installed pandas on its first list conversion (0.3-0.4 s); the
+    test extra installs pandas (with rerun-sdk[catalog]), so the check below is live."""
+    from importlib.util import find_spec
+
+    assert find_spec("pandas") is not None
+    log = GOLDEN / "red_block-seed0-640x480-f10.mcap"
+    out = tmp_path / "out.rrd"
+    done, loaded = run_loading("view", str(log), "-o", str(out), "--no-progress")
+    assert out.stat().st_size > 0
+    assert "rerun" in loaded and "pandas" not in loaded
+    assert done.stderr == ""  # e.g. no RerunWarning: every component converted
