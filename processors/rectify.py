@@ -5,7 +5,8 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from replay.camera import CAMERA_MODELS, CameraModel, canonical_model
+from replay.camera import CameraModel, canonical_model
+from replay.format_names import CAMERA_MODELS
 from replay.frames import Frame, encode_image
 from replay.messages import F64, CameraInfo
 

@@ -8,7 +8,8 @@ from typing import Any
 
 import numpy as np
 
-from replay.camera import CAMERA_MODELS, FISHEYE_MODELS, CameraModel, focal_from_hfov
+from replay.camera import CameraModel, focal_from_hfov
+from replay.format_names import CAMERA_MODELS, FISHEYE_MODELS
 from replay.geometry import frame_from_axes, rotation_from_rpy
 from replay.messages import F64
 

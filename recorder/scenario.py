@@ -10,27 +10,15 @@ from __future__ import annotations
 import copy
 import tomllib
 from dataclasses import dataclass
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
+from .builtin import DEFAULT_SCENARIO, MAX_FRAMES, builtin_dir, builtin_names
 from .cameras import CameraSpec, parse_camera
 from .errors import ScenarioError
 from .spec_table import SpecTable
 from .target_spec import TargetSpec, parse_target
 from .targets import check_target
-
-DEFAULT_SCENARIO = "mono_checkerboard"
-
-
-def builtin_dir() -> Path:
-    """Folder of the built-in scenario specs."""
-    return Path(str(resources.files("camlog_datasets") / "scenarios"))
-
-
-def builtin_names() -> list[str]:
-    """Names of the scenario specs that ship with camlog."""
-    return sorted(p.stem for p in builtin_dir().glob("*.toml"))
 
 
 @dataclass(frozen=True)
@@ -70,10 +58,6 @@ class Scenario:
 
 
 # --- loading -------------------------------------------------------------------------------
-
-#: most frames per camera of one recording (9 hours at 30 Hz; planning and memory stay sane)
-MAX_FRAMES = 1_000_000
-
 
 def load_scenario(
     name_or_path: str | None = None, overrides: dict[str, Any] | None = None

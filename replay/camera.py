@@ -18,16 +18,9 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
+from .format_names import CAMERA_MODELS, FISHEYE_MODELS, MODEL_ALIASES
 from .messages import F64, CameraInfo
 
-#: distortion model -> number of coefficients OpenCV uses for it
-DISTORTION_MODELS = {"plumb_bob": 5, "rational_polynomial": 8}
-#: fisheye model -> number of coefficients (``cv2.fisheye``'s k1..k4)
-FISHEYE_MODELS = {"equidistant": 4}
-#: every model :class:`CameraModel` understands (ROS ``distortion_model`` names)
-CAMERA_MODELS = DISTORTION_MODELS | FISHEYE_MODELS
-#: other names of the models (OpenCV and Kalibr call the equidistant model "fisheye")
-MODEL_ALIASES = {"fisheye": "equidistant"}
 _FISHEYE_NEWTON_STEPS = 30
 _UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-14)
 

@@ -1,9 +1,12 @@
-"""Names of the log formats and image codecs camlog writes, without loading any library (for
-argument parsers: ``--format`` and ``--compress`` choices, defaults)."""
+"""Names and defaults that argument parsers offer, without loading any library: the log
+formats and image codecs camlog writes, the camera models it understands, replay's log times
+and the first stamp of an import (``--format``, ``--compress``, ``--model`` choices)."""
 
 from __future__ import annotations
 
-__all__ = ["DEFAULT_CRF", "STILL_CODECS", "VIDEO_CODEC_NAMES", "WRITE_FORMATS"]
+__all__ = ["CAMERA_MODELS", "DEFAULT_CRF", "DEFAULT_START_NS", "DISTORTION_MODELS",
+           "FISHEYE_MODELS", "LOG_TIMES", "MODEL_ALIASES", "STILL_CODECS", "VIDEO_CODEC_NAMES",
+           "WRITE_FORMATS"]
 
 #: ``--format`` names, in the order of :data:`replay.formats.FORMATS`
 WRITE_FORMATS = ("mcap", "rosbag2", "rosbag2-sqlite3", "ros1")
@@ -18,3 +21,19 @@ VIDEO_CODEC_NAMES = ("h264", "h265")
 #: 39-40 dB PSNR on 640x480 images with 2 levels of sensor noise and still shrinks such a
 #: log far more than tenfold (``benchmarks.video_size``)
 DEFAULT_CRF = 18
+
+#: distortion model -> number of coefficients OpenCV uses for it
+DISTORTION_MODELS = {"plumb_bob": 5, "rational_polynomial": 8}
+#: fisheye model -> number of coefficients (``cv2.fisheye``'s k1..k4)
+FISHEYE_MODELS = {"equidistant": 4}
+#: every model :class:`~replay.camera.CameraModel` understands (ROS ``distortion_model`` names)
+CAMERA_MODELS = DISTORTION_MODELS | FISHEYE_MODELS
+#: other names of the models (OpenCV and Kalibr call the equidistant model "fisheye")
+MODEL_ALIASES = {"fisheye": "equidistant"}
+
+#: what ``camlog play`` writes as a message's log time: the replay's wall clock or the log's
+LOG_TIMES = ("replay", "original")
+
+#: an import's first stamp by default, the recorder's (2023-11-14T22:13:20Z): imports are
+#: deterministic
+DEFAULT_START_NS = 1_700_000_000_000_000_000

@@ -21,11 +21,11 @@ from tqdm import tqdm
 
 from .calibration_yaml import load_calibration
 from .errors import ImageFolderError, OptionError
+from .format_names import DEFAULT_START_NS
 from .formats import open_writer
 from .messages import CameraInfo, Image
 
 __all__ = [
-    "DEFAULT_START_NS",
     "EXTENSIONS",
     "ImportResult",
     "frame_id_for",
@@ -38,8 +38,6 @@ __all__ = [
 ]
 
 EXTENSIONS = (".png", ".jpg", ".jpeg", ".ppm", ".pgm", ".pnm")
-#: the recorder's default first stamp (2023-11-14T22:13:20Z): imports are deterministic
-DEFAULT_START_NS = 1_700_000_000_000_000_000
 SIDES = ("left", "right")
 
 

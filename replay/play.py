@@ -27,13 +27,13 @@ from .export.logger import LoggerOptions, SceneLogger
 from .export.sink import RecordingSink
 from .export.view import ExportSession, open_logs
 from .export.viewer import DEFAULT_PORT, LOCALHOST
+from .format_names import LOG_TIMES
 from .formats import open_writer
 from .formats.base import LogWriter, RawMessage
 from .pacing import Pacer, loop_period_ns
 
 __all__ = ["LOG_TIMES", "REPLAY_TIME", "PlayResult", "play_log"]
 
-LOG_TIMES = ("replay", "original")
 
 
 class _Destination(Protocol):

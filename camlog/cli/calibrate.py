@@ -6,7 +6,7 @@ import argparse
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from processors.calibration.board import DEFAULT_DICTIONARY, PATTERNS
+from processors.calibration.patterns import DEFAULT_DICTIONARY, PATTERNS
 
 from ..errors import UsageError
 from .args import (

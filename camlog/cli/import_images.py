@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from replay.importer import DEFAULT_START_NS, import_images
+from replay.format_names import DEFAULT_START_NS
 
 from .args import (
     add_format_argument,
@@ -52,6 +52,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Call :func:`replay.importer.import_images`."""
+    from replay.importer import import_images
+
     result = import_images(
         args.folder, args.output, topic=args.topic, rate_hz=args.rate, stereo=args.stereo,
         camera_info=args.camera_info, start_ns=args.start_time, frame_id=args.frame_id,

@@ -5,8 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from replay.format_names import WRITE_FORMATS
-from replay.play import LOG_TIMES, play_log
+from replay.format_names import LOG_TIMES, WRITE_FORMATS
 
 from .args import (
     add_no_progress,
@@ -47,6 +46,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Call :func:`replay.play.play_log` and report the pacing."""
+    from replay.play import play_log
+
     result = play_log(
         args.logs, rate=args.rate, start_s=args.start, end_s=args.end, topics=args.topics,
         loops=args.loop, output=args.output, spawn=args.spawn, connect=args.connect,

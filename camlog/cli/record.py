@@ -7,10 +7,9 @@ import math
 from pathlib import Path
 from typing import Any
 
-from recorder.scenario import DEFAULT_SCENARIO, MAX_FRAMES, builtin_names
+from recorder.builtin import DEFAULT_SCENARIO, MAX_FRAMES, builtin_names
 from replay.atomic import refuse_existing
-from replay.camera import CAMERA_MODELS
-from replay.format_names import WRITE_FORMATS
+from replay.format_names import CAMERA_MODELS, WRITE_FORMATS
 
 from .args import (
     add_no_progress,
@@ -136,6 +135,8 @@ def overrides_from(args: argparse.Namespace) -> dict[str, Any]:
 
 def run(args: argparse.Namespace) -> int:
     """Record the scenario and print what was written."""
+    if args.output is not None:  # refused before the scenario loader's libraries load
+        refuse_existing(args.output, overwrite=args.overwrite)
     from recorder.scenario import load_scenario
 
     scenario = load_scenario(args.scenario, overrides_from(args))

@@ -24,9 +24,7 @@ if TYPE_CHECKING:
     import cv2
 
 from ..errors import ProcessorError
-
-PATTERNS = ("chessboard", "charuco", "circles", "acircles")
-DEFAULT_DICTIONARY = "DICT_5X5_100"
+from .patterns import DEFAULT_DICTIONARY, PATTERNS
 
 
 @dataclass(frozen=True)

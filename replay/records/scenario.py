@@ -13,7 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from ..camera import FISHEYE_MODELS, CameraModel
+from ..camera import CameraModel
+from ..format_names import FISHEYE_MODELS
 from ..messages import F64
 from .base import OMIT_NONE, JsonRecord
 

@@ -8,13 +8,8 @@ import cv2
 import numpy as np
 import pytest
 
-from replay.camera import (
-    CAMERA_MODELS,
-    DISTORTION_MODELS,
-    CameraModel,
-    canonical_model,
-    rectify_maps,
-)
+from replay.camera import CameraModel, canonical_model, rectify_maps
+from replay.format_names import CAMERA_MODELS, DISTORTION_MODELS
 from replay.messages import F64, CameraInfo
 
 K = np.array([[214.7, 0.0, 322.3], [0.0, 214.9, 237.6], [0.0, 0.0, 1.0]])

@@ -11,7 +11,8 @@ import pytest
 from replay import CameraInfo, Image, ImageFolderError, OptionError, open_reader
 from replay.calibration_yaml import save_calibration
 from replay.camera import CameraModel
-from replay.importer import DEFAULT_START_NS, import_images, natural_key, stereo_pairs
+from replay.format_names import DEFAULT_START_NS
+from replay.importer import import_images, natural_key, stereo_pairs
 from tests.outputs import temp_outputs
 
 

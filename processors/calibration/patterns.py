@@ -1,0 +1,11 @@
+"""The calibration target patterns and the default ArUco dictionary, without loading numpy
+or OpenCV (for ``camlog calibrate``'s argument parser)."""
+
+from __future__ import annotations
+
+__all__ = ["DEFAULT_DICTIONARY", "PATTERNS"]
+
+#: ``--pattern`` names: a chessboard, a ChArUco board, a symmetric or an asymmetric circle grid
+PATTERNS = ("chessboard", "charuco", "circles", "acircles")
+#: the ArUco dictionary of a ChArUco board unless one is named (ROS camera_calibration's too)
+DEFAULT_DICTIONARY = "DICT_5X5_100"
