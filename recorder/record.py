@@ -6,11 +6,10 @@ worker thread behind a bounded queue so that they overlap rendering.
 
 from __future__ import annotations
 
-import queue
-import threading
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -21,6 +20,7 @@ from tqdm import tqdm
 from replay import Image, PoseStamped, open_writer
 from replay._version import VERSION
 from replay.formats import LogWriter
+from replay.formats.background import BackgroundWriter
 from replay.geometry import invert, quat_xyzw_from_rotation
 from replay.records import RenderView, ScenarioCamera
 from replay.records import Scenario as ScenarioRecord
@@ -102,14 +102,10 @@ def scenario_record(
         targets=targets)
 
 
-#: queue item that ends the worker and drops the partial log
-_ABORT = object()
-
-
 class _Pipeline:
-    """Worker thread that owns the log writer: it opens it, finishes frames (warp, noise,
-    encoding), writes them, and closes or aborts it. Every writer call happens on this one
-    thread, since some storages (SQLite) refuse to be used from another."""
+    """The log writer on a worker thread (:class:`~replay.formats.background.BackgroundWriter`,
+    which opens, uses and closes it on that one thread, as some storages, SQLite, require)
+    that also finishes frames there (warp, noise, encoding) before writing them."""
 
     def __init__(
         self, scenario: Scenario, optics: list[CameraOptics], open_log: Callable[[], LogWriter]
@@ -117,68 +113,19 @@ class _Pipeline:
         self.scenario = scenario
         self.optics = optics
         self.noise = [rng_for(scenario, NOISE_STREAM, i) for i in range(len(optics))]
-        self.queue: queue.Queue[Any] = queue.Queue(maxsize=6)
-        self.error: BaseException | None = None
-        self._open_log = open_log
-        self._opened = threading.Event()
-        self.thread = threading.Thread(target=self._run, name="camlog-writer", daemon=True)
-        self.thread.start()
-        try:
-            self._opened.wait()
-        except BaseException:  # Ctrl-C while the log opens: drop it once it is open
-            self.abort()
-            raise
-        if self.error is not None:  # the log could not be opened
-            self.thread.join()
-            raise self.error
+        self._log = BackgroundWriter(open_log, max_queued=6)
 
-    def put(self, item: Any) -> None:
-        while True:
-            if self.error is not None:
-                raise self.error
-            try:
-                self.queue.put(item, timeout=0.2)
-                return
-            except queue.Full:
-                continue
+    def put(self, item: tuple[Shot, np.ndarray, list[np.ndarray]]) -> None:
+        """Queue a rendered shot (with its true target poses) to be finished and written."""
+        self._log.submit(partial(self._write, shot=item[0], rendered=item[1], truth=item[2]))
 
     def finish(self) -> None:
         """Write what is queued, close the log and raise the worker's error, if any."""
-        self._stop(None)
-        if self.error is not None:
-            raise self.error
+        self._log.close()
 
     def abort(self) -> None:
         """Drop what is queued and the partial log."""
-        self._stop(_ABORT)
-
-    def _stop(self, sentinel: object) -> None:
-        if self.thread.is_alive():
-            self.queue.put(sentinel)
-            self.thread.join()
-
-    def _run(self) -> None:
-        try:
-            writer = self._open_log()
-        except BaseException as err:  # handed to the rendering thread
-            self.error = err
-            return
-        finally:
-            self._opened.set()
-        # after an error, keep taking items without writing so that the producer never blocks
-        while (item := self.queue.get()) is not None and item is not _ABORT:
-            if self.error is None:
-                try:
-                    self._write(writer, *item)
-                except BaseException as err:
-                    self.error = err
-        try:
-            if item is None and self.error is None:
-                writer.close()
-            else:
-                writer.abort()
-        except BaseException as err:
-            self.error = self.error or err
+        self._log.abort()
 
     def _write(
         self, writer: LogWriter, shot: Shot, rendered: np.ndarray, truth: list[np.ndarray]

@@ -194,7 +194,31 @@ def is_rosbag2_dir(path: Path) -> bool:
 FLUSH_INTERVAL_S = 0.5
 
 
-class LogWriter:
+class KeptOnSuccess:
+    """An output as a context manager: :meth:`close` (finish and keep it) when the block
+    ends without an exception, :meth:`abort` (drop it) otherwise."""
+
+    def close(self) -> None:
+        """Finish the output and move it to its final name."""
+        raise NotImplementedError
+
+    def abort(self) -> None:
+        """Drop the partial output."""
+        raise NotImplementedError
+
+    def __enter__(self) -> Self:
+        return self
+
+    def __exit__(
+        self, et: type[BaseException] | None, ev: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        if et is None:
+            self.close()
+        else:
+            self.abort()
+
+
+class LogWriter(KeptOnSuccess):
     """Writer base: typed messages are serialized here, formats store raw bytes.
 
     Use as a context manager: the output appears under its final name only when the block
@@ -369,14 +393,4 @@ class LogWriter:
         finally:
             self._atomic.discard()
 
-    def __enter__(self) -> Self:
-        return self
-
-    def __exit__(
-        self, et: type[BaseException] | None, ev: BaseException | None, tb: TracebackType | None
-    ) -> None:
-        if et is None:
-            self.close()
-        else:
-            self.abort()
 
