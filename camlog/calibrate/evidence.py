@@ -12,18 +12,18 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 import cv2
 import numpy as np
-from tqdm import tqdm
 
 from processors.calibration.board import Board
 from processors.calibration.figures import annotate_detection
 from replay.camera import rectify_maps
-from replay.formats import LogReader, open_writer
+from replay.formats import LogReader, LogWriter
+from replay.formats.background import BackgroundWriter
 from replay.frames import encode_image
 from replay.messages import CameraInfo, Image, PointStamped
+from replay.progress import progress_bar
 from replay.records import CalibrationSummary, ViewResiduals
 from replay.topics import CALIBRATION_SUMMARY, CameraTopics
 
@@ -31,7 +31,7 @@ from .pixels import TopicFrames
 from .solving import CalibratedCamera, StereoSolution
 from .views import Frame
 
-__all__ = ["Evidence", "write_evidence"]
+__all__ = ["Evidence", "write_evidence", "write_summary"]
 
 
 @dataclass(frozen=True)
@@ -59,10 +59,12 @@ def hold_ends(frames: Sequence[Frame], view_of: Mapping[int, int]) -> dict[int, 
     return ends
 
 
-def write_evidence(reader: LogReader, path: Path, cameras: list[CalibratedCamera], *,
-                   board: Board, stereo: StereoSolution | None, summary: CalibrationSummary,
-                   progress: bool | None) -> Evidence:
-    """Write ``path``: the log of ``reader`` plus the calibration's annotated topics."""
+def write_evidence(reader: LogReader, writer: LogWriter | BackgroundWriter,
+                   cameras: list[CalibratedCamera], *, board: Board,
+                   stereo: StereoSolution | None, progress: bool | None) -> Evidence:
+    """Write into ``writer`` the log of ``reader`` plus the calibration's annotated topics
+    (a :class:`~replay.formats.background.BackgroundWriter` compresses and writes them while
+    this pass draws the next frames)."""
     by_topic = {c.views.source.image_topic: c for c in cameras}
     counters = dict.fromkeys(by_topic, 0)
     ends = {c.views.source.namespace: hold_ends(c.views.frames, c.solution.view_of)
@@ -76,10 +78,10 @@ def write_evidence(reader: LogReader, path: Path, cameras: list[CalibratedCamera
     shown = stereo.pairs[len(stereo.pairs) // 2] if stereo is not None and stereo.pairs \
         else None
     rectified_shown: dict[int, np.ndarray] = {}
-    bar = tqdm(total=reader.message_count, unit="msg", desc="write", leave=False,
-               disable=None if progress is None else not progress)
+    bar = progress_bar(total=reader.message_count, unit="msg", desc="write",
+                       progress=progress)
     to_frame = TopicFrames()
-    with open_writer(path) as writer, bar:
+    with bar:
         for raw in reader.raw_messages():
             writer.write_raw(raw)
             bar.update()
@@ -130,7 +132,11 @@ def write_evidence(reader: LogReader, path: Path, cameras: list[CalibratedCamera
                     np.round(result.residuals_px[frame.index], 5), outliers,
                     until_ns=ends[ns].get(frame.index)).to_message(),
                     log_time_ns=log_time)
-        writer.write(CALIBRATION_SUMMARY, summary.to_message(indent=1),
-                     log_time_ns=reader.end_ns or 0)
     pair = (rectified_shown[0], rectified_shown[1]) if len(rectified_shown) == 2 else None
     return Evidence(pair)
+
+
+def write_summary(writer: LogWriter | BackgroundWriter, summary: CalibrationSummary, *,
+                  log_time_ns: int) -> None:
+    """The calibration summary, at the end of the log (``log_time_ns``: its last time)."""
+    writer.write(CALIBRATION_SUMMARY, summary.to_message(indent=1), log_time_ns=log_time_ns)

@@ -12,17 +12,19 @@ from __future__ import annotations
 import os
 import time
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 from processors.calibration.board import Board
 from processors.calibration.solve import CalibrationOptions
 from replay.atomic import AtomicFolder
-from replay.formats import open_reader
-from replay.records import CalibrationSummary
+from replay.formats import LogReader, open_reader, open_writer
+from replay.formats.background import BackgroundWriter
+from replay.records import CalibrationSummary, Scenario
 from replay.storage import Location, local_paths
 
 from ..errors import InputError
-from .evidence import write_evidence
+from .evidence import write_evidence, write_summary
 from .report import output_names, write_files
 from .solving import (
     CalibratedCamera,
@@ -72,6 +74,27 @@ def _checked(found: LogViews, max_speed_px: float | None) -> list[CameraViews]:
     return out
 
 
+def _write_report(reader: LogReader, folder: Path, calibrated: list[CalibratedCamera],
+                  solved: RigSolution, *, board: Board, options: CalibrationOptions,
+                  scenario: Scenario | None, camera_name: str | None,
+                  progress: bool | None) -> CalibrationSummary:
+    """calibration.mcap, the calibration files, the figures and report.md into ``folder``;
+    the summary they show.
+
+    calibration.mcap is compressed and written on a thread of its own while this one
+    annotates the frames and draws the figures (and another one may still compute the
+    statistics); it is complete, or its error raised, when this returns."""
+    with BackgroundWriter(partial(open_writer, folder / "calibration.mcap")) as log:
+        evidence = write_evidence(reader, log, calibrated, board=board, stereo=solved.stereo,
+                                  progress=progress)
+        summary = build_summary(calibrated, solved, board=board, options=options,
+                                scenario=scenario)
+        write_summary(log, summary, log_time_ns=reader.end_ns or 0)
+        write_files(folder, calibrated, stereo=solved.stereo, summary=summary,
+                    evidence=evidence, camera_name=camera_name)
+    return summary
+
+
 def calibrate_log(
     log: Location,
     *,
@@ -112,21 +135,24 @@ def calibrate_log(
                 found = detect_views(reader, sources, board, workers=workers,
                                      progress=progress, models=models)
                 cameras_views = _checked(found, max_speed_px)
+        # with the report, the statistics are computed while the evidence pass runs
         solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s,
-                           diameter_m=diameter_m)
+                           diameter_m=diameter_m, background=report)
         solutions, stereo = solved.cameras, solved.stereo
         scenario = found.scenario
         truth = [scenario.camera_for(s.views.source.namespace,
                                      s.views.log_info.frame_id if s.views.log_info else None)
                  if scenario is not None else None for s in solutions]
         calibrated = calibrated_cameras(solutions, stereo, truth)
-        summary = build_summary(calibrated, solved, board=board, options=options,
-                                scenario=scenario)
-        evidence = write_evidence(reader, staged.path / "calibration.mcap", calibrated,
-                                  board=board, stereo=stereo, summary=summary,
-                                  progress=progress) if report else None
-        write_files(staged.path, calibrated, stereo=stereo, summary=summary,
-                    evidence=evidence, camera_name=camera_name)
+        if report:
+            summary = _write_report(reader, staged.path, calibrated, solved, board=board,
+                                    options=options, scenario=scenario, camera_name=camera_name,
+                                    progress=progress)
+        else:
+            summary = build_summary(calibrated, solved, board=board, options=options,
+                                    scenario=scenario)
+            write_files(staged.path, calibrated, stereo=stereo, summary=summary, evidence=None,
+                        camera_name=camera_name)
     diameter_warning = solved.circles.warning() if solved.circles is not None else None
     return CalibrationRun(calibrated, stereo, solved, output_dir, staged.files,
                           time.perf_counter() - started, summary,

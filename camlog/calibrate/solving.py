@@ -11,6 +11,7 @@ which is what every later step (summary, evidence, report) speaks.
 
 from __future__ import annotations
 
+from concurrent.futures import Future
 from dataclasses import dataclass
 
 import cv2
@@ -24,18 +25,16 @@ from processors.calibration.selection import Coverage, coverage, view_parameters
 from processors.calibration.solve import MonoResult
 from processors.calibration.stereo import StereoResult, orient_right_views, stereo_result
 from processors.calibration.targets import guides_charuco
-from processors.calibration.uncertainty import UncertaintyMap, projection_uncertainty
-from processors.calibration.validation import CrossValidation, cross_validate
+from processors.calibration.uncertainty import UncertaintyMap
+from processors.calibration.validation import CrossValidation
 from replay.camera import CameraModel
 from replay.messages import F64, CameraInfo
 from replay.records import ScenarioCamera
 
 from ..errors import CalibrationError
 from .instants import ViewsOfRig, rig_views
+from .statistics import CameraStatistics, camera_statistics
 from .views import CameraViews, Frame
-
-#: "far away": the uncertainty and cross-validation of rays
-FAR_M = 1e4
 
 #: a given circle diameter this far (relative) from the measured one earns a warning
 DIAMETER_WARNING = 0.05
@@ -56,9 +55,22 @@ class CameraSolution:
     view_of: dict[int, int]
     frames_in_view: dict[int, int]  # view name -> how many frames it averages
     coverage: Coverage  # of the used views
-    uncertainty: UncertaintyMap  # at the working range
-    rays_uncertainty: UncertaintyMap  # for points far away
-    cross_validation: CrossValidation | None
+    statistics: Future[CameraStatistics]  # computed beside the evidence pass (solve_rig)
+
+    @property
+    def uncertainty(self) -> UncertaintyMap:
+        """Projection uncertainty at the working range (waits for the statistics)."""
+        return self.statistics.result().uncertainty
+
+    @property
+    def rays_uncertainty(self) -> UncertaintyMap:
+        """Projection uncertainty of points far away (waits for the statistics)."""
+        return self.statistics.result().rays_uncertainty
+
+    @property
+    def cross_validation(self) -> CrossValidation | None:
+        """The halves' cross-validation (waits for the statistics)."""
+        return self.statistics.result().cross_validation
 
     @property
     def cross_validation_px(self) -> float | None:
@@ -244,9 +256,13 @@ def guiding_models(cameras: list[CameraViews], board: Board, options: Calibratio
 
 
 def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOptions, *,
-              approximate_s: float | None, diameter_m: float | None = None) -> RigSolution:
+              approximate_s: float | None, diameter_m: float | None = None,
+              background: bool = False) -> RigSolution:
     """Calibrate every camera, and for two the stereo rig, from every view; a circle grid's
-    circles are ``diameter_m`` across, or as the views measure them."""
+    circles are ``diameter_m`` across, or as the views measure them. With ``background``
+    the cameras' :class:`~.statistics.CameraStatistics` (most of the work) are computed on
+    a thread of their own while the caller goes on; reading them waits, and raises their
+    error."""
     circles = circle_size(cameras, board, diameter_m)
     disc_diameter_m = circles.diameter_m if circles is not None else None
     rig, seeds, sizes = _prepared(cameras, board, options, approximate_s=approximate_s,
@@ -254,8 +270,8 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
     points = board.points_in_board()
     joint = calibrate_cameras(points, rig.views, sizes, options, seeds=seeds,
                               disc_diameter_m=disc_diameter_m)
-    validation = cross_validate(points, rig.views, sizes, joint.options, range_m=FAR_M,
-                                disc_diameter_m=disc_diameter_m)
+    statistics = camera_statistics(joint, rig.views, points, sizes,
+                                   disc_diameter_m=disc_diameter_m, background=background)
     solutions = []
     for index, views in enumerate(cameras):
         result = _mono_result(joint, rig, index)
@@ -268,9 +284,7 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
             views, rig.candidates[index], sorted(view_of), result, view_of,
             {rig.frames_of[i][0]: len(rig.frames_of[i]) for i in mine},
             coverage(params, [c for c, _ in used], views.size),
-            projection_uncertainty(joint.problem, index),
-            projection_uncertainty(joint.problem, index, range_m=FAR_M),
-            validation[index] if validation is not None else None))
+            statistics[index]))
     stereo = None
     if len(cameras) == 2:
         rectified = stereo_result(joint, rig.pairs, points_in_board=points,

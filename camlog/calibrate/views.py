@@ -20,7 +20,6 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 import numpy as np
-from tqdm import tqdm
 
 from processors.calibration.board import Board
 from processors.calibration.detect import Detection
@@ -30,6 +29,7 @@ from replay.errors import RecordError
 from replay.formats import LogReader
 from replay.geometry import transform_from_pose
 from replay.messages import F64, CameraInfo, PoseStamped
+from replay.progress import progress_bar
 from replay.records import Scenario
 from replay.topics import SCENARIO, CameraTopics, split_ground_truth
 
@@ -237,9 +237,9 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
     wanted = [*by_image, *by_info, *by_truth,
               *([SCENARIO] if SCENARIO in reader.topics else [])]
     pending: deque[tuple[_Seen, list[int], Future[list[Detection | None]]]] = deque()
-    bar = tqdm(total=sum(reader.topics[s.image_topic].count for s in sources), unit="frame",
-               desc="detect" if models is None else "detect again (guided)",
-               disable=None if progress is None else not progress, leave=False)
+    bar = progress_bar(total=sum(reader.topics[s.image_topic].count for s in sources),
+                       unit="frame", desc="detect" if models is None else "detect again (guided)",
+                       progress=progress)
 
     def submit(camera: _Seen) -> None:
         indices = [i for i, _ in camera.run]
