@@ -149,13 +149,12 @@ def board_and_options(args: argparse.Namespace) -> tuple[Board, CalibrationOptio
 
 def run(args: argparse.Namespace) -> int:
     """Calibrate (or ``--check``) and print the key figures."""
-    from ..calibrate.check import check_log
-    from ..calibrate.flow import calibrate_log
-
     board, options = board_and_options(args)
     cameras = cameras_from(args)
     progress = False if args.no_progress else None
     if args.check:
+        from ..calibrate.check import check_log
+
         if not args.calibration:
             raise UsageError("--check needs --calibration FILE (twice for stereo)")
         result = check_log(args.log, board=board, cameras=cameras,
@@ -163,6 +162,8 @@ def run(args: argparse.Namespace) -> int:
                            diameter_m=args.diameter, progress=progress, recover=args.recover)
         print("\n".join(result.lines()))
         return 0
+    from ..calibrate.flow import calibrate_log
+
     output = args.output or args.log.with_name(f"{args.log.stem}_calibration")
     run_ = calibrate_log(
         args.log, board=board, cameras=cameras, output_dir=output, options=options,

@@ -7,6 +7,7 @@ reads ``sys.modules`` at exit, which is deterministic where a time would not be.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 from pathlib import Path
@@ -151,3 +152,39 @@ def test_view_keeps_pyarrow_from_loading_pandas(tmp_path: Path) -> None:
     assert out.stat().st_size > 0
     assert "rerun" in loaded and "pandas" not in loaded
     assert done.stderr == ""  # e.g. no RerunWarning: every component converted
+
+
+def test_calibrate_with_its_report_loads_no_bar_plotting_or_viewer_library(
+        mono_calibration_log: Path, tmp_path: Path) -> None:
+    """The figures are drawn with OpenCV; no bar is shown without a terminal."""
+    loaded = loaded_by("calibrate", str(mono_calibration_log), "--size", "7x6", "--square",
+                       "0.01", "-o", str(tmp_path / "cal"), "--no-progress")
+    assert (tmp_path / "cal" / "calibration.mcap").is_file()
+    assert {"tqdm", "matplotlib", "scipy", "rerun"} & loaded == set()
+    assert "cv2" in loaded
+
+
+BLAS_SCRIPT = """
+import os, sys
+from camlog.cli import main
+try:
+    main(["--help"])
+except SystemExit:
+    pass
+import numpy
+print(len(os.listdir("/proc/self/task")))
+"""
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="counts threads in /proc")
+def test_numpy_loads_with_one_blas_thread_unless_told_otherwise() -> None:
+    """camlog's linear algebra is small: OpenBLAS starts no thread of its own."""
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    threads = {}
+    for given in (None, "2"):
+        if given is not None:
+            env["OPENBLAS_NUM_THREADS"] = given
+        done = subprocess.run([sys.executable, "-c", BLAS_SCRIPT], capture_output=True,
+                              text=True, check=True, env=env)
+        threads[given] = int(done.stdout.splitlines()[-1])
+    assert threads == {None: 1, "2": 2}
