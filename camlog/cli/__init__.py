@@ -18,6 +18,8 @@ import threading
 from collections.abc import Callable, Collection, Sequence
 from typing import Any, NoReturn
 
+from .memory import keep_freed_memory
+
 #: subcommand name -> (one-line help, module under camlog.cli with add_arguments and run)
 COMMANDS: dict[str, tuple[str, str]] = {
     "demo": ("run the whole workflow on built-in scenarios: record, resync, calibrate, "
@@ -150,6 +152,7 @@ def _run(argv: list[str], command: str | None, where: str) -> int:
         # beside camlog's own threads. Read once, when numpy loads; a user's setting stands.
         os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
         args = build_parser([command] if command else []).parse_args(argv)
+        keep_freed_memory()
         return int(args.run(args))
     except KeyboardInterrupt:
         print(f"{where}: interrupted", file=sys.stderr)
