@@ -1,6 +1,7 @@
-"""Writing MCAP files with ROS 2 (CDR) messages (or Foxglove schemas) through ``mcap``.
+"""Writing MCAP files with ROS 2 (CDR) messages (or Foxglove schemas).
 
-Chunks are zstd-compressed by default and carry CRCs; a live writer completes a chunk at least
+Chunks are zstd-compressed by default, carry CRCs and are finished on a worker thread
+(:mod:`.mcap_chunks`); a live writer completes a chunk at least
 every :data:`~.base.FLUSH_INTERVAL_S` so that a killed writer's file keeps all but its last
 moments.
 """
@@ -10,17 +11,16 @@ from __future__ import annotations
 from collections.abc import Iterable
 from pathlib import Path
 
-from mcap.writer import CompressionType, Writer
-
 from .._version import VERSION
 from ..errors import LogWriteError
 from ..wire import CDR, JSON, PROTOBUF, ros2_typestore
 from .base import LogWriter, RawMessage
+from .mcap_chunks import McapChunkWriter
 
 __all__ = ["COMPRESSION", "McapLogWriter"]
 
-COMPRESSION = {"zstd": CompressionType.ZSTD, "lz4": CompressionType.LZ4,
-               "none": CompressionType.NONE}
+#: compression name -> its name in MCAP chunk records
+COMPRESSION = {"zstd": "zstd", "lz4": "lz4", "none": ""}
 
 
 class McapLogWriter(LogWriter):
@@ -50,9 +50,9 @@ class McapLogWriter(LogWriter):
             self._file = self.temp_path.open("wb")
         except OSError as err:
             raise LogWriteError(f"cannot write {path}: {err.strerror}") from None
-        # every chunk carries the CRC of its content (enable_crcs, on by default)
-        self._writer = Writer(self._file, chunk_size=chunk_size,
-                              compression=COMPRESSION[compression])
+        # every chunk carries the CRC of its content
+        self._writer = McapChunkWriter(self._file, chunk_size=chunk_size,
+                                       compression=COMPRESSION[compression])
         if profile not in ("ros2", "foxglove"):
             raise LogWriteError(f"unknown MCAP profile {profile!r} (use ros2 or foxglove)")
         self.profile = profile
@@ -91,18 +91,22 @@ class McapLogWriter(LogWriter):
         channel = self._channel(raw, msgdef)
         sequence = self._sequence.get(channel, 0)
         self._sequence[channel] = sequence + 1
-        self._writer.add_message(channel, raw.log_time_ns, bytes(raw.data), raw.log_time_ns,
-                                 sequence)
+        self._writer.add_message(channel, raw.log_time_ns, raw.data, raw.log_time_ns, sequence)
 
     def set_metadata(self, name: str, values: dict[str, str]) -> None:
         self._writer.add_metadata(name, values)
 
     def _flush(self) -> None:
-        self._writer.flush()  # type: ignore[no-untyped-call]  # chunk (with CRC) to the file
+        self._writer.flush()  # chunk (with CRC) to the file
 
     def _finish(self) -> None:
-        self._writer.finish()  # type: ignore[no-untyped-call]
-        self._file.close()
+        try:
+            self._writer.finish()
+        finally:
+            self._file.close()
 
     def _abort(self) -> None:
-        self._file.close()
+        try:
+            self._writer.abort()
+        finally:
+            self._file.close()

@@ -1,22 +1,22 @@
 """rosbag2 storage writers that survive a killed process, plugged into ``rosbags``' writer.
 
 ``rosbags`` writes metadata.yaml, message definitions, type hashes and QoS; these classes
-store the messages. The MCAP storage goes through the ``mcap`` library (chunks with CRCs,
-zstd-compressed when asked), the SQLite storage commits what it holds at each flush and
-after every few megabytes instead of once at the end.
+store the messages. The MCAP storage is written by :mod:`.mcap_chunks` (chunks with CRCs,
+zstd-compressed when asked, finished on a worker thread), the SQLite storage commits what it
+holds at each flush and after every few megabytes instead of once at the end.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any, cast
+from typing import Any
 
-from mcap.writer import CompressionType, Writer
 from rosbags.interfaces import MessageDefinitionFormat
 from rosbags.rosbag2.enums import CompressionMode
 from rosbags.rosbag2.storage_sqlite3 import Sqlite3Writer
 
 from .._version import VERSION
+from .mcap_chunks import McapChunkWriter
 
 #: an SQLite transaction is committed at least after this many bytes of messages
 SQLITE_CHUNK_BYTES = 8 * 1024 * 1024
@@ -28,17 +28,15 @@ class McapStorage:
     metadata in a ``rosbag2`` metadata record. ``CompressionMode.STORAGE`` means zstd chunks.
     """
 
-    #: as rosbags' own MCAP storage: the mcap writer builds each chunk in one growing buffer,
-    #: which past about 2 MiB of 640x480 images costs it twice the time to write them
+    #: as rosbags' own MCAP storage
     CHUNK_SIZE = 1024 * 1024
 
     def __init__(self, path: Path, compression: CompressionMode) -> None:
         self.path = path / f"{path.name}.mcap"
         self._file = self.path.open("xb")
-        chunks = CompressionType.ZSTD if compression == CompressionMode.STORAGE \
-            else CompressionType.NONE
-        self._writer = Writer(self._file, chunk_size=self.CHUNK_SIZE, compression=chunks,
-                              enable_crcs=True)
+        chunks = "zstd" if compression == CompressionMode.STORAGE else ""
+        self._writer = McapChunkWriter(self._file, chunk_size=self.CHUNK_SIZE,
+                                       compression=chunks)
         self._writer.start(profile="ros2", library=f"camlog {VERSION}")
         self._schemas: dict[str, int] = {}
         self._channels: dict[int, int] = {}  # rosbags connection id -> MCAP channel id
@@ -62,23 +60,27 @@ class McapStorage:
         channel = self._channels[connection.id]
         sequence = self._sequence.get(channel, 0)
         self._sequence[channel] = sequence + 1
-        # the mcap writer copies the buffer into its chunk: a memoryview needs no copy first
-        self._writer.add_message(channel, timestamp, cast(bytes, data), timestamp, sequence)
+        self._writer.add_message(channel, timestamp, data, timestamp, sequence)  # copied
 
     def flush(self) -> None:
         """Complete the open chunk and hand it to the OS."""
-        self._writer.flush()  # type: ignore[no-untyped-call]
+        self._writer.flush()
 
     def close(self, version: int, metadata: str) -> None:
         """Write the summary (with the bag metadata, as rosbag2 does) and close the file."""
         del version
-        self._writer.add_metadata("rosbag2", {"serialized_metadata": metadata})
-        self._writer.finish()  # type: ignore[no-untyped-call]
-        self._file.close()
+        try:
+            self._writer.add_metadata("rosbag2", {"serialized_metadata": metadata})
+            self._writer.finish()
+        finally:
+            self._file.close()
 
     def abort(self) -> None:
         """Close without a summary."""
-        self._file.close()
+        try:
+            self._writer.abort()
+        finally:
+            self._file.close()
 
 
 class Sqlite3Storage(Sqlite3Writer):

@@ -63,7 +63,7 @@ def test_metadata_round_trip(tmp_path: Path) -> None:
 CHILD = textwrap.dedent(
     """
     # Writes numbered frames until killed; prints "index size" whenever the file grew on
-    # disk, i.e. a chunk ending with frame `index` was handed to the OS.
+    # disk, i.e. a chunk ending at or before frame `index` was handed to the OS.
     import sys
     import numpy as np
     from replay import Image, open_writer
@@ -109,7 +109,9 @@ def test_killed_writer_leaves_a_readable_partial(tmp_path: Path) -> None:
         assert any("incomplete" in warning for warning in reader.warnings), reader.warnings
         recovered = [(r.topic, r.log_time_ns, r.message) for r in reader.messages()]
         assert reader.message_count == len(recovered)
-    assert len(recovered) >= flushed
+    # chunks are finished on a worker thread: when the file grew, up to two chunks handed to
+    # it (14 frames of 4.8 kB each in 64 KiB) and the open one may not be on disk yet
+    assert len(recovered) >= flushed - 3 * 15
     assert recovered == numbered_images(len(recovered))
 
 
