@@ -18,6 +18,7 @@ from ..errors import LogReadError, LogWriteError
 from ..wire import CDR, ROS1, ros1_typestore, ros2_typestore
 from .base import LogWriter, RawMessage
 from .bounded import BoundedFile
+from .ros1_chunks import ThreadedRos1Writer
 from .ros1_layout import layout_problem
 from .ros1_reindex import Reindexed, reindexed_copy
 from .rosbag2_storage import McapStorage, Sqlite3Storage
@@ -225,7 +226,8 @@ class Rosbag2LogWriter(_RosbagsWriter):
 
 
 class Ros1LogWriter(_RosbagsWriter):
-    """Writer for a ROS1 ``.bag`` file (lz4-compressed chunks by default)."""
+    """Writer for a ROS1 ``.bag`` file (lz4-compressed chunks by default, finished on a worker
+    thread: :mod:`.ros1_chunks`)."""
 
     format_name = "ros1"
     serialization = ROS1
@@ -239,7 +241,7 @@ class Ros1LogWriter(_RosbagsWriter):
             raise LogWriteError(f"ROS1 bags cannot use {compression!r} compression "
                                 f"(use {', '.join(formats)})")
         super().__init__(path, overwrite=overwrite, inputs=inputs)
-        writer = Writer1(self.temp_path)
+        writer = ThreadedRos1Writer(self.temp_path)
         if (chunk_format := formats[compression]) is not None:
             writer.set_compression(chunk_format)
         self.compression = f"{compression} chunks" if compression != "none" else "none"
@@ -249,6 +251,4 @@ class Ros1LogWriter(_RosbagsWriter):
         return ros1_typestore()
 
     def _flush(self) -> None:
-        writer = self._writer
-        writer.write_chunk(writer.chunks[-1])  # the open chunk; rosbags starts a new one
-        writer.bio.flush()
+        self._writer.flush()
