@@ -27,6 +27,7 @@ from .base import LogReader, RawMessage, TopicInfo
 from .bounded import BoundedFile
 from .mcap_checks import check_chunk_size, summary_problem
 from .mcap_index import channel_spans
+from .mcap_ordered import chunk_messages, ordered_chunks
 
 MAGIC = b"\x89MCAP0\r\n"
 ENCODINGS = {"cdr": CDR, "ros1": ROS1}
@@ -291,18 +292,10 @@ class McapLogReader(LogReader):
     ) -> Iterator[RawMessage]:
         wanted = None if topics is None else set(topics)
         if self._summary is not None:
-            start_name, end_name = _TIME_BOUNDS
-            bounds: dict[str, Any] = {start_name: start_ns, end_name: end_ns}
             try:
-                reader = self._seeking_reader()
-                for _schema, channel, message in reader.iter_messages(
-                    topics=None if wanted is None else sorted(wanted),
-                    log_time_order=True,
-                    **bounds,
-                ):
-                    topic, msgtype, encoding, schema = self._channels[channel.id]
-                    yield RawMessage(topic, msgtype, message.log_time, message.data, encoding,
-                                     schema)
+                for log_time, cid, data in self._indexed_messages(wanted, start_ns, end_ns):
+                    topic, msgtype, encoding, schema = self._channels[cid]
+                    yield RawMessage(topic, msgtype, log_time, data, encoding, schema)
             except _DAMAGE as err:
                 raise LogReadError(
                     f"{self.path} is corrupt ({_describe(err)}); "
@@ -318,6 +311,24 @@ class McapLogReader(LogReader):
             if end_ns is not None and message.log_time >= end_ns:
                 continue
             yield RawMessage(topic, msgtype, message.log_time, message.data, encoding, schema)
+
+    def _indexed_messages(self, wanted: set[str] | None, start_ns: int | None,
+                          end_ns: int | None) -> Iterator[tuple[int, int, bytes | memoryview]]:
+        """(log time, channel id, data) in log-time order, through the summary: chunk by chunk
+        when the chunks follow each other in time, else by the mcap library's reader."""
+        chunks = ordered_chunks(self._summary)
+        if chunks is not None:
+            ids = None if wanted is None else {
+                cid for cid, (topic, *_) in self._channels.items() if topic in wanted}
+            yield from chunk_messages(self._file, chunks, channels=ids, start_ns=start_ns,
+                                      end_ns=end_ns)
+            return
+        start_name, end_name = _TIME_BOUNDS
+        bounds: dict[str, Any] = {start_name: start_ns, end_name: end_ns}
+        for _schema, channel, message in self._seeking_reader().iter_messages(
+                topics=None if wanted is None else sorted(wanted), log_time_order=True,
+                **bounds):
+            yield message.log_time, channel.id, message.data
 
     def topic_spans(self) -> dict[str, tuple[int, int]] | None:
         """From the message indexes of an MCAP file with a summary (see
