@@ -145,6 +145,7 @@ def convert_log(
         total = sum(reader.topics[t].count for t in names)
         options: dict[str, Any] = {"profile": profile} if fmt == "mcap" else {}
         codecs = _reencoders(renamed, compress, crf)
+        msgdefs = {t: _msgdef(reader, t) for t in names}
         written = reencoded = 0
         with open_writer(output, fmt=fmt, overwrite=overwrite, inputs=[input_path],
                          **options) as writer, \
@@ -166,7 +167,7 @@ def convert_log(
                         record_msgtype(raw.msgtype) in FOXGLOVE_CAMERA_TYPES:
                     out = reader.decode(raw)
                 if out is False:
-                    writer.write_raw(raw, msgdef=_msgdef(reader, raw.topic))
+                    writer.write_raw(raw, msgdef=msgdefs[raw.topic])
                 else:
                     assert not isinstance(out, bool)
                     topic = renamed.get(raw.topic, raw.topic)
