@@ -87,7 +87,7 @@ def test_chunks_indexes_and_crcs_read_back_in_order() -> None:
     assert [m.name for m in reader.iter_metadata()] == ["before", "after"]
 
 
-def test_worker_runs_jobs_in_order_and_raises_a_failure_once() -> None:
+def test_worker_runs_jobs_in_order_and_reports_a_failure() -> None:
     worker = OrderedWorker(depth=1)
     done: list[int] = []
     threads = set()
@@ -102,9 +102,12 @@ def test_worker_runs_jobs_in_order_and_raises_a_failure_once() -> None:
         for n in range(20):
             worker.submit(lambda n=n: job(n))
         worker.drain()
+    with pytest.raises(OSError, match="No space"):  # until the writer is abandoned
+        worker.drain()
     worker.abort()
     assert done == [0, 1, 2, 3, 4]  # nothing after the failed job
-    assert threads == {name for name in threads if name.startswith("camlog-chunks")}
+    assert threads == {"camlog-chunks"}
+    assert not [t for t in threading.enumerate() if t.name == "camlog-chunks"]
 
 
 class FullDisk(io.RawIOBase):
