@@ -44,20 +44,24 @@ class McapLogWriter(LogWriter):
         if compression not in COMPRESSION:
             raise LogWriteError(f"MCAP files cannot use {compression!r} compression "
                                 "(use zstd, lz4 or none)")
+        if profile not in ("ros2", "foxglove"):
+            raise LogWriteError(f"unknown MCAP profile {profile!r} (use ros2 or foxglove)")
         super().__init__(path, overwrite=overwrite, inputs=inputs)
         self.compression = f"{compression} chunks" if compression != "none" else "none"
+        self.profile = profile
         try:
             self._file = self.temp_path.open("wb")
         except OSError as err:
             raise LogWriteError(f"cannot write {path}: {err.strerror}") from None
-        # every chunk carries the CRC of its content
-        self._writer = McapChunkWriter(self._file, chunk_size=chunk_size,
-                                       compression=COMPRESSION[compression])
-        if profile not in ("ros2", "foxglove"):
-            raise LogWriteError(f"unknown MCAP profile {profile!r} (use ros2 or foxglove)")
-        self.profile = profile
-        self._writer.start(profile="ros2" if profile == "ros2" else "",
-                           library=f"camlog {VERSION}")
+        try:  # every chunk carries the CRC of its content
+            self._writer = McapChunkWriter(self._file, chunk_size=chunk_size,
+                                           compression=COMPRESSION[compression])
+            self._writer.start(profile="ros2" if profile == "ros2" else "",
+                               library=f"camlog {VERSION}")
+        except BaseException:  # e.g. Ctrl-C: no temporary file stays behind
+            self._file.close()
+            self._atomic.discard()
+            raise
         self._schemas: dict[str, int] = {}
         self._channels: dict[str, int] = {}
         self._sequence: dict[int, int] = {}
