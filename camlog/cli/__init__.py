@@ -107,7 +107,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     command = _command_in(argv)
     where = f"camlog {command}" if command else "camlog"
     try:
-        return _run(argv, command, where)
+        return _run(argv, command, where, as_program=as_program)
     finally:
         if as_program:
             signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -141,7 +141,7 @@ def _interrupt_where_it_can_be_handled(
     return hook
 
 
-def _run(argv: list[str], command: str | None, where: str) -> int:
+def _run(argv: list[str], command: str | None, where: str, *, as_program: bool) -> int:
     """:func:`main` without its exit handler."""
     try:
         # rerun's Rust side logs a failure (disk full, lost viewer) as several lines of its
@@ -152,7 +152,9 @@ def _run(argv: list[str], command: str | None, where: str) -> int:
         # beside camlog's own threads. Read once, when numpy loads; a user's setting stands.
         os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
         args = build_parser([command] if command else []).parse_args(argv)
-        keep_freed_memory()
+        args.as_program = as_program  # the process is camlog's own (see camlog.cli.lean)
+        if as_program:  # a process-wide setting: only in camlog's own process
+            keep_freed_memory()
         return int(args.run(args))
     except KeyboardInterrupt:
         print(f"{where}: interrupted", file=sys.stderr)

@@ -4,7 +4,9 @@ pyarrow (which rerun uses for every component) checks whether a Python list it c
 a pandas object, and to do so imports pandas, when it is installed, on its first conversion:
 0.3-0.4 s of CPU, more than a short view spends on its images. Commands that never hand a
 pandas object to pyarrow hide pandas from the import system before loading rerun; pyarrow
-then finds it absent, as on a lean install, and treats lists as lists.
+then finds it absent, as on a lean install, and treats lists as lists. Only in a process that
+is camlog's own (the ``camlog`` program): pyarrow remembers the answer for the process's
+life, so code that calls :func:`camlog.cli.main` in its own process keeps its pandas.
 """
 
 from __future__ import annotations

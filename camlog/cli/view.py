@@ -55,7 +55,8 @@ def run(args: argparse.Namespace) -> int:
 
     refuse_output(args.logs, args.output, live=args.spawn or args.connect is not None,
                   overwrite=args.overwrite)
-    without_pandas()
+    if getattr(args, "as_program", False):
+        without_pandas()
     from replay.export import LoggerOptions, view_logs
 
     options = LoggerOptions(every=args.every, jpeg_quality=args.jpeg_quality,

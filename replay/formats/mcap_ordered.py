@@ -19,6 +19,7 @@ from typing import IO, Any
 from mcap.data_stream import ReadDataStream
 from mcap.exceptions import McapError
 from mcap.records import Chunk, ChunkIndex
+from mcap.stream_reader import CRCValidationError
 
 from .mcap_checks import check_chunk_size
 
@@ -89,8 +90,9 @@ def _loader(file: IO[bytes]) -> Callable[[ChunkIndex], memoryview]:
             raise McapError(f"unknown chunk compression {chunk.compression!r}")
         if len(data) != chunk.uncompressed_size:
             raise ValueError(f"a chunk holds {len(data)} bytes, not {chunk.uncompressed_size}")
-        if chunk.uncompressed_crc and zlib.crc32(data) != chunk.uncompressed_crc:
-            raise McapError(f"the chunk at byte {index.chunk_start_offset} fails its CRC")
+        crc = zlib.crc32(data) if chunk.uncompressed_crc else 0
+        if crc != chunk.uncompressed_crc:  # the mcap library's error, as its reader raises it
+            raise CRCValidationError(expected=chunk.uncompressed_crc, actual=crc, record=chunk)
         return memoryview(data)
 
     return load

@@ -148,10 +148,24 @@ def test_view_keeps_pyarrow_from_loading_pandas(tmp_path: Path) -> None:
     assert find_spec("pandas") is not None
     log = GOLDEN / "red_block-seed0-640x480-f10.mcap"
     out = tmp_path / "out.rrd"
-    done, loaded = run_loading("view", str(log), "-o", str(out), "--no-progress")
+    as_program = SCRIPT.replace("main(sys.argv[1:])", "main()")  # the camlog program
+    done = subprocess.run([sys.executable, "-c", as_program, "view", str(log), "-o", str(out),
+                           "--no-progress"], capture_output=True, text=True, check=True)
+    loaded = set(json.loads(done.stdout.splitlines()[-1]))
     assert out.stat().st_size > 0
     assert "rerun" in loaded and "pandas" not in loaded
     assert done.stderr == ""  # e.g. no RerunWarning: every component converted
+
+
+def test_main_called_by_other_code_leaves_its_pandas_importable(tmp_path: Path) -> None:
+    """Code that calls camlog's main() keeps its pandas (pyarrow would remember it absent)."""
+    script = ("import sys; from camlog.cli import main; main(sys.argv[1:]); import pandas; "
+              "print(pandas.__name__)")
+    log = GOLDEN / "red_block-seed0-640x480-f10.mcap"
+    done = subprocess.run([sys.executable, "-c", script, "view", str(log), "-o",
+                           str(tmp_path / "out.rrd"), "--no-progress"], capture_output=True,
+                          text=True, check=True)
+    assert done.stdout.splitlines()[-1] == "pandas"
 
 
 def test_calibrate_with_its_report_loads_no_bar_plotting_or_viewer_library(
