@@ -74,6 +74,8 @@ class SceneRenderer:
                     self._views = ViewRenderer(mj, self.model)
         except Exception as err:
             self.close()
+            if _interrupted(err):
+                raise KeyboardInterrupt from None
             if "framebuffer" in str(err).lower() and max(size) > 2048:
                 raise RenderError(
                     f"cannot render {size[0]}x{size[1]} images (each camera's size times its "
@@ -171,3 +173,13 @@ class ViewRenderer:
         if self._gl is not None:
             self._gl.free()
             self._gl = None
+
+
+def _interrupted(err: BaseException) -> bool:
+    """Whether ``err`` is a Ctrl-C in disguise: ctypes (under MuJoCo's GL bindings) turns a
+    KeyboardInterrupt raised while it converts a call's arguments into an ArgumentError
+    ("argument 2: KeyboardInterrupt: ")."""
+    import ctypes
+
+    return isinstance(err.__context__, KeyboardInterrupt) or (
+        isinstance(err, ctypes.ArgumentError) and "KeyboardInterrupt" in str(err))
