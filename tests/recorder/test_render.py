@@ -5,12 +5,11 @@ from __future__ import annotations
 import ctypes
 from typing import Any
 
-import mujoco
 import pytest
 
 from recorder.errors import RenderError
 from recorder.optics import plan_optics
-from recorder.render import SceneRenderer
+from recorder.render import SceneRenderer, _import_mujoco
 from recorder.scenario import load_scenario
 
 
@@ -31,6 +30,7 @@ def test_a_gl_start_up_failure_is_a_render_error_unless_it_was_ctrl_c(
         expected: type[BaseException]) -> None:
     scenario = load_scenario("red_block")
     optics = [plan_optics(camera.model, 1) for camera in scenario.cameras]
+    mujoco = _import_mujoco()  # as the renderer loads it: MUJOCO_GL chosen first
     monkeypatch.setattr(mujoco, "Renderer", _failing_renderer(error))
     with pytest.raises(expected) as raised:
         SceneRenderer(scenario, optics)  # type: ignore[arg-type]
