@@ -199,21 +199,25 @@ def record(
     frames = dict.fromkeys((c.name for c in scenario.cameras), 0)
     try:
         loop_started = time.perf_counter()
-        pipeline = _Pipeline(scenario, optics, open_log)
+        # the bar first: once the pipeline has opened the log, nothing may come between it
+        # and the block that drops the partial log on an error or Ctrl-C
         bar = tqdm(total=len(shots), unit="frame", desc=f"record {scenario.name}",
                    disable=None if progress is None else not progress, leave=False)
         try:
-            for shot, rendered, poses in rendered_shots(renderer, scenario.cameras,
-                                                        scenario.targets, trajectories, shots):
-                truth = [camera_from_world[shot.camera_index] @ p for p in poses]
-                pipeline.put((shot, rendered, truth))
-                frames[scenario.cameras[shot.camera_index].name] += 1
-                bar.update()
-            pipeline.finish()
-            loop_s = time.perf_counter() - loop_started
-        except BaseException:
-            pipeline.abort()
-            raise
+            pipeline = _Pipeline(scenario, optics, open_log)
+            try:
+                for shot, rendered, poses in rendered_shots(renderer, scenario.cameras,
+                                                            scenario.targets, trajectories,
+                                                            shots):
+                    truth = [camera_from_world[shot.camera_index] @ p for p in poses]
+                    pipeline.put((shot, rendered, truth))
+                    frames[scenario.cameras[shot.camera_index].name] += 1
+                    bar.update()
+                pipeline.finish()
+                loop_s = time.perf_counter() - loop_started
+            except BaseException:
+                pipeline.abort()
+                raise
         finally:
             bar.close()
     finally:
