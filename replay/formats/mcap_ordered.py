@@ -38,8 +38,11 @@ Entry = tuple[int, int, memoryview]
 
 def ordered_chunks(summary: Any) -> list[ChunkIndex] | None:
     """The chunk indexes in file order when each chunk's messages come no earlier than the
-    previous chunk's; None when they overlap in time."""
+    previous chunk's; None when they overlap in time, or when the summary indexes no chunk
+    (an unchunked file, whose messages only a scan finds)."""
     chunks = sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset)
+    if not chunks:
+        return None
     for before, after in pairwise(chunks):
         if before.message_end_time > after.message_start_time:
             return None
@@ -54,8 +57,10 @@ def chunk_messages(
     :func:`ordered_chunks`) in log-time order, of ``channels`` (None: all) with
     ``start_ns <= log time < end_ns``. Damage raises McapError, ValueError or a
     decompressor's error."""
+    # a chunk without message indexes may hold any channel: only reading it tells
     wanted = [c for c in chunks
-              if (channels is None or not channels.isdisjoint(c.message_index_offsets))
+              if (channels is None or not c.message_index_offsets
+                  or not channels.isdisjoint(c.message_index_offsets))
               and (start_ns is None or c.message_end_time >= start_ns)
               and (end_ns is None or c.message_start_time < end_ns)]
     if not wanted:

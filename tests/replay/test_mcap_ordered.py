@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 from mcap.reader import SeekingReader
-from mcap.writer import CompressionType, Writer
+from mcap.writer import CompressionType, IndexType, Writer
 
 from replay import LogReadError, open_reader
 from replay.formats.mcap_ordered import ordered_chunks
@@ -77,3 +77,25 @@ def test_a_damaged_chunk_is_one_error(tmp_path: Path) -> None:
     path.write_bytes(bytes(data))
     with open_reader(path) as reader, pytest.raises(LogReadError, match="corrupt"):
         list(reader.raw_messages())
+
+
+@pytest.mark.parametrize("layout", ["unchunked", "no message indexes"])
+def test_files_without_chunk_or_message_indexes_read_as_the_mcap_reader(
+        tmp_path: Path, layout: str) -> None:
+    """A summary that indexes no chunk (messages outside chunks) or chunks without message
+    indexes (topic membership unknown until read): nothing may be skipped."""
+    path = tmp_path / "log.mcap"
+    with path.open("wb") as f:
+        writer = Writer(f, chunk_size=2048, use_chunking=layout != "unchunked",
+                        index_types=IndexType.ALL & ~IndexType.MESSAGE)
+        writer.start(profile="ros2", library="test")
+        schema = writer.register_schema("std_msgs/msg/String", "ros2msg", b"string data")
+        channels = [writer.register_channel(t, "cdr", schema) for t in ("/a", "/b")]
+        for i in range(200):
+            writer.add_message(channels[i % 2], 1000 + i, b"\x00\x01\x00\x00" + bytes(40), 0, i)
+        writer.finish()
+    for topics in (None, ["/b"]):
+        with open_reader(path) as reader:
+            ours = [(r.topic, r.log_time_ns, bytes(r.data)) for r in reader.raw_messages(topics)]
+        assert ours == library_order(path, topics, None, None)
+        assert len(ours) == (200 if topics is None else 100)
