@@ -6,7 +6,6 @@ package (``replay.errors``, ``replay.selection``) does not load numpy, OpenCV or
 
 from __future__ import annotations
 
-import importlib
 from typing import TYPE_CHECKING, Any
 
 from .errors import (
@@ -23,6 +22,7 @@ from .errors import (
     UnsupportedEncodingError,
     ViewerError,
 )
+from .lazy import lazy_names
 
 if TYPE_CHECKING:
     from .formats import (
@@ -58,18 +58,16 @@ _MODULES = {
 }
 
 
+_load = lazy_names(__name__, _MODULES, globals())
+
+
 def __getattr__(name: str) -> Any:
     """Load a public name (or ``__version__``) from its module on first use."""
     if name == "__version__":
         from ._version import VERSION
 
         return VERSION
-    module = _MODULES.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(module, __name__), name)
-    globals()[name] = value
-    return value
+    return _load(name)
 
 
 __all__ = [

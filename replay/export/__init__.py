@@ -6,8 +6,9 @@ writes) is usable before the rerun SDK, which the other modules import, is loade
 
 from __future__ import annotations
 
-import importlib
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+
+from ..lazy import lazy_names
 
 if TYPE_CHECKING:
     from .logger import LoggerOptions, SceneLogger
@@ -26,14 +27,8 @@ _MODULES = {
 }
 
 
-def __getattr__(name: str) -> Any:
-    """Load a public name from its module on first use."""
-    module = _MODULES.get(name)
-    if module is None:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    value = getattr(importlib.import_module(module, __name__), name)
-    globals()[name] = value
-    return value
+#: load a public name from its module on first use
+__getattr__ = lazy_names(__name__, _MODULES, globals())
 
 
 __all__ = [
