@@ -16,6 +16,7 @@ import numpy as np
 import rerun as rr
 
 from .blueprint import LOG_TIME, REPLAY_TIME, STAMP_TIME
+from .columns import ClearRow, ColumnBatcher, ImageRow, PointsRow, Times
 from .sink import flush_recording
 
 __all__ = ["FLUSH_EVERY", "MAX_PENDING", "Emitter", "Flush"]
@@ -27,19 +28,21 @@ FLUSH_EVERY = 400
 
 #: a blocking flush of the recording (default: :func:`flush_recording`)
 Flush = Callable[[], None] | None
-#: (log time, header stamp or None, replay wall clock or None), ns
-Times = tuple[int, int | None, int | None]
+ROWS = (ImageRow, PointsRow, ClearRow)
 
 
 class Emitter:
     """Sends ``(entity, archetype)`` log calls to ``rec`` at the current message's times;
     an archetype may be a :class:`~concurrent.futures.Future` of one (see :meth:`encode`,
-    which runs on ``encoders`` worker threads). Counts rows per entity. ``flush`` waits for
-    rerun's writer every :data:`FLUSH_EVERY` calls."""
+    which runs on ``encoders`` worker threads), or a row (:mod:`replay.export.columns`),
+    sent in a batch of its entity's rows with ``columns`` and as its archetype otherwise (a
+    live replay shows every frame when it comes). Counts rows per entity. ``flush`` waits
+    for rerun's writer every :data:`FLUSH_EVERY` calls."""
 
     def __init__(self, rec: rr.RecordingStream, *, encoders: int = 0,
-                 flush: Flush = None) -> None:
+                 flush: Flush = None, columns: bool = False) -> None:
         self.rec = rec
+        self._columns = ColumnBatcher(rec) if columns else None
         # a blocking flush that gives up when rerun stalls (see sink.flush_recording)
         self._flush = flush or (lambda: flush_recording(rec))
         self._pool = ThreadPoolExecutor(encoders, thread_name_prefix="camlog-jpeg") \
@@ -70,14 +73,26 @@ class Emitter:
                     return
                 archetype = archetype.result()
             self._pending.popleft()
-            if times != self._applied:
-                self._apply(times)
-            self.rec.log(entity, archetype)
+            self._send(times, entity, archetype)
             self._logged += 1
             if self._logged % FLUSH_EVERY == 0:
                 # rerun writes on its own thread; without back-pressure its queue grows with
                 # the log's length whenever logging outpaces writing
+                if self._columns is not None:
+                    self._columns.flush()
                 self._flush()
+
+    def _send(self, times: Times, entity: str, archetype: Any) -> None:
+        if self._columns is not None:
+            if isinstance(archetype, ROWS):
+                self._columns.add(entity, times, archetype)
+                return
+            self._columns.flush_entity(entity)  # the entity's earlier rows first
+        if isinstance(archetype, ROWS):
+            archetype = archetype.archetype()
+        if times != self._applied:
+            self._apply(times)
+        self.rec.log(entity, archetype)
 
     def encode(self, make: Callable[..., Any], *args: Any, **kwargs: Any) -> Any:
         """``make(*args, **kwargs)``: an archetype, made on a worker thread when there are
@@ -90,6 +105,8 @@ class Emitter:
         """Send what is still pending and stop the worker threads."""
         try:
             self.drain()
+            if self._columns is not None:
+                self._columns.flush()
         finally:
             if self._pool is not None:
                 self._pool.shutdown(cancel_futures=True)

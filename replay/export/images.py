@@ -17,9 +17,10 @@ import rerun as rr
 from ..errors import EncodingError
 from ..frames import Color, Frame, decode_frame
 from ..messages import CompressedImage, CompressedVideo, Image, Message
+from .columns import ImageRow
 
-__all__ = ["COLOR_MODELS", "complete", "encoded_image", "is_keyframe", "media_type", "rerun_image",
-           "still_frame", "video_sample"]
+__all__ = ["COLOR_MODELS", "complete", "encoded_image", "image_row", "is_keyframe", "media_type",
+           "rerun_image", "still_frame", "video_sample"]
 
 #: CompressedVideo format -> rerun's codec
 VIDEO_CODECS = {"h264": rr.VideoCodec.H264, "h265": rr.VideoCodec.H265}
@@ -80,6 +81,14 @@ def rerun_image(
             return rr.EncodedImage(contents=buf.tobytes(), media_type="image/jpeg",
                                    draw_order=draw_order)
     return rr.Image(pixels, color_model=COLOR_MODELS[frame.color], draw_order=draw_order)
+
+
+def image_row(frame: Frame, *, draw_order: float | None = None) -> ImageRow | None:
+    """The pixels of a colour or grey frame as a row that can go to rerun in a column
+    (:mod:`replay.export.columns`); None for depth, which needs its metre scale."""
+    if frame.color is Color.DEPTH:
+        return None
+    return ImageRow(frame.pixels, COLOR_MODELS[frame.color], draw_order)
 
 
 def still_frame(message: Message) -> Frame:

@@ -28,9 +28,10 @@ from ..formats.base import RawMessage
 from ..frames import decode_frame
 from ..messages import CameraInfo, CompressedImage, Image, Message, PointStamped, PoseStamped, Text
 from ..records import ViewResiduals
+from .columns import ClearRow, PointsRow
 from .emitter import Emitter, Flush
 from .frames import CameraFrames
-from .images import encoded_image, is_keyframe, rerun_image, still_frame, video_sample
+from .images import encoded_image, image_row, is_keyframe, rerun_image, still_frame, video_sample
 from .overlays import (
     CLASSES,
     edge_classes,
@@ -76,10 +77,13 @@ class _Camera:
 
 
 class SceneLogger:
-    """Logs raw messages of the planned topics to ``rec``; counts what it logged."""
+    """Logs raw messages of the planned topics to ``rec``; counts what it logged.
+    ``columns``: send images, points and clears in columns of several frames (an export;
+    a live replay sends each frame as it comes)."""
 
     def __init__(self, rec: rr.RecordingStream, plan: ScenePlan, options: LoggerOptions,
-                 *, decode: Callable[[RawMessage], Message], flush: Flush = None) -> None:
+                 *, decode: Callable[[RawMessage], Message], flush: Flush = None,
+                 columns: bool = False) -> None:
         self.rec, self.plan, self.options, self._decode = rec, plan, options, decode
         # rerun's own log_time (the export's wall clock) and log_tick would clutter timelines
         rec.set_log_time_enabled(False)
@@ -87,7 +91,8 @@ class SceneLogger:
         self.cameras = {ns: _Camera(cam, frames=CameraFrames(every=options.every))
                         for ns, cam in plan.cameras.items()}
         encoders = 2 if options.jpeg_quality is not None else 0
-        self._out = Emitter(rec, encoders=encoders, flush=flush)  # flush: the sink's
+        self._out = Emitter(rec, encoders=encoders, flush=flush,  # flush: the sink's
+                            columns=columns)
         self.counts = self._out.counts  # entity -> logged rows
         self.warnings: list[str] = []
         self._warned: set[str] = set()
@@ -209,7 +214,7 @@ class SceneLogger:
             return
         self._times(raw, stamp)
         for entity in cam.frames.stale(stamp, stamp_free_key(raw.data)):
-            self._emit(entity, rr.Clear(recursive=False), count=False)
+            self._emit(entity, ClearRow(), count=False)
         if isinstance(message, Image):
             cam.size = (message.width, message.height)
         self._emit(f"{cam.plan.entity}/image", self._archetype(message))
@@ -220,6 +225,10 @@ class SceneLogger:
             if archetype is not None:
                 return archetype
         frame = decode_frame(message)
+        if self.options.jpeg_quality is None:
+            row = image_row(frame, draw_order=draw_order)
+            if row is not None:
+                return row
         if frame.pixels.dtype == np.uint8:  # JPEG: encoded on a worker thread
             return self._out.encode(rerun_image, frame, draw_order=draw_order,
                                     jpeg_quality=self.options.jpeg_quality)
@@ -387,7 +396,7 @@ class SceneLogger:
             self.rec.log(entity, rr.Points2D.from_fields(
                 colors=[color], radii=radius, labels=None if label is None else [label]),
                 static=True)
-        return rr.Points2D(positions)
+        return PointsRow(np.asarray(positions, dtype=np.float32))
 
     def _text(self, raw: RawMessage, route: Route) -> None:
         message = self._decode(raw)

@@ -247,7 +247,7 @@ def _log_session(session: ExportSession, sink: RecordingSink, options: LoggerOpt
     """Log every message of ``session`` into ``sink``'s recording; the logger and how many
     messages it was given."""
     logger = SceneLogger(sink.rec, session.plan, options, decode=session.decode,
-                         flush=sink.flush)
+                         flush=sink.flush, columns=True)
     logger.log_static()
     count = 0
     try:
