@@ -48,13 +48,16 @@ class ImageRow:
 
     @property
     def nbytes(self) -> int:
+        """Bytes of pixels the row holds."""
         return int(self.pixels.nbytes)
 
     def archetype(self) -> Any:
+        """The row as one ``log`` call's archetype."""
         return rr.Image(self.pixels, color_model=self.color_model, draw_order=self.draw_order)
 
     @staticmethod
     def columns(rows: Sequence[ImageRow]) -> Any:
+        """The component columns of ``rows`` (equal keys)."""
         first = rows[0]
         height, width = first.pixels.shape[:2]
         image_format = rr.components.ImageFormat(
@@ -73,17 +76,21 @@ class PointsRow:
     positions: np.ndarray
 
     def key(self) -> tuple[Any, ...]:
+        """Every points row goes with the others."""
         return (PointsRow,)
 
     @property
     def nbytes(self) -> int:
+        """Bytes of positions the row holds."""
         return int(self.positions.nbytes)
 
     def archetype(self) -> Any:
+        """The row as one ``log`` call's archetype."""
         return rr.Points2D(self.positions)
 
     @staticmethod
     def columns(rows: Sequence[PointsRow]) -> Any:
+        """The positions of ``rows``, one list per row."""
         positions = [np.asarray(row.positions, dtype=np.float32).reshape(-1, 2) for row in rows]
         return rr.Points2D.columns(positions=np.concatenate(positions)).partition(
             [len(p) for p in positions])
@@ -94,17 +101,21 @@ class ClearRow:
     """A non-recursive clear: the entity shows nothing from this time on."""
 
     def key(self) -> tuple[Any, ...]:
+        """Every clear goes with the others."""
         return (ClearRow,)
 
     @property
     def nbytes(self) -> int:
+        """A clear holds no data."""
         return 0
 
     def archetype(self) -> Any:
+        """The row as one ``log`` call's archetype."""
         return rr.Clear(recursive=False)
 
     @staticmethod
     def columns(rows: Sequence[ClearRow]) -> Any:
+        """One non-recursive clear per row."""
         return rr.Clear.columns(is_recursive=[False] * len(rows))
 
 

@@ -32,6 +32,7 @@ from .columns import ClearRow, PointsRow
 from .emitter import Emitter, Flush
 from .frames import CameraFrames
 from .images import encoded_image, image_row, is_keyframe, rerun_image, still_frame, video_sample
+from .options import LoggerOptions
 from .overlays import (
     CLASSES,
     edge_classes,
@@ -52,17 +53,6 @@ GREEN, ORANGE, RED, YELLOW, CYAN = (60, 230, 60), (255, 150, 0), (255, 50, 50), 
     (0, 220, 255)
 CORNER_RADIUS, CENTROID_RADIUS, TRUTH_RADIUS, GUIDE_RADIUS = (
     rr.components.Radius.ui_points(r) for r in (2.5, 5.0, 1.5, 0.5))
-
-
-@dataclass(frozen=True)
-class LoggerOptions:
-    """What to draw and how: ``every`` keeps every N-th image of a camera; ``jpeg_quality``
-    stores raw 8-bit images as JPEG; residual arrows are drawn ``residual_scale`` times long."""
-
-    every: int = 1
-    jpeg_quality: int | None = None
-    residual_scale: float = 50.0
-    ground_truth: bool = True
 
 
 @dataclass

@@ -1,0 +1,18 @@
+"""What ``camlog view`` and ``camlog play`` draw, and how: the options a user sets."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["LoggerOptions"]
+
+
+@dataclass(frozen=True)
+class LoggerOptions:
+    """What to draw and how: ``every`` keeps every N-th image of a camera; ``jpeg_quality``
+    stores raw 8-bit images as JPEG; residual arrows are drawn ``residual_scale`` times long."""
+
+    every: int = 1
+    jpeg_quality: int | None = None
+    residual_scale: float = 50.0
+    ground_truth: bool = True
