@@ -147,13 +147,15 @@ def _run(argv: list[str], command: str | None, where: str, *, as_program: bool) 
         # rerun's Rust side logs a failure (disk full, lost viewer) as several lines of its
         # own; camlog reports it in one. RUST_LOG=warn (or any value) brings them back.
         os.environ.setdefault("RUST_LOG", "off")
-        # camlog's dense linear algebra is small (the joint solve's reduced system): OpenBLAS's
-        # worker threads would only add their start-up (60 ms at numpy's import) and spin
-        # beside camlog's own threads. Read once, when numpy loads; a user's setting stands.
-        os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+        if as_program:  # process-wide settings: only in camlog's own process
+            # camlog's dense linear algebra is small (the joint solve's reduced system):
+            # OpenBLAS's worker threads would only add their start-up (60 ms at numpy's
+            # import) and spin beside camlog's own threads. Read once, when numpy loads; a
+            # user's setting stands.
+            os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
         args = build_parser([command] if command else []).parse_args(argv)
         args.as_program = as_program  # the process is camlog's own (see camlog.cli.lean)
-        if as_program:  # a process-wide setting: only in camlog's own process
+        if as_program:
             keep_freed_memory()
         return int(args.run(args))
     except KeyboardInterrupt:

@@ -181,12 +181,13 @@ def test_calibrate_with_its_report_loads_no_bar_plotting_or_viewer_library(
 BLAS_SCRIPT = """
 import os, sys
 from camlog.cli import main
+sys.argv = ["camlog", "--help"]  # main() without arguments: camlog is the program
 try:
-    main(["--help"])
+    main({argv})
 except SystemExit:
     pass
 import numpy
-print(len(os.listdir("/proc/self/task")))
+print(len(os.listdir("/proc/self/task")), os.environ.get("OPENBLAS_NUM_THREADS"))
 """
 
 
@@ -198,7 +199,15 @@ def test_numpy_loads_with_one_blas_thread_unless_told_otherwise() -> None:
     for given in (None, "2"):
         if given is not None:
             env["OPENBLAS_NUM_THREADS"] = given
-        done = subprocess.run([sys.executable, "-c", BLAS_SCRIPT], capture_output=True,
-                              text=True, check=True, env=env)
-        threads[given] = int(done.stdout.splitlines()[-1])
+        done = subprocess.run([sys.executable, "-c", BLAS_SCRIPT.format(argv="")],
+                              capture_output=True, text=True, check=True, env=env)
+        threads[given] = int(done.stdout.splitlines()[-1].split()[0])
     assert threads == {None: 1, "2": 2}
+
+
+def test_a_caller_of_main_keeps_its_blas_threads() -> None:
+    """Called from other code with its arguments, main() leaves the process's settings."""
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    done = subprocess.run([sys.executable, "-c", BLAS_SCRIPT.format(argv='["--help"]')],
+                          capture_output=True, text=True, check=True, env=env)
+    assert done.stdout.splitlines()[-1].split()[1] == "None"
