@@ -16,6 +16,7 @@ from functools import partial
 from pathlib import Path
 
 from processors.calibration.board import Board
+from processors.calibration.corners import remeasures
 from processors.calibration.solve import CalibrationOptions
 from replay.atomic import AtomicFolder
 from replay.formats import LogReader, open_reader, open_writer
@@ -25,6 +26,7 @@ from replay.storage import Location, local_paths
 
 from ..errors import InputError
 from .evidence import write_evidence, write_summary
+from .remeasure import remeasured_rig
 from .report import output_names, write_files
 from .solving import (
     CalibratedCamera,
@@ -135,9 +137,14 @@ def calibrate_log(
                 found = detect_views(reader, sources, board, workers=workers,
                                      progress=progress, models=models)
                 cameras_views = _checked(found, max_speed_px)
+        # a fisheye's chessboard corners are measured again through a first solution:
+        # cornerSubPix is biased on its strongly distorted squares (see .remeasure)
+        remeasure = partial(remeasured_rig, reader, cameras_views, board=board,
+                            workers=workers) \
+            if board.pattern == "chessboard" and remeasures(options.distortion_model) else None
         # with the report, the statistics are computed while the evidence pass runs
         solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s,
-                           diameter_m=diameter_m, background=report)
+                           diameter_m=diameter_m, background=report, remeasure=remeasure)
         solutions, stereo = solved.cameras, solved.stereo
         scenario = found.scenario
         truth = [scenario.camera_for(s.views.source.namespace,

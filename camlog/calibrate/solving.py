@@ -11,6 +11,7 @@ which is what every later step (summary, evidence, report) speaks.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass
 
@@ -257,9 +258,13 @@ def guiding_models(cameras: list[CameraViews], board: Board, options: Calibratio
 
 def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOptions, *,
               approximate_s: float | None, diameter_m: float | None = None,
-              background: bool = False) -> RigSolution:
+              background: bool = False,
+              remeasure: Callable[[ViewsOfRig, JointResult], ViewsOfRig] | None = None
+              ) -> RigSolution:
     """Calibrate every camera, and for two the stereo rig, from every view; a circle grid's
-    circles are ``diameter_m`` across, or as the views measure them. With ``background``
+    circles are ``diameter_m`` across, or as the views measure them. ``remeasure`` gives the
+    views measured again through a first solution (:mod:`.remeasure`), which are then solved
+    again from it. With ``background``
     the cameras' :class:`~.statistics.CameraStatistics` (most of the work) are computed on
     a thread of their own while the caller goes on; reading them waits, and raises their
     error."""
@@ -270,6 +275,10 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
     points = board.points_in_board()
     joint = calibrate_cameras(points, rig.views, sizes, options, seeds=seeds,
                               disc_diameter_m=disc_diameter_m)
+    if remeasure is not None:
+        rig = remeasure(rig, joint)
+        joint = calibrate_cameras(points, rig.views, sizes, options, seeds=joint.models,
+                                  disc_diameter_m=disc_diameter_m)
     statistics = camera_statistics(joint, rig.views, points, sizes,
                                    disc_diameter_m=disc_diameter_m, background=background)
     solutions = []
