@@ -14,7 +14,8 @@ detector's position.
 from __future__ import annotations
 
 import dataclasses
-from concurrent.futures import Future, ThreadPoolExecutor
+from collections import deque
+from concurrent.futures import Future, ThreadPoolExecutor, wait
 
 import numpy as np
 
@@ -54,8 +55,16 @@ def remeasured_rig(reader: LogReader, cameras: list[CameraViews], rig: ViewsOfRi
     counters = [0] * len(cameras)
     sums: dict[int, tuple[np.ndarray, int]] = {}  # view -> (sum of its images, how many)
     pending: dict[int, Future[F64]] = {}
+    in_flight: deque[Future[F64]] = deque()  # at most two per worker: bounds the images held
     to_frame = TopicFrames()
     with ThreadPoolExecutor(max_workers=workers) as pool:
+
+        def submit(view: int, gray: np.ndarray) -> None:
+            pending[view] = future = pool.submit(_remeasured, rig.views[view], gray, joint, board)
+            in_flight.append(future)
+            while len(in_flight) > 2 * workers:
+                wait([in_flight.popleft()])
+
         for raw in reader.raw_messages(list(by_topic)):
             camera = by_topic[raw.topic]
             image = to_frame(reader, raw)
@@ -69,7 +78,7 @@ def remeasured_rig(reader: LogReader, cameras: list[CameraViews], rig: ViewsOfRi
             gray = image.mono8()
             held = len(rig.frames_of[view])
             if held == 1:
-                pending[view] = pool.submit(_remeasured, rig.views[view], gray, joint, board)
+                submit(view, gray)
                 continue
             total, count = sums.get(view, (np.zeros(gray.shape, np.float32), 0))
             total += gray
@@ -77,8 +86,7 @@ def remeasured_rig(reader: LogReader, cameras: list[CameraViews], rig: ViewsOfRi
                 sums[view] = (total, count + 1)
                 continue
             sums.pop(view, None)
-            pending[view] = pool.submit(_remeasured, rig.views[view], total / held, joint,
-                                        board)
+            submit(view, total / held)
         corners = {view: future.result() for view, future in pending.items()}
     views = [dataclasses.replace(v, corners_px=corners[i]) if i in corners else v
              for i, v in enumerate(rig.views)]
