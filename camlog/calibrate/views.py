@@ -181,7 +181,8 @@ class _Seen:
         self.stamps.append(stamp_ns)
         self.duplicates.append(duplicate)
         if index % self.hint_stride == 0 and len(self.samples) < HINT_SAMPLES:
-            self.samples.append(gray)
+            # a copy: the frame's pixels may be a view of a whole decompressed chunk
+            self.samples.append(gray.copy())
         return index, duplicate
 
     def views(self) -> CameraViews:

@@ -1,5 +1,6 @@
 """The detection pass over a recorded log: a ChArUco detection guided by a camera model finds
-more corners (beside a single marker, near the border) and places them where the truth says."""
+more corners (beside a single marker, near the border) and places them where the truth says;
+what the pass keeps of the frames does not hold on to the log's buffers."""
 
 from __future__ import annotations
 
@@ -12,7 +13,7 @@ from camlog.calibrate.solving import guiding_models
 from camlog.calibrate.views import detect_views, resolve_camera
 from processors.calibration.board import make_board
 from processors.calibration.options import CalibrationOptions
-from replay import PoseStamped, open_reader
+from replay import Image, PoseStamped, open_reader, open_writer
 from replay.geometry import rotation_from_quat_xyzw
 from replay.records import Scenario
 from replay.topics import SCENARIO
@@ -85,3 +86,21 @@ def test_a_fisheye_lens_skips_the_guiding_calibration() -> None:
     # no views at all: a first calibration would fail, so this returning shows none was run
     fisheye = CalibrationOptions(model="equidistant")
     assert guiding_models([], BOARD, fisheye, approximate_s=None) == {}
+
+
+def test_the_frames_kept_for_size_hints_are_copies(tmp_path: Path) -> None:
+    # a mono8 frame is a view of its decompressed chunk: a kept view would keep the chunk
+    path = tmp_path / "noise.mcap"
+    rng = np.random.default_rng(0)
+    with open_writer(path) as writer:
+        for i in range(40):
+            stamp = (i + 1) * 50_000_000
+            writer.write("/cam/image_raw", Image(stamp, "cam", "mono8",
+                                                 rng.integers(0, 256, (48, 64), np.uint8)),
+                         log_time_ns=stamp)
+    with open_reader(path) as reader:
+        found = detect_views(reader, [resolve_camera(reader, "/cam")], make_board(
+            "7x6", 0.01, "chessboard"), workers=2, progress=False)
+    samples = found.cameras[0].samples
+    assert len(samples) > 1
+    assert all(sample.base is None and sample.shape == (48, 64) for sample in samples)
