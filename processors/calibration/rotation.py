@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+import numpy.typing as npt
 
 from replay.messages import F64
 
 #: below this angle (rad) the first-order expansions are exact to double precision
 _SMALL = 1e-8
+#: rotation pairs compared at once by :func:`support` (8 bytes each)
+SUPPORT_BLOCK = 1 << 20
 
 
 def matrices(rvecs: F64) -> F64:
@@ -68,3 +73,28 @@ def rigid_fit(points_in_a: F64, points_in_b: F64) -> F64:
     out[:3, :3] = rotation
     out[:3, 3] = centre_b - rotation @ centre_a
     return out
+
+
+def support(rotations: F64, within_rad: float, *, group: int = 1) -> npt.NDArray[np.int64]:
+    """Per rotation of ``rotations`` ``(K, 3, 3)``, how many of its groups of ``group``
+    consecutive rotations hold one less than ``within_rad`` from it (itself included).
+
+    The angle between ``a`` and ``b`` is ``acos((trace(a^T b) - 1) / 2)`` and ``trace(a^T b)``
+    is the dot product of their entries: the ``K^2`` comparisons are one matrix product per
+    block of rows, with memory bounded by :data:`SUPPORT_BLOCK`."""
+    entries = np.asarray(rotations, dtype=np.float64).reshape(-1, 9)
+    limit = 1.0 + 2.0 * math.cos(within_rad)
+    rows = max(1, SUPPORT_BLOCK // max(len(entries), 1))
+    out = np.empty(len(entries), dtype=np.int64)
+    for start in range(0, len(entries), rows):
+        traces = (entries[start:start + rows] @ entries.T).reshape(-1, len(entries) // group,
+                                                                   group)
+        out[start:start + rows] = np.count_nonzero(traces.max(axis=2) > limit, axis=1)
+    return out
+
+
+def within(rotations: F64, reference: F64, within_rad: float) -> npt.NDArray[np.bool_]:
+    """``(K,)`` which of ``rotations`` ``(K, 3, 3)`` lie less than ``within_rad`` from
+    ``reference`` ``(3, 3)`` (as :func:`support` counts them)."""
+    traces = np.asarray(rotations, dtype=np.float64).reshape(-1, 9) @ reference.reshape(9)
+    return np.asarray(traces > 1.0 + 2.0 * math.cos(within_rad))

@@ -157,11 +157,8 @@ def rig_transform(camera_from_board: list[F64], reference_from_board: list[F64])
     if not len(candidates):
         raise ProcessorError("a camera never sees the board at the same time as the first one")
     rvecs = rotation.rotation_vectors(candidates[:, :3, :3])
-    relative = np.einsum("aji,bjk->abik", candidates[:, :3, :3], candidates[:, :3, :3])
-    cos = np.clip((np.trace(relative, axis1=2, axis2=3) - 1) / 2, -1, 1)
-    support = np.arccos(cos) < RIG_AGREEMENT_RAD
-    best = int(np.argmax(support.sum(axis=1)))
-    agree = support[best]
+    best = int(np.argmax(rotation.support(candidates[:, :3, :3], RIG_AGREEMENT_RAD)))
+    agree = rotation.within(candidates[:, :3, :3], candidates[best, :3, :3], RIG_AGREEMENT_RAD)
     mean = rotation.nearest_rotation(candidates[agree, :3, :3].sum(axis=0))
     out = np.eye(4)
     out[:3, :3] = mean if np.all(np.isfinite(mean)) else rotation.matrices(rvecs[best:best + 1])[0]

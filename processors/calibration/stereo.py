@@ -23,6 +23,7 @@ from replay.messages import F64
 
 from ..errors import ProcessorError
 from .joint import JointResult
+from .rotation import support
 from .seed import board_pose
 
 #: views whose rig rotation lies within this angle of another's support it
@@ -116,9 +117,7 @@ def orient_right_views(points_in_board: F64, left: list[F64], right: list[F64], 
     if not candidates:
         return []
     flat = [rotation for pair in candidates for rotation in pair]
-    support = [sum(min(_angle_rad(r, a), _angle_rad(r, b)) < ORIENTATION_AGREEMENT_RAD
-                   for a, b in candidates) for r in flat]
-    consensus = flat[int(np.argmax(support))]
+    consensus = flat[int(np.argmax(support(np.array(flat), ORIENTATION_AGREEMENT_RAD, group=2)))]
     return [cr if _angle_rad(a, consensus) <= _angle_rad(b, consensus)
             else np.ascontiguousarray(cr[::-1])
             for cr, (a, b) in zip(right, candidates, strict=True)]
