@@ -20,6 +20,7 @@ A light prior on some intrinsics (:mod:`.prior`) adds one residual per parameter
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import numpy.typing as npt
@@ -35,6 +36,9 @@ B8 = npt.NDArray[np.bool_]
 #: LM stops when a step lowers the cost by less than this fraction
 TOLERANCE = 1e-12
 MAX_ITERATIONS = 60
+#: views linearized at once by :func:`refine` and for residuals: the Jacobian blocks (about
+#: 1 KB per corner) of a few MB are held at a time, not of every view of a long log
+CHUNK_VIEWS = 128
 
 
 @dataclass(frozen=True)
@@ -128,9 +132,17 @@ class Observations:
     @property
     def camera_slices(self) -> list[slice]:
         """The views of each camera (0 .. max camera), as slices."""
-        cameras = int(self.camera.max()) + 1 if len(self.camera) else 0
+        return self.slices_of(int(self.camera.max()) + 1 if len(self.camera) else 0)
+
+    def slices_of(self, cameras: int) -> list[slice]:
+        """The views of cameras ``0 .. cameras - 1`` (empty for a camera without any)."""
         bounds = np.searchsorted(self.camera, np.arange(cameras + 1))
         return [slice(int(bounds[c]), int(bounds[c + 1])) for c in range(cameras)]
+
+    def rows(self, rows: slice) -> Observations:
+        """The views of ``rows`` (views, not copies)."""
+        return Observations(self.camera[rows], self.instant[rows], self.observed[rows],
+                            self.mask[rows], self.weight[rows])
 
     def with_mask(self, mask: B8) -> Observations:
         """The same observations with another mask ``(V, N)`` of the corners that count."""
@@ -237,9 +249,33 @@ def cross(a: F64, b: F64) -> F64:
                      a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]], axis=-1)
 
 
+def _chunks(count: int) -> list[slice]:
+    return [slice(start, min(start + CHUNK_VIEWS, count))
+            for start in range(0, count, CHUNK_VIEWS)]
+
+
 def linearize(state: RigState, layout: Layout, obs: Observations, points_in_board: F64, *,
               jacobian: bool = True) -> Linearization:
-    """Residuals and Jacobian blocks of every corner at ``state``."""
+    """Residuals and Jacobian blocks of every corner at ``state`` (without ``jacobian``: the
+    residuals alone, computed :data:`CHUNK_VIEWS` views at a time)."""
+    if jacobian:
+        return _linearize(state, layout, obs, points_in_board, jacobian=True)
+    v_count, n = obs.mask.shape
+    residuals = np.empty((v_count, n, 2))
+    for rows in _chunks(v_count):
+        residuals[rows] = _linearize(state, layout, obs.rows(rows), points_in_board,
+                                     jacobian=False).residuals
+    return _residuals_only(residuals, layout, layout.prior_residual(state))
+
+
+def _residuals_only(residuals: F64, layout: Layout, prior_residual: F64) -> Linearization:
+    n = residuals.shape[1]
+    return Linearization(residuals, np.zeros((0, 2 * n, 6)),
+                         [np.zeros((0, 2 * n, 0)) for _ in layout.setups], prior_residual)
+
+
+def _linearize(state: RigState, layout: Layout, obs: Observations, points_in_board: F64, *,
+               jacobian: bool) -> Linearization:
     v_count, n = obs.mask.shape
     rotations = state.board_rotation[obs.instant]  # (V, 3, 3)
     # board points turned into the reference frame (before the translation), (V, N, 3)
@@ -252,9 +288,15 @@ def linearize(state: RigState, layout: Layout, obs: Observations, points_in_boar
     residuals = np.empty((v_count, n, 2))
     pose = np.empty((v_count, n, 2, 6)) if jacobian else np.zeros((0, n, 2, 6))
     blocks = []
-    for camera, setup in enumerate(layout.setups):
-        views = obs.camera_slices[camera]
+    for camera, (setup, views) in enumerate(zip(layout.setups,
+                                                obs.slices_of(len(layout.setups)),
+                                                strict=True)):
         count = views.stop - views.start
+        width = layout.bases[camera].shape[1] + (6 if camera else 0)
+        if not count or not jacobian:
+            blocks.append(np.zeros((count, 2 * n, width if jacobian else 0)))
+            if not count:
+                continue
         r_c, t_c = state.rig_rotation[camera], state.rig_translation[camera]
         turned_c = times(in_reference[views].reshape(-1, 3), r_c.T)  # rig rotation applied
         uv, d_point, d_intrinsics = project(setup.distortion_model, state.intrinsics[camera],
@@ -262,7 +304,6 @@ def linearize(state: RigState, layout: Layout, obs: Observations, points_in_boar
         s = scale[views].reshape(-1, 1)
         residuals[views] = (s * (uv - obs.observed[views].reshape(-1, 2))).reshape(-1, n, 2)
         if not jacobian:
-            blocks.append(np.zeros((count, 2 * n, 0)))
             continue
         d_point *= s[:, :, None]  # (M, 2, 3)
         # R_p <- exp([d]x) R_p moves a point by -[R_p X]x d, seen through the rig rotation
@@ -270,12 +311,12 @@ def linearize(state: RigState, layout: Layout, obs: Observations, points_in_boar
         pose_views = pose[views].reshape(-1, 2, 6)
         pose_views[:, :, :3] = cross(turned[views].reshape(-1, 1, 3), e)
         pose_views[:, :, 3:] = e
-        width = layout.bases[camera].shape[1]
-        block = np.empty((count * n, 2, width + (6 if camera else 0)))
-        block[:, :, :width] = times(d_intrinsics * s[:, :, None], layout.bases[camera])
+        free = layout.bases[camera].shape[1]
+        block = np.empty((count * n, 2, width))
+        block[:, :, :free] = times(d_intrinsics * s[:, :, None], layout.bases[camera])
         if camera:
-            block[:, :, width:width + 3] = cross(turned_c.reshape(-1, 1, 3), d_point)
-            block[:, :, width + 3:] = d_point
+            block[:, :, free:free + 3] = cross(turned_c.reshape(-1, 1, 3), d_point)
+            block[:, :, free + 3:] = d_point
         blocks.append(block.reshape(count, 2 * n, -1))
     return Linearization(residuals, pose.reshape(len(pose), 2 * n, 6), blocks,
                          layout.prior_residual(state))
@@ -298,13 +339,18 @@ class NormalEquations:
         """Levenberg-Marquardt increments ``(G,)``, ``(P, 6)`` with Marquardt's scaling."""
         a = self.a + damping * np.diag(np.diag(self.a))
         b = self.b + damping * self.b * np.eye(6)
-        d_global, d_pose = _schur_solve(a, self.c, b, -self.g_global[:, None],
-                                        -self.g_pose[:, :, None])
+        d_global, d_pose = _schur_solve(_schur_factors(a, self.c, b), self.c,
+                                        -self.g_global[:, None], -self.g_pose[:, :, None])
         return d_global[:, 0], d_pose[:, :, 0]
 
     def solve(self, rhs_global: F64, rhs_pose: F64) -> tuple[F64, F64]:
-        """``(J^T J)^-1 rhs`` for right-hand sides ``(G, R)`` and ``(P, 6, R)``."""
-        return _schur_solve(self.a, self.c, self.b, rhs_global, rhs_pose)
+        """``(J^T J)^-1 rhs`` for right-hand sides ``(G, R)`` and ``(P, 6, R)`` (the pose
+        blocks' inverses and the Schur complement are computed at the first call)."""
+        return _schur_solve(self._factors, self.c, rhs_global, rhs_pose)
+
+    @cached_property
+    def _factors(self) -> tuple[F64, F64, F64]:
+        return _schur_factors(self.a, self.c, self.b)
 
     def global_covariance(self) -> F64:
         """``[(J^T J)^-1]`` of the global unknowns ``(G, G)`` (times sigma^2: covariance)."""
@@ -314,12 +360,21 @@ class NormalEquations:
         return inverse
 
 
-def _schur_solve(a: F64, c: F64, b: F64, rhs_global: F64, rhs_pose: F64) -> tuple[F64, F64]:
-    b_inverse = np.linalg.inv(b)
-    c_b_inverse = np.einsum("pgi,pij->pgj", c, b_inverse)
-    schur = a - np.einsum("pgj,phj->gh", c_b_inverse, c)
+def _schur_factors(a: F64, c: F64, b: F64) -> tuple[F64, F64, F64]:
+    """The pose blocks' inverses ``(P, 6, 6)``, ``c`` times them ``(P, G, 6)`` and the Schur
+    complement ``(G, G)``."""
+    b_inverse = np.asarray(np.linalg.inv(b), dtype=np.float64)
+    c_b_inverse: F64 = np.einsum("pgi,pij->pgj", c, b_inverse)
+    schur: F64 = a - np.einsum("pgj,phj->gh", c_b_inverse, c)
+    return b_inverse, c_b_inverse, schur
+
+
+def _schur_solve(factors: tuple[F64, F64, F64], c: F64, rhs_global: F64, rhs_pose: F64
+                 ) -> tuple[F64, F64]:
+    b_inverse, c_b_inverse, schur = factors
     reduced = rhs_global - np.einsum("pgj,pjr->gr", c_b_inverse, rhs_pose)
-    x_global = np.linalg.solve(schur, reduced) if len(a) else np.zeros((0, rhs_pose.shape[2]))
+    x_global = np.linalg.solve(schur, reduced) if len(schur) \
+        else np.zeros((0, rhs_pose.shape[2]))
     x_pose = np.einsum("pij,pjr->pir", b_inverse,
                        rhs_pose - np.einsum("pgi,gr->pir", c, x_global))
     return x_global, x_pose
@@ -328,39 +383,72 @@ def _schur_solve(a: F64, c: F64, b: F64, rhs_global: F64, rhs_pose: F64) -> tupl
 def normal_equations(lin: Linearization, layout: Layout, obs: Observations,
                      pose_count: int) -> NormalEquations:
     """The blocks of ``J^T J`` and ``J^T r`` at a linearization."""
-    g = layout.global_count
-    a = np.zeros((g, g))
-    c = np.zeros((pose_count, g, 6))
-    b = np.zeros((pose_count, 6, 6))
-    g_global = np.zeros(g)
-    g_pose = np.zeros((pose_count, 6))
+    normal = _no_equations(layout.global_count, pose_count)
+    _add_views(normal, lin, layout, obs)
+    return _finished(normal, layout, lin.prior)
+
+
+def _no_equations(global_count: int, pose_count: int) -> NormalEquations:
+    g = global_count
+    return NormalEquations(np.zeros((g, g)), np.zeros((pose_count, g, 6)),
+                           np.zeros((pose_count, 6, 6)), np.zeros(g), np.zeros((pose_count, 6)),
+                           np.zeros(pose_count, dtype=bool))
+
+
+def _add_views(normal: NormalEquations, lin: Linearization, layout: Layout,
+               obs: Observations) -> None:
+    """Add the products of the views of ``lin`` (at ``obs``) to ``normal``."""
+    pose_count = len(normal.b)
     r = lin.residuals.reshape(obs.view_count, -1)  # (V, 2N)
     pose_t = np.swapaxes(lin.pose, 1, 2)  # (V, 6, 2N)
-    np.add.at(b, obs.instant, pose_t @ lin.pose)
-    np.add.at(g_pose, obs.instant, np.einsum("vir,vr->vi", pose_t, r))
-    for camera, (views, block) in enumerate(zip(obs.camera_slices, lin.global_blocks,
-                                                strict=True)):
+    np.add.at(normal.b, obs.instant, pose_t @ lin.pose)
+    np.add.at(normal.g_pose, obs.instant, np.einsum("vir,vr->vi", pose_t, r))
+    for camera, (views, block) in enumerate(zip(obs.slices_of(len(layout.setups)),
+                                                lin.global_blocks, strict=True)):
         columns = layout.global_columns(camera)
         if not len(columns) or views.stop == views.start:
             continue
         flat = block.reshape(-1, block.shape[2])
-        a[np.ix_(columns, columns)] += flat.T @ flat
-        g_global[columns] += flat.T @ r[views].reshape(-1)
+        normal.a[np.ix_(columns, columns)] += flat.T @ flat
+        normal.g_global[columns] += flat.T @ r[views].reshape(-1)
         coupling = np.swapaxes(block, 1, 2) @ lin.pose[views]  # (Vc, G_c, 6)
         per_pose = np.zeros((pose_count, len(columns), 6))
         np.add.at(per_pose, obs.instant[views], coupling)
-        c[:, columns, :] += per_pose
-    if len(lin.prior):
-        a[np.diag_indices(g)] += layout.prior_px ** 2
-        g_global += layout.prior_px * lin.prior
-    seen = np.abs(b).sum(axis=(1, 2)) > 0
-    b[~seen] = np.eye(6)
-    return NormalEquations(a, c, b, g_global, g_pose, seen)
+        normal.c[:, columns, :] += per_pose
+
+
+def _finished(normal: NormalEquations, layout: Layout, prior_residual: F64) -> NormalEquations:
+    """``normal`` with the prior added and unseen poses given an identity block."""
+    if len(prior_residual):
+        normal.a[np.diag_indices(layout.global_count)] += layout.prior_px ** 2
+        normal.g_global += layout.prior_px * prior_residual
+    normal.seen = np.abs(normal.b).sum(axis=(1, 2)) > 0
+    normal.b[~normal.seen] = np.eye(6)
+    return normal
+
+
+def linearized_equations(state: RigState, layout: Layout, obs: Observations,
+                         points_in_board: F64, pose_count: int
+                         ) -> tuple[Linearization, NormalEquations]:
+    """The residuals (no Jacobian blocks) and normal equations at ``state``, the views
+    linearized :data:`CHUNK_VIEWS` at a time."""
+    v_count, n = obs.mask.shape
+    residuals = np.empty((v_count, n, 2))
+    normal = _no_equations(layout.global_count, pose_count)
+    for rows in _chunks(v_count):
+        part = obs.rows(rows)
+        lin = _linearize(state, layout, part, points_in_board, jacobian=True)
+        residuals[rows] = lin.residuals
+        _add_views(normal, lin, layout, part)
+    prior_residual = layout.prior_residual(state)
+    return (_residuals_only(residuals, layout, prior_residual),
+            _finished(normal, layout, prior_residual))
 
 
 @dataclass
 class Refinement:
-    """The refined state, its linearization and normal equations, and how it got there."""
+    """The refined state, its residuals (``linearization`` holds no Jacobian blocks) and
+    normal equations, and how it got there."""
 
     state: RigState
     linearization: Linearization
@@ -374,23 +462,22 @@ def refine(seed: RigState, layout: Layout, obs: Observations, points_in_board: F
     """Levenberg-Marquardt from ``seed`` to the least-squares optimum."""
     pose_count = len(seed.board_rotation)
     state = seed
-    lin = linearize(state, layout, obs, points_in_board)
-    normal = normal_equations(lin, layout, obs, pose_count)
+    lin, normal = linearized_equations(state, layout, obs, points_in_board, pose_count)
     damping = 1e-6
     costs = [lin.cost]
     iteration = 0
     for iteration in range(1, max_iterations + 1):  # noqa: B007
         d_global, d_pose = normal.damped_solve(damping)
         trial = layout.step(state, d_global, d_pose)
-        trial_lin = linearize(trial, layout, obs, points_in_board)
+        trial_lin, trial_normal = linearized_equations(trial, layout, obs, points_in_board,
+                                                       pose_count)
         if not np.isfinite(trial_lin.cost) or trial_lin.cost > lin.cost:
             damping *= 10.0
             if damping > 1e12:
                 break
             continue
         improvement = lin.cost - trial_lin.cost
-        state, lin = trial, trial_lin
-        normal = normal_equations(lin, layout, obs, pose_count)
+        state, lin, normal = trial, trial_lin, trial_normal
         costs.append(lin.cost)
         damping = max(damping / 10.0, 1e-12)
         if improvement <= TOLERANCE * max(lin.cost, 1e-300):

@@ -29,8 +29,11 @@ from .lens import model_of, project
 
 #: pixels per grid cell of the uncertainty map
 GRID_STEP_PX = 16
-#: pixels solved at once (memory grows with poses x pixels)
+#: pixels solved at once, at most
 CHUNK = 64
+#: board poses times pixels solved at once: the right-hand sides and solutions (100 bytes
+#: per pose and pixel) stay a few MB however many poses a long log holds
+POSE_PIXELS = 8192
 
 
 @dataclass(frozen=True)
@@ -99,8 +102,9 @@ def projection_uncertainty(problem: Problem, camera: int, *, range_m: float | No
     seen = np.flatnonzero(normal.seen)
     pose_count = len(state.board_rotation)
     setup = layout.setups[camera]
-    for start in range(0, len(flat), CHUNK):
-        chunk = flat[start:start + CHUNK]
+    step = max(1, min(CHUNK, POSE_PIXELS // max(pose_count, 1)))
+    for start in range(0, len(flat), step):
+        chunk = flat[start:start + step]
         in_camera, in_reference, r_c = _points_in_reference(problem, camera, chunk, range_m)
         valid = np.isfinite(in_camera).all(axis=1)
         if not valid.any():
