@@ -114,3 +114,22 @@ def test_normal_equations_are_the_jacobian_products() -> None:
     x_global, x_pose = normal.solve(rhs[:g], rhs[g:].reshape(5, 6, 3))
     np.testing.assert_allclose(np.vstack([x_global, x_pose.reshape(30, 3)]),
                                np.linalg.solve(jtj, rhs), rtol=1e-6, atol=1e-12)
+
+
+def test_equations_summed_over_chunks_of_views_are_the_whole_problems(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    state, layout, obs = rig_problem([true_model(), FISHEYE], 7, 0.2, seed=6)
+    points = BOARD.points_in_board()
+    whole = bundle.linearize(state, layout, obs, points)
+    expected = bundle.normal_equations(whole, layout, obs, 7)
+    # 14 views in chunks of 3: one chunk holds views of both cameras, others of one only
+    monkeypatch.setattr(bundle, "CHUNK_VIEWS", 3)
+    lin, normal = bundle.linearized_equations(state, layout, obs, points, 7)
+    np.testing.assert_allclose(lin.residuals, whole.residuals, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(bundle.linearize(state, layout, obs, points,
+                                                jacobian=False).residuals, whole.residuals,
+                               rtol=1e-12, atol=1e-15)
+    for name in ("a", "c", "b", "g_global", "g_pose"):
+        np.testing.assert_allclose(getattr(normal, name), getattr(expected, name), rtol=1e-10,
+                                   atol=1e-9, err_msg=name)
+    assert lin.cost == pytest.approx(whole.cost, rel=1e-12)
