@@ -142,7 +142,7 @@ def calibrate_log(
         remeasure = partial(remeasured_rig, reader, cameras_views, board=board,
                             workers=workers) \
             if board.pattern == "chessboard" and remeasures(options.distortion_model) else None
-        # with the report, the statistics are computed while the evidence pass runs
+        # with the report, a short log's statistics are computed while the evidence pass runs
         solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s,
                            diameter_m=diameter_m, background=report, remeasure=remeasure)
         solutions, stereo = solved.cameras, solved.stereo

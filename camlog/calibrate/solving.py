@@ -264,10 +264,10 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
     """Calibrate every camera, and for two the stereo rig, from every view; a circle grid's
     circles are ``diameter_m`` across, or as the views measure them. ``remeasure`` gives the
     views measured again through a first solution (:mod:`.remeasure`), which are then solved
-    again from it. With ``background``
-    the cameras' :class:`~.statistics.CameraStatistics` (most of the work) are computed on
-    a thread of their own while the caller goes on; reading them waits, and raises their
-    error."""
+    again from it. With ``background`` the cameras' :class:`~.statistics.CameraStatistics`
+    (most of the work) of a short log are computed on a thread of their own while the caller
+    goes on (see :func:`~.statistics.camera_statistics`); reading them waits, and raises
+    their error."""
     circles = circle_size(cameras, board, diameter_m)
     disc_diameter_m = circles.diameter_m if circles is not None else None
     rig, seeds, sizes = _prepared(cameras, board, options, approximate_s=approximate_s,
