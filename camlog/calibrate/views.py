@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import hashlib
+from array import array
 from collections import deque
 from collections.abc import Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -85,7 +86,7 @@ def resolve_camera(reader: LogReader, namespace: str) -> CameraSource:
     return CameraSource(ns, topic, camera_info_topic(reader, ns))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, slots=True)
 class Frame:
     """One image of one camera, as the detection pass saw it. ``speed_px``: how far the
     board's corners moved to the nearer neighbouring frame (px; None without a neighbour
@@ -115,7 +116,8 @@ class CameraViews:
     size: tuple[int, int]  # (width, height)
     log_info: CameraInfo | None
     samples: tuple[np.ndarray, ...] = field(default=(), repr=False)
-    #: simulated logs: target name -> image stamp (ns) -> true ``camera_from_target`` (4, 4)
+    #: simulated logs: target name -> image stamp (ns) -> true ``camera_from_target`` (4, 4),
+    #: at the distinct frames with a board found (the only ones a view holds)
     true_camera_from_target: dict[str, dict[int, F64]] = field(default_factory=dict,
                                                                repr=False)
 
@@ -161,7 +163,10 @@ class _Seen:
     size: tuple[int, int] | None = None
     log_info: CameraInfo | None = None
     samples: list[np.ndarray] = field(default_factory=list)
-    truth: dict[str, dict[int, F64]] = field(default_factory=dict)
+    #: true target poses: target name -> their stamps (ns), and 7 numbers per pose (position
+    #: in m, quaternion xyzw): a few dozen bytes each, where a (4, 4) array takes 240
+    truth_stamps: dict[str, list[int]] = field(default_factory=dict)
+    truth_poses: dict[str, array[float]] = field(default_factory=dict)
     last: bytes = b""
     run: list[tuple[int, np.ndarray]] = field(default_factory=list)  # frames to detect
 
@@ -185,6 +190,22 @@ class _Seen:
             self.samples.append(gray.copy())
         return index, duplicate
 
+    def add_truth(self, target: str, pose: PoseStamped) -> None:
+        """Record a true pose of ``target`` in this camera."""
+        self.truth_stamps.setdefault(target, []).append(pose.stamp_ns)
+        self.truth_poses.setdefault(target, array("d")).extend(
+            [*pose.position_m.tolist(), *pose.orientation_xyzw.tolist()])
+
+    def _truth(self, frames: tuple[Frame, ...]) -> dict[str, dict[int, F64]]:
+        """The true poses at the stamps of the distinct frames with a board found."""
+        wanted = {f.stamp_ns for f in frames if not f.duplicate and f.detection is not None}
+        out: dict[str, dict[int, F64]] = {}
+        for target, stamps in self.truth_stamps.items():
+            poses = np.frombuffer(self.truth_poses[target], dtype=np.float64).reshape(-1, 7)
+            out[target] = {stamp: transform_from_pose(pose[:3], pose[3:])
+                           for stamp, pose in zip(stamps, poses, strict=True) if stamp in wanted}
+        return out
+
     def views(self) -> CameraViews:
         """The frames, duplicates sharing the detection of the frame they repeat, each with
         its board's speed."""
@@ -200,7 +221,7 @@ class _Seen:
                        for i, (stamp, duplicate, detection, speed) in enumerate(zip(
                            self.stamps, self.duplicates, detections, speeds, strict=True)))
         return CameraViews(self.source, frames, self.size, self.log_info, tuple(self.samples),
-                           self.truth)
+                           self._truth(frames))
 
 
 def board_speeds(detections: list[Detection | None], duplicates: list[bool]) -> list[float | None]:
@@ -262,8 +283,7 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
                 camera, target = by_truth[raw.topic]
                 pose = reader.decode(raw)
                 if isinstance(pose, PoseStamped):
-                    camera.truth.setdefault(target, {})[pose.stamp_ns] = \
-                        transform_from_pose(pose.position_m, pose.orientation_xyzw)
+                    camera.add_truth(target, pose)
                 continue
             if raw.topic in by_info:
                 camera = by_info[raw.topic]

@@ -104,3 +104,22 @@ def test_the_frames_kept_for_size_hints_are_copies(tmp_path: Path) -> None:
     samples = found.cameras[0].samples
     assert len(samples) > 1
     assert all(sample.base is None and sample.shape == (48, 64) for sample in samples)
+
+
+def test_true_poses_are_kept_only_where_a_view_can_read_them(charuco_log: Path) -> None:
+    scenario, truth = true_corners(charuco_log)
+    camera, points = scenario.camera_for(NAMESPACE), scenario.targets[0].points_in_target()
+    assert camera is not None and points is not None
+    with open_reader(charuco_log) as reader:
+        found = detect_views(reader, [resolve_camera(reader, NAMESPACE)], BOARD, workers=2,
+                             progress=False)
+    views = found.cameras[0]
+    (poses,) = views.true_camera_from_target.values()
+    with_board = [f for f in views.distinct() if f.detection is not None]
+    assert set(poses) == {f.stamp_ns for f in with_board}
+    assert len(poses) < len(views.frames) == len(truth)  # held poses repeat frames
+    model = camera.model()
+    for frame in with_board:
+        pose = poses[frame.stamp_ns]
+        np.testing.assert_allclose(model.project(points @ pose[:3, :3].T + pose[:3, 3]),
+                                   truth[frame.stamp_ns], atol=1e-9)
