@@ -187,7 +187,7 @@ class _Seen:
         self.duplicates.append(duplicate)
         if index % self.hint_stride == 0 and len(self.samples) < HINT_SAMPLES:
             # a copy: the frame's pixels may be a view of a whole decompressed chunk
-            self.samples.append(gray.copy())
+            self.samples.append(gray.copy() if gray.base is not None else gray)
         return index, duplicate
 
     def add_truth(self, target: str, pose: PoseStamped) -> None:
@@ -299,7 +299,9 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
             gray = image.mono8()
             index, duplicate = camera.add(gray, image.stamp_ns, f"{reader.path}: {raw.topic}")
             if not duplicate:
-                camera.run.append((index, gray))
+                # frames wait for detection in runs: a view of the log's chunk would keep
+                # the whole chunk until then
+                camera.run.append((index, gray if gray.base is None else gray.copy()))
                 if len(camera.run) >= SEGMENT_FRAMES:
                     submit(camera)
             bar.update()

@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from camlog.calibrate import views as views_module
 from camlog.calibrate.solving import guiding_models
 from camlog.calibrate.views import detect_views, resolve_camera
 from processors.calibration.board import make_board
@@ -88,7 +89,8 @@ def test_a_fisheye_lens_skips_the_guiding_calibration() -> None:
     assert guiding_models([], BOARD, fisheye, approximate_s=None) == {}
 
 
-def test_the_frames_kept_for_size_hints_are_copies(tmp_path: Path) -> None:
+def test_the_frames_kept_for_detection_and_size_hints_are_copies(
+        tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     # a mono8 frame is a view of its decompressed chunk: a kept view would keep the chunk
     path = tmp_path / "noise.mcap"
     rng = np.random.default_rng(0)
@@ -98,12 +100,19 @@ def test_the_frames_kept_for_size_hints_are_copies(tmp_path: Path) -> None:
             writer.write("/cam/image_raw", Image(stamp, "cam", "mono8",
                                                  rng.integers(0, 256, (48, 64), np.uint8)),
                          log_time_ns=stamp)
+    waiting: list[np.ndarray] = []
+
+    def detect_segment(grays: list[np.ndarray], *args: object) -> list[None]:
+        waiting.extend(grays)
+        return [None] * len(grays)
+
+    monkeypatch.setattr(views_module, "detect_segment", detect_segment)
     with open_reader(path) as reader:
         found = detect_views(reader, [resolve_camera(reader, "/cam")], make_board(
             "7x6", 0.01, "chessboard"), workers=2, progress=False)
     samples = found.cameras[0].samples
-    assert len(samples) > 1
-    assert all(sample.base is None and sample.shape == (48, 64) for sample in samples)
+    assert len(samples) > 1 and len(waiting) == 40
+    assert all(gray.base is None and gray.shape == (48, 64) for gray in [*samples, *waiting])
 
 
 def test_true_poses_are_kept_only_where_a_view_can_read_them(charuco_log: Path) -> None:
