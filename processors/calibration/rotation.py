@@ -12,7 +12,7 @@ from replay.messages import F64
 #: below this angle (rad) the first-order expansions are exact to double precision
 _SMALL = 1e-8
 #: rotation pairs compared at once by :func:`support` (8 bytes each)
-SUPPORT_BLOCK = 1 << 20
+SUPPORT_BLOCK = 1 << 18
 
 
 def matrices(rvecs: F64) -> F64:

@@ -14,7 +14,7 @@ def angle_rad(a: np.ndarray, b: np.ndarray) -> float:
     return math.acos(max(-1.0, min(1.0, (float(np.trace(a.T @ b)) - 1) / 2)))
 
 
-@pytest.mark.parametrize("block", [1 << 20, 7])
+@pytest.mark.parametrize("block", [1 << 18, 7])
 def test_support_counts_the_groups_holding_a_rotation_within_the_angle(
         block: int, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(rotation, "SUPPORT_BLOCK", block)
