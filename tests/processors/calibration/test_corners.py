@@ -60,7 +60,7 @@ def test_a_corner_whose_patch_leaves_the_image_is_not_measured() -> None:
     image, pose, _ = _near_the_corner()
     points = BOARD.points_in_board()
     # four squares beyond the board's last corner (the one nearest the image's top left)
-    beyond = points[-1:] + [4 * BOARD.square_m, 4 * BOARD.square_m, 0.0]
+    beyond = points[-1:] + np.array([4 * BOARD.square_m, 4 * BOARD.square_m, 0.0])
     beyond_px = FISHEYE.project(beyond @ pose[:3, :3].T + pose[:3, 3])[0]
     assert min(beyond_px) < 8  # nearer the border than half a patch
     _, ok = refine_on_board(image, FISHEYE, pose, np.concatenate([points, beyond]),
