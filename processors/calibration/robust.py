@@ -24,7 +24,7 @@ import numpy.typing as npt
 from replay.camera import CameraModel
 from replay.messages import F64
 
-from . import bundle
+from . import bundle, normal
 from .discs import centroid_shifts
 from .lens import intrinsics_of
 from .motion import BlurModel, fit_blur
@@ -113,7 +113,7 @@ class Problem:
     state: bundle.RigState
     layout: bundle.Layout
     observations: bundle.Observations  # masked to the inliers; circle centres, not centroids
-    normal: bundle.NormalEquations
+    normal: normal.NormalEquations
     points_in_board: F64
     sigma_px: float
     instants: I64  # original instant number of each pose row
@@ -178,7 +178,7 @@ def robust_solve(points_in_board: F64, views: list[BoardView], sizes: list[tuple
     rounds = 0
     while True:
         rounds += 1
-        refinement = bundle.refine(state, layout,
+        refinement = normal.refine(state, layout,
                                    _moved(obs, shift).with_mask(evidence.inliers),
                                    points_in_board)
         state = refinement.state

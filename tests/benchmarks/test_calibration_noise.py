@@ -8,7 +8,7 @@ import numpy as np
 
 from benchmarks.calibration_noise import propagate, sandwich_covariance
 from benchmarks.ideal_board import DARK, ideal_image, refinement_error_px
-from processors.calibration import bundle
+from processors.calibration import bundle, normal
 from processors.calibration.joint import BoardView, calibrate_cameras
 from processors.calibration.options import CalibrationOptions
 from tests.processors.calibration.synthetic import (
@@ -56,7 +56,7 @@ def test_propagate_predicts_the_change_of_a_new_solve() -> None:
     shift = np.random.default_rng(1).normal(0.0, 0.02, obs.observed.shape)
     predicted, kept = propagate(problem, shift)
     moved = dataclasses.replace(obs, observed=obs.observed + shift)
-    again = bundle.refine(problem.state, problem.layout, moved, POINTS)
+    again = normal.refine(problem.state, problem.layout, moved, POINTS)
     change = np.concatenate(again.state.intrinsics) - np.concatenate(problem.state.intrinsics)
     columns = problem.layout.intrinsic_columns[0]
     expected = problem.layout.bases[0] @ predicted[columns]

@@ -7,6 +7,7 @@ import pytest
 
 from processors.calibration import bundle, rotation
 from processors.calibration.lens import INTRINSIC_NAMES, intrinsics_of
+from processors.calibration.normal import linearized_equations, normal_equations, refine
 from replay.camera import CameraModel
 
 from .synthetic import BOARD, H, W, pose, random_poses, true_model, views
@@ -83,7 +84,7 @@ def test_refine_converges_to_the_truth_without_noise() -> None:
         @ seed.rig_rotation[1]
     seed.rig_translation[1] += [0.002, -0.001, 0.0]
     seed.board_translation += 0.003
-    refined = bundle.refine(seed, layout, obs, BOARD.points_in_board())
+    refined = refine(seed, layout, obs, BOARD.points_in_board())
     assert refined.costs[0] > 1.0 and refined.linearization.cost < 1e-16
     np.testing.assert_allclose(refined.state.intrinsics[0], truth.intrinsics[0], rtol=1e-9)
     np.testing.assert_allclose(refined.state.rig_translation, truth.rig_translation, atol=1e-11)
@@ -93,7 +94,7 @@ def test_refine_converges_to_the_truth_without_noise() -> None:
 def test_normal_equations_are_the_jacobian_products() -> None:
     state, layout, obs = rig_problem([true_model(), FISHEYE], 5, 0.2, seed=5)
     lin = bundle.linearize(state, layout, obs, BOARD.points_in_board())
-    normal = bundle.normal_equations(lin, layout, obs, 5)
+    normal = normal_equations(lin, layout, obs, 5)
     # the dense Jacobian, assembled from the blocks
     rows = lin.residuals.size
     dense = np.zeros((rows, layout.global_count + 30))
@@ -121,10 +122,10 @@ def test_equations_summed_over_chunks_of_views_are_the_whole_problems(
     state, layout, obs = rig_problem([true_model(), FISHEYE], 7, 0.2, seed=6)
     points = BOARD.points_in_board()
     whole = bundle.linearize(state, layout, obs, points)
-    expected = bundle.normal_equations(whole, layout, obs, 7)
+    expected = normal_equations(whole, layout, obs, 7)
     # 14 views in chunks of 3: one chunk holds views of both cameras, others of one only
     monkeypatch.setattr(bundle, "CHUNK_VIEWS", 3)
-    lin, normal = bundle.linearized_equations(state, layout, obs, points, 7)
+    lin, normal = linearized_equations(state, layout, obs, points, 7)
     np.testing.assert_allclose(lin.residuals, whole.residuals, rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(bundle.linearize(state, layout, obs, points,
                                                 jacobian=False).residuals, whole.residuals,
