@@ -140,7 +140,7 @@ def calibrate_log(
         # a fisheye's chessboard corners are measured again through a first solution:
         # cornerSubPix is biased on its strongly distorted squares (see .remeasure)
         remeasure = partial(remeasured_rig, reader, cameras_views, board=board,
-                            workers=workers) \
+                            workers=workers, progress=progress) \
             if board.pattern == "chessboard" and remeasures(options.distortion_model) else None
         # with the report, a short log's statistics are computed while the evidence pass runs
         solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s,

@@ -24,6 +24,7 @@ from processors.calibration.corners import refine_on_board
 from processors.calibration.joint import BoardView, JointResult
 from replay.formats import LogReader
 from replay.messages import F64
+from replay.progress import progress_bar
 
 from .instants import ViewsOfRig
 from .pixels import TopicFrames
@@ -42,9 +43,11 @@ def _remeasured(view: BoardView, image: np.ndarray, joint: JointResult, board: B
 
 
 def remeasured_rig(reader: LogReader, cameras: list[CameraViews], rig: ViewsOfRig,
-                   joint: JointResult, board: Board, *, workers: int) -> ViewsOfRig:
+                   joint: JointResult, board: Board, *, workers: int,
+                   progress: bool | None = False) -> ViewsOfRig:
     """``rig`` with the corners of every view ``joint`` used measured again on the board
-    plane, through ``joint``'s models and board poses (one pass over ``reader``'s images)."""
+    plane, through ``joint``'s models and board poses (one pass over ``reader``'s images,
+    with a bar unless ``progress`` is False; None: on a terminal)."""
     by_topic = {c.source.image_topic: camera for camera, c in enumerate(cameras)}
     # camera -> frame index -> the view it belongs to
     view_of: list[dict[int, int]] = [{} for _ in cameras]
@@ -57,7 +60,9 @@ def remeasured_rig(reader: LogReader, cameras: list[CameraViews], rig: ViewsOfRi
     pending: dict[int, Future[F64]] = {}
     in_flight: deque[Future[F64]] = deque()  # at most two per worker: bounds the images held
     to_frame = TopicFrames()
-    with ThreadPoolExecutor(max_workers=workers) as pool:
+    bar = progress_bar(total=sum(reader.topics[topic].count for topic in by_topic),
+                       unit="frame", desc="measure corners again", progress=progress)
+    with ThreadPoolExecutor(max_workers=workers) as pool, bar:
 
         def submit(view: int, gray: np.ndarray) -> None:
             pending[view] = future = pool.submit(_remeasured, rig.views[view], gray, joint, board)
@@ -66,6 +71,7 @@ def remeasured_rig(reader: LogReader, cameras: list[CameraViews], rig: ViewsOfRi
                 wait([in_flight.popleft()])
 
         for raw in reader.raw_messages(list(by_topic)):
+            bar.update()
             camera = by_topic[raw.topic]
             image = to_frame(reader, raw)
             if image is None:  # no frame in the views either (see TopicFrames)
