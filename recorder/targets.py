@@ -1,8 +1,14 @@
 """Calibration targets as exact geometry: checkerboard, ChArUco and circle grids.
 
-Every dark feature is a black solid 20 um thick whose face lies on the board plane z = 0,
-on a white plate behind it, so features sit exactly where the truth says (no texture
-filtering). The printed face looks along -z of the board frame (z into the board).
+Every dark feature is a black solid whose face lies on the board plane z = 0, in front of
+a white plate, so features sit exactly where the truth says (no texture filtering). The
+printed face looks along -z of the board frame (z into the board). The solids are thin
+(:data:`BLACK_THICKNESS_M`) and the plate stands :data:`PLATE_GAP_M` behind them: a ray
+passing beside a feature's edge at an angle would otherwise meet the feature's side wall and
+see it dark, which moves every edge against the ray's sideways travel by the wall's height
+times the tangent of the angle (20 um walls moved corners by up to 0.02 px, inwards,
+growing towards the image border). With no lights casting shadows the plate looks the same
+at any distance behind.
 
 - ``checkerboard``: origin at the first inner corner, x along the ``cols`` inner corners,
   y along the ``rows``.
@@ -30,7 +36,12 @@ from replay.records import ScenarioTarget
 from .errors import ScenarioError
 from .target_spec import TargetSpec
 
-BLACK_THICKNESS_M = 2e-5
+#: thickness of the dark features: their side walls shift an edge seen at angle a by
+#: BLACK_THICKNESS_M * tan(a) / 2 on average (0.5 um: under a thousandth of a pixel here)
+BLACK_THICKNESS_M = 5e-7
+#: space between the features' face and the white plate: far more than a depth-buffer step
+#: (about 1.3 um at 0.33 m with znear 5 mm), so the plate never shows through a feature
+PLATE_GAP_M = 1e-3
 PLATE_THICKNESS_M = 3e-3
 #: sides of the polygon MuJoCo draws a disk with (quality numslices)
 CIRCLE_SLICES = 120
@@ -131,7 +142,7 @@ def _black_box(x0: float, x1: float, y0: float, y1: float) -> str:
 def _plate(target: TargetSpec) -> str:
     x0, x1, y0, y1 = _printed_area(target)
     b = target.border_m
-    center = ((x0 + x1) / 2, (y0 + y1) / 2, BLACK_THICKNESS_M + PLATE_THICKNESS_M / 2)
+    center = ((x0 + x1) / 2, (y0 + y1) / 2, PLATE_GAP_M + PLATE_THICKNESS_M / 2)
     half = ((x1 - x0) / 2 + b, (y1 - y0) / 2 + b, PLATE_THICKNESS_M / 2)
     return f'<geom type="box" pos="{_vec(center)}" size="{_vec(half)}" material="white"/>'
 

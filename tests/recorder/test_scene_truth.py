@@ -226,3 +226,54 @@ def test_red_block_disparity_in_the_right_image(red_block: Log) -> None:
     expected = box_image_centroid(CameraModel.from_camera_info(info), transform(pose),
                                   np.array(target["size_m"]))
     np.testing.assert_allclose(red_centroid(right.pixels), expected, atol=0.5)
+
+
+def _wall_shift_px(model: CameraModel, camera_from_board: F64, points: F64,
+                   wall_m: float) -> F64:
+    """Where corners would move ``(N, 2)`` if each dark square had side walls ``wall_m``
+    high behind its face: a ray passing beside an edge at an angle meets the wall, which
+    moves the edge against the ray's sideways travel by ``wall_m`` times the tangent of the
+    angle on one of the junction's two halves (half that on average)."""
+    rotation, translation = camera_from_board[:3, :3], camera_from_board[:3, 3]
+    in_camera = points @ rotation.T + translation
+    ray_in_board = (in_camera / np.linalg.norm(in_camera, axis=1, keepdims=True)) @ rotation
+    shift = np.zeros_like(points)
+    shift[:, :2] = -(wall_m / 2) * ray_in_board[:, :2] / ray_in_board[:, 2:]
+    return model.project((points + shift) @ rotation.T + translation) - model.project(in_camera)
+
+
+def test_rendered_corners_show_no_side_walls(recording: Callable[..., Log]) -> None:
+    """Seen at an angle, the board's features put their corners where the truth says: the
+    recorder's corners differ from those of an exact render of the same pose by noise, not
+    by the pattern side walls 20 um high would leave (0.02 px towards the image border)."""
+    from benchmarks.ideal_board import ideal_image
+    from processors.calibration.board import Board
+    from processors.calibration.detect import track_chessboard
+
+    log = recording("mono_checkerboard", frames=FRAMES)
+    (target,) = log.scenario["targets"]
+    board = Board(*target["inner_corners"], target["square_m"])
+    points = np.array(target["corners_in_target"])
+    measured, pattern = [], []
+    for frame in range(0, FRAMES, HOLD_FRAMES):
+        if corner_errors(log, frame) is None:  # not fully in view
+            continue
+        info = log.infos("/simple_camera")[frame]
+        model = CameraModel.from_camera_info(info)
+        camera_from_board = transform(log.truths("/simple_camera", "checkerboard")[frame])
+        true_px = model.project(points @ camera_from_board[:3, :3].T + camera_from_board[:3, 3])
+        gray = cv2.cvtColor(log.images("/simple_camera")[frame].pixels, cv2.COLOR_RGB2GRAY)
+        found = [track_chessboard(image, true_px, board) for image in
+                 (gray, ideal_image(model, camera_from_board, board))]
+        assert all(f is not None for f in found)
+        rendered, exact = (f.corners_px for f in found if f is not None)
+        for corners in (rendered, exact):  # in the board's order
+            if np.linalg.norm(corners[0] - true_px[0]) > 1.0:
+                corners[:] = corners[::-1]
+        measured.append((rendered - exact).ravel())
+        pattern.append(_wall_shift_px(model, camera_from_board, points, 20e-6).ravel())
+    assert len(measured) >= 3
+    difference, walls = np.concatenate(measured), np.concatenate(pattern)
+    assert np.sqrt(np.mean(walls ** 2)) > 0.005  # the views are oblique enough to show walls
+    slope = float(difference @ walls / (walls @ walls))
+    assert abs(slope) < 0.35, f"corners move as {slope:.2f} x 20 um walls would move them"
