@@ -258,3 +258,19 @@ def test_projection_difference_of_fisheye_models() -> None:
                           "equidistant", a.d)
     assert max_projection_difference(a, shifted) == pytest.approx(0.5, abs=1e-6)
     assert max_projection_difference(a, shifted, align_rotation=True) < 0.5
+
+
+def test_opencv_solvers_run_on_one_thread_and_give_the_same_result_twice() -> None:
+    """OpenCV's parallel sums change their order from run to run; its calibration runs on
+    one thread, and OpenCV's own setting comes back afterwards, also when nested."""
+    import cv2
+
+    from processors.calibration.seed import one_opencv_thread
+
+    before = cv2.getNumThreads()
+    with one_opencv_thread():
+        assert cv2.getNumThreads() == 1
+        with one_opencv_thread():
+            assert cv2.getNumThreads() == 1
+        assert cv2.getNumThreads() == 1
+    assert cv2.getNumThreads() == before
