@@ -37,9 +37,11 @@ PAD_PX = 40
 
 
 def ideal_image(model: CameraModel, camera_from_board: F64, board: Board, *,
-                supersample: int = 4) -> np.ndarray:
+                supersample: int = 4, marker_m: float = 0.0) -> np.ndarray:
     """``(H, W)`` uint8 image of a chessboard at ``camera_from_board`` ``(4, 4)``; only the
-    pixels near the board are rendered (the rest is mid grey)."""
+    pixels near the board are rendered (the rest is mid grey). ``marker_m`` > 0 puts a dark
+    square that wide in the middle of every bright square (a ChArUco board's markers, as
+    their black outlines show them to a corner's refinement)."""
     rotation, translation = camera_from_board[:3, :3], camera_from_board[:3, 3]
     points = board.points_in_board()
     corners_px = model.project(points @ rotation.T + translation)
@@ -63,6 +65,9 @@ def ideal_image(model: CameraModel, camera_from_board: F64, board: Board, *,
     hit = np.isfinite(depth) & (depth > 0)
     on_squares = hit & (a > -1) & (a < board.cols) & (b > -1) & (b < board.rows)
     dark = (np.floor(a) + np.floor(b)) % 2 == 0
+    if marker_m > 0:
+        half = marker_m / (2 * board.square_m)
+        dark |= (np.abs(a - np.floor(a) - 0.5) < half) & (np.abs(b - np.floor(b) - 0.5) < half)
     shade = np.where(on_squares & dark, DARK, BRIGHT)
     shade[~hit] = 128.0
     image[low[1]:high[1] + 1, low[0]:high[0] + 1] = \

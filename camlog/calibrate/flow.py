@@ -137,11 +137,11 @@ def calibrate_log(
                 found = detect_views(reader, sources, board, workers=workers,
                                      progress=progress, models=models)
                 cameras_views = _checked(found, max_speed_px)
-        # a fisheye's chessboard corners are measured again through a first solution:
-        # cornerSubPix is biased on its strongly distorted squares (see .remeasure)
+        # a fisheye's chessboard corners and every ChArUco corner are measured again through
+        # a first solution (see .remeasure)
         remeasure = partial(remeasured_rig, reader, cameras_views, board=board,
                             workers=workers, progress=progress) \
-            if board.pattern == "chessboard" and remeasures(options.distortion_model) else None
+            if remeasures(board, options.distortion_model) else None
         # with the report, a short log's statistics are computed while the evidence pass runs
         solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s,
                            diameter_m=diameter_m, background=report, remeasure=remeasure)

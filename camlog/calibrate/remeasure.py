@@ -2,7 +2,8 @@
 log.
 
 ``cornerSubPix`` is biased where squares are strongly distorted (on a fisheye a field of
-0.03-0.05 px outwards, which the solver reads as a lens; which lenses:
+0.03-0.05 px outwards, which the solver reads as a lens), and ChArUco corners are refined in
+small windows between the markers (which boards and lenses:
 :func:`processors.calibration.corners.remeasures`). Once a first solve has given
 every camera a model and every view a board pose, each view's image is read again and its
 corners measured on the board plane (:func:`processors.calibration.corners.refine_on_board`);
@@ -20,7 +21,7 @@ from concurrent.futures import Future, ThreadPoolExecutor, wait
 import numpy as np
 
 from processors.calibration.board import Board
-from processors.calibration.corners import refine_on_board
+from processors.calibration.corners import edge_band_m, refine_on_board
 from processors.calibration.joint import BoardView, JointResult
 from replay.formats import LogReader
 from replay.messages import F64
@@ -38,7 +39,8 @@ def _remeasured(view: BoardView, image: np.ndarray, joint: JointResult, board: B
     camera_from_board = joint.camera_from_reference[view.camera] \
         @ joint.reference_from_board[view.instant]
     refined, ok = refine_on_board(image, model, camera_from_board,
-                                  board.points_in_board()[view.point_ids], board.square_m)
+                                  board.points_in_board()[view.point_ids], board.square_m,
+                                  band_m=edge_band_m(board))
     return np.where(ok[:, None], refined, view.corners_px)
 
 

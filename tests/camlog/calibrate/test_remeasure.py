@@ -7,6 +7,7 @@ from __future__ import annotations
 from pathlib import Path
 from types import SimpleNamespace
 
+import cv2
 import numpy as np
 
 from benchmarks.ideal_board import ideal_image, tilted_pose
@@ -14,7 +15,7 @@ from camlog.calibrate.instants import ViewsOfRig
 from camlog.calibrate.remeasure import remeasured_rig
 from camlog.calibrate.views import CameraSource, CameraViews, Frame
 from processors.calibration.board import Board
-from processors.calibration.corners import refine_on_board
+from processors.calibration.corners import edge_band_m, refine_on_board
 from processors.calibration.detect import track_chessboard
 from processors.calibration.robust import BoardView
 from replay import Image, open_reader, open_writer
@@ -88,3 +89,43 @@ def test_views_are_measured_again_from_their_own_frames(tmp_path: Path) -> None:
                               BOARD, workers=1)
     np.testing.assert_array_equal(kept.views[1].corners_px, detected[1])
     np.testing.assert_allclose(kept.views[0].corners_px, expected, atol=1e-9)
+
+
+def test_charuco_views_are_measured_on_the_edges_between_the_markers(tmp_path: Path) -> None:
+    """A ChArUco view (the mono_charuco lens and board) is measured again with the edge-band
+    estimator, and ends closer to the truth than OpenCV's small-window refinement."""
+    board = Board(7, 5, 0.011, pattern="charuco", marker_m=0.008)
+    lens = CameraModel(640, 480, np.array([[512.3, 0.0, 318.2], [0.0, 513.1, 242.6],
+                                           [0.0, 0.0, 1.0]]), "rational_polynomial",
+                       np.array([-0.32, 0.11, 0.0004, -0.0003, -0.018, 0.02, 0.01, -0.004]))
+    rng = np.random.default_rng(7)
+    pose = tilted_pose(lens, board, np.array([420.0, 300.0]), 0.2, tilt_rad=0.5, rng=rng)
+    points = board.points_in_board()
+    truth = lens.project(points @ pose[:3, :3].T + pose[:3, 3])
+    clean = ideal_image(lens, pose, board, supersample=8, marker_m=board.marker_m)
+    noisy = np.clip(clean + rng.normal(0.0, 3.0, clean.shape), 0, 255).astype(np.uint8)
+    log = tmp_path / "charuco.mcap"
+    with open_writer(log) as writer:
+        writer.write(TOPIC, Image(T0, "cam", "mono8", noisy), log_time_ns=T0)
+    # OpenCV's ChArUco refinement: cornerSubPix in windows that stay clear of the markers
+    start = truth.astype(np.float32).reshape(-1, 1, 2)
+    detected = cv2.cornerSubPix(noisy, start, (3, 3), (-1, -1), (
+        cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 40, 1e-3)).reshape(-1, 2)
+    ids = np.arange(board.corner_count)
+    rig = ViewsOfRig([BoardView(0, 0, ids, detected.astype(np.float64))], [[0]], [], [[0]],
+                     None)
+    camera = CameraViews(CameraSource("/cam", TOPIC, None), (Frame(0, T0, False),),
+                         (640, 480), None)
+    joint = SimpleNamespace(models=[lens], camera_from_reference=[np.eye(4)],
+                            reference_from_board={0: pose}, rejected={})
+    with open_reader(log) as reader:
+        again = remeasured_rig(reader, [camera], rig, joint, board,  # type: ignore[arg-type]
+                               workers=1)
+    expected, ok = refine_on_board(noisy, lens, pose, points, board.square_m,
+                                   band_m=edge_band_m(board))
+    assert ok.all()
+    np.testing.assert_allclose(again.views[0].corners_px, expected, atol=1e-9)
+
+    def rms(px: np.ndarray) -> float:
+        return float(np.sqrt(np.mean(np.sum((px - truth) ** 2, axis=1))))
+    assert rms(again.views[0].corners_px) < 0.9 * rms(detected)  # 0.034 against 0.044 px
