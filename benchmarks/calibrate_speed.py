@@ -6,9 +6,11 @@ and prints, against the simulator's truth: fx, fy error (%), cx, cy error (px), 
 projection difference over the image (16 px margin, camera frames aligned by a rotation; a
 fisheye within 80° of its axis; stereo: left / right), stereo rotation (°) and baseline (%)
 errors, the worst error/sigma over every estimated parameter (≤ 3: the truth lies inside the
-reported 3-sigma intervals), and how the projection uncertainty and the cross-validation compare
-with the true error (ratios of their medians over the image, for rays; the true error measured
-as they predict it, through the estimated board poses and back through the true ones). A plain
+reported 3-sigma intervals; and per case and over every case, how error/sigma is spread: RMS 1
+and 4.6 % beyond 2 sigma when the reported sigma is right), and how the projection uncertainty
+and the cross-validation compare with the true error (ratios of their medians over the image,
+for rays; the true error measured as they predict it, through the estimated board poses and
+back through the true ones). A plain
 OpenCV script on the same detections (``cv2.calibrateCamera`` / ``cv2.fisheye.calibrate`` with every
 detected frame and default flags, ``cv2.stereoCalibrate`` with default flags) follows each
 case as a reference row, with the ratio of the max projection differences.
@@ -39,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 import cv2
+import numpy as np
 
 from camlog.calibrate.flow import CalibrationRun, calibrate_log
 from camlog.cli.calibrate import add_arguments, board_and_options
@@ -107,11 +110,27 @@ def calibrate(path: Path, flags: str, out: Path, *, report: bool) -> Calibration
                          overwrite=True, progress=False, report=report)
 
 
+def z_scores(run: CalibrationRun) -> list[float]:
+    """(estimate - truth) / sigma of every estimated parameter of every camera."""
+    return [q.error / q.std for c in run.summary.cameras
+            for q in c.parameters.values() if q.std > 0 and q.error is not None]
+
+
 def sigma_ratio(run: CalibrationRun) -> float:
     """The worst |estimate - truth| / sigma over every estimated parameter of every camera."""
-    ratios = [abs(q.error) / q.std for c in run.summary.cameras
-              for q in c.parameters.values() if q.std > 0 and q.error is not None]
-    return max(ratios)
+    return max(abs(z) for z in z_scores(run))
+
+
+def z_line(label: str, zs: list[float]) -> str:
+    """How error/sigma is spread over many estimates, against a normal distribution's
+    (what it is when the reported sigma is right)."""
+    if not zs:
+        return f"{label}: no estimates"
+    magnitudes = np.abs(np.asarray(zs))
+    rms = float(np.sqrt(np.mean(magnitudes ** 2)))
+    return (f"{label}: error/σ over {len(zs)} estimates: RMS {rms:.2f}"
+            f" (1 when σ is right), beyond 2σ {np.mean(magnitudes > 2) * 100:.1f} % (4.6 %), "
+            f"beyond 3σ {np.mean(magnitudes > 3) * 100:.1f} % (0.27 %)")
 
 
 def agreement(run: CalibrationRun) -> tuple[float, float]:
@@ -160,10 +179,11 @@ class Worst:
 
 
 def accuracy_case(case: Case, seeds: range, duration: float | None, *, logs: Path,
-                  tmp: Path, fisheye: dict[str, float]) -> None:
+                  tmp: Path, fisheye: dict[str, float]) -> list[float]:
     """Record (into ``logs``, unless there already), calibrate and compare one case over the
-    seeds; print its rows and its worst."""
+    seeds; print its rows and its worst; return every parameter's error/sigma."""
     mine, theirs = Worst(), Worst()
+    zs: list[float] = []
     for seed in seeds:
         overrides: dict[str, Any] = {"seed": seed, **case.overrides}
         if case.scenario == "mono_fisheye":
@@ -179,6 +199,7 @@ def accuracy_case(case: Case, seeds: range, duration: float | None, *, logs: Pat
         wall = time.perf_counter() - started
         a = camlog_accuracy(run)
         sigmas = sigma_ratio(run)
+        zs += z_scores(run)
         unc, cv = agreement(run)
         used = sum(c.evidence.frames_used for c in run.summary.cameras
                    if c.evidence is not None)
@@ -206,6 +227,8 @@ def accuracy_case(case: Case, seeds: range, duration: float | None, *, logs: Pat
                      maxdiff_right_px=a.max_difference_px[1])
     print(f"worst over seeds {list(seeds)}: {case.name}: {mine.line()}")
     print(f"{'':>25}plain OpenCV: {theirs.line()}", flush=True)
+    print(z_line(case.name, zs), flush=True)
+    return zs
 
 
 def run_board(case: Case, path: Path) -> Any:
@@ -280,9 +303,13 @@ def main() -> None:
         tmp = Path(tmp_name)
         logs = args.logs or tmp
         logs.mkdir(parents=True, exist_ok=True)
+        every_z: list[float] = []
         for case in CASES:
             if case.name in chosen:
-                accuracy_case(case, seeds, duration, logs=logs, tmp=tmp, fisheye=fisheye)
+                every_z += accuracy_case(case, seeds, duration, logs=logs, tmp=tmp,
+                                         fisheye=fisheye)
+        if every_z:
+            print(z_line("every case", every_z), flush=True)
         if "speed" in chosen:
             speed(speed_duration, tmp)
     print(f"load average {os.getloadavg()[0]:.1f} at the end")
