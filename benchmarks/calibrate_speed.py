@@ -43,7 +43,7 @@ from typing import Any
 import cv2
 import numpy as np
 
-from camlog.calibrate.flow import CalibrationRun, calibrate_log
+from camlog.calibrate.flow import CalibrationRun, MeasureAgain, calibrate_log
 from camlog.cli.calibrate import add_arguments, board_and_options
 from recorder.record import record
 from recorder.scenario import load_scenario
@@ -100,14 +100,17 @@ def parse_flags(path: Path, flags: str) -> argparse.Namespace:
     return parser.parse_args([str(path), *flags.split()])
 
 
-def calibrate(path: Path, flags: str, out: Path, *, report: bool) -> CalibrationRun:
-    """``camlog calibrate PATH FLAGS`` as a function call (no printout)."""
+def calibrate(path: Path, flags: str, out: Path, *, report: bool,
+              measure_again: MeasureAgain | None = None) -> CalibrationRun:
+    """``camlog calibrate PATH FLAGS`` as a function call (no printout); ``measure_again``
+    as :func:`~camlog.calibrate.flow.calibrate_log` takes it."""
     args = parse_flags(path, flags)
     board, options = board_and_options(args)
     cameras = [args.left, args.right] if args.left else [args.camera]
     return calibrate_log(path, board=board, cameras=cameras, output_dir=out, options=options,
                          approximate_s=args.approximate, diameter_m=args.diameter,
-                         overwrite=True, progress=False, report=report)
+                         overwrite=True, progress=False, report=report,
+                         measure_again=measure_again)
 
 
 def z_scores(run: CalibrationRun) -> list[float]:
@@ -229,6 +232,32 @@ def accuracy_case(case: Case, seeds: range, duration: float | None, *, logs: Pat
     print(f"{'':>25}plain OpenCV: {theirs.line()}", flush=True)
     print(z_line(case.name, zs), flush=True)
     return zs
+
+
+def add_kept_logs_arguments(parser: argparse.ArgumentParser, default_cases: str) -> None:
+    """``--logs``, ``--cases`` and ``--seeds`` of a benchmark that reads the recordings this
+    one keeps (``--logs DIR``)."""
+    parser.add_argument("--logs", type=Path, required=True,
+                        help="recordings kept by python -m benchmarks.calibrate_speed --logs "
+                             "(<scenario>_<seed>.mcap)")
+    parser.add_argument("--cases", default=default_cases,
+                        help=f"comma-separated, from {', '.join(CASE_NAMES)}")
+    parser.add_argument("--seeds", type=int, default=3, help="seeds per case (default 3)")
+
+
+def kept_cases(parser: argparse.ArgumentParser, args: argparse.Namespace) -> list[str]:
+    """The cases ``args`` chose (see :func:`add_kept_logs_arguments`); an unknown case or a
+    missing recording is a usage error."""
+    chosen: list[str] = args.cases.split(",")
+    unknown = sorted(set(chosen) - set(CASE_NAMES))
+    if unknown:
+        parser.error(f"unknown cases {', '.join(unknown)} (known: {', '.join(CASE_NAMES)})")
+    missing = [p for c in CASES if c.name in chosen for s in range(args.seeds)
+               if not (p := args.logs / f"{c.scenario}_{s}.mcap").exists()]
+    if missing:
+        parser.error(f"no recording {missing[0]} (record it with benchmarks.calibrate_speed "
+                     "--logs)")
+    return chosen
 
 
 def run_board(case: Case, path: Path) -> Any:

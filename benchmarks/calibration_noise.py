@@ -41,7 +41,7 @@ from replay.messages import F64
 from replay.records import Scenario
 from replay.topics import SCENARIO
 
-from .calibrate_speed import CASE_NAMES, CASES, calibrate, run_board
+from .calibrate_speed import CASES, add_kept_logs_arguments, calibrate, kept_cases, run_board
 from .ideal_board import refinement_error_px
 
 
@@ -196,22 +196,9 @@ def analyse(name: str, seeds: range, logs: Path) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--logs", type=Path, required=True,
-                        help="folder of recordings named <scenario>_<seed>.mcap")
-    parser.add_argument("--cases", default="fisheye,stereo",
-                        help=f"comma-separated, from {', '.join(CASE_NAMES)}")
-    parser.add_argument("--seeds", type=int, default=3, help="seeds per case (default 3)")
+    add_kept_logs_arguments(parser, "fisheye,stereo")
     args = parser.parse_args()
-    chosen = args.cases.split(",")
-    unknown = sorted(set(chosen) - set(CASE_NAMES))
-    if unknown:
-        parser.error(f"unknown cases {', '.join(unknown)}")
-    missing = [p for c in CASES if c.name in chosen for s in range(args.seeds)
-               if not (p := args.logs / f"{c.scenario}_{s}.mcap").exists()]
-    if missing:
-        parser.error(f"no recording {missing[0]} (record it with benchmarks.calibrate_speed "
-                     "--logs)")
-    for name in chosen:
+    for name in kept_cases(parser, args):
         analyse(name, range(args.seeds), args.logs)
 
 

@@ -11,12 +11,14 @@ from __future__ import annotations
 
 import os
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
 from processors.calibration.board import Board
 from processors.calibration.corners import remeasures
+from processors.calibration.joint import JointResult
 from processors.calibration.solve import CalibrationOptions
 from replay.atomic import AtomicFolder
 from replay.formats import LogReader, open_reader, open_writer
@@ -26,6 +28,7 @@ from replay.storage import Location, local_paths
 
 from ..errors import InputError
 from .evidence import write_evidence, write_summary
+from .instants import ViewsOfRig
 from .remeasure import remeasured_rig
 from .report import output_names, write_files
 from .solving import (
@@ -39,7 +42,11 @@ from .solving import (
 from .summary import build_summary
 from .views import CameraViews, LogViews, detect_views, resolve_camera, with_speed_limit
 
-__all__ = ["CalibrationRun", "calibrate_log"]
+__all__ = ["CalibrationRun", "MeasureAgain", "calibrate_log"]
+
+#: the views' corners given again after a first solve: (every camera's views, the rig's views,
+#: the first solve) -> the rig's views with new corners
+MeasureAgain = Callable[[list[CameraViews], ViewsOfRig, JointResult], ViewsOfRig]
 
 
 @dataclass(frozen=True)
@@ -113,11 +120,15 @@ def calibrate_log(
     progress: bool | None = None,
     recover: bool = False,
     report: bool = True,
+    measure_again: MeasureAgain | None = None,
 ) -> CalibrationRun:
     """Calibrate one camera (``cameras=[ns]``) or a stereo pair (``[left_ns, right_ns]``);
     a circle grid's circles are ``diameter_m`` across (None: measured in the images);
     without ``report`` only the calibration files and calibration.json are written (no
-    second pass over the log, no figures)."""
+    second pass over the log, no figures). ``measure_again`` gives the views' corners again
+    after a first solve, which is then solved again (default: measured on the board plane
+    where :func:`~processors.calibration.corners.remeasures` says; an analysis may give, for
+    instance, ideal corners)."""
     started = time.perf_counter()
     stereo_mode = len(cameras) == 2
     with AtomicFolder(output_dir, output_names(stereo_mode, report=report),
@@ -139,9 +150,10 @@ def calibrate_log(
                 cameras_views = _checked(found, max_speed_px)
         # a fisheye's chessboard corners and every ChArUco corner are measured again through
         # a first solution (see .remeasure)
-        remeasure = partial(remeasured_rig, reader, cameras_views, board=board,
-                            workers=workers, progress=progress) \
-            if remeasures(board, options.distortion_model) else None
+        remeasure = partial(measure_again, cameras_views) if measure_again is not None \
+            else partial(remeasured_rig, reader, cameras_views, board=board, workers=workers,
+                         progress=progress) if remeasures(board, options.distortion_model) \
+            else None
         # with the report, a short log's statistics are computed while the evidence pass runs
         solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s,
                            diameter_m=diameter_m, background=report, remeasure=remeasure)

@@ -1,0 +1,43 @@
+"""calibrate_log's second measurement: the corners a ``measure_again`` gives after the first
+solve are solved again, and they alone make the result."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from camlog.calibrate.flow import calibrate_log
+from camlog.calibrate.instants import ViewsOfRig
+from camlog.calibrate.views import CameraViews
+from processors.calibration.board import Board
+from processors.calibration.joint import JointResult
+from processors.calibration.options import CalibrationOptions
+
+
+def test_corners_given_again_are_solved_again(mono_calibration_log: Path,
+                                               tmp_path: Path) -> None:
+    log = mono_calibration_log.parent.parent / "mono.mcap"  # 320x240 mono_checkerboard
+    first: list[JointResult] = []
+
+    def stretched(cameras: list[CameraViews], rig: ViewsOfRig, joint: JointResult
+                  ) -> ViewsOfRig:
+        """Every corner 0.1 % further from the principal point: fx, fy 0.1 % larger."""
+        assert [c.source.namespace for c in cameras] == ["/simple_camera"]
+        first.append(joint)
+        centre = np.array([joint.models[0].cx, joint.models[0].cy])
+        views = [dataclasses.replace(v, corners_px=centre + (v.corners_px - centre) * 1.001)
+                 for v in rig.views]
+        return ViewsOfRig(views, rig.frames_of, rig.pairs, rig.candidates,
+                          rig.frame_scatter_px)
+
+    run = calibrate_log(log, board=Board(7, 6, 0.01), cameras=["/simple_camera"],
+                        output_dir=tmp_path / "cal", options=CalibrationOptions(),
+                        progress=False, report=False, measure_again=stretched)
+    assert len(first) == 1
+    before, after = first[0].models[0], run.cameras[0].solution.result.model
+    assert after.fx / before.fx == pytest.approx(1.001, abs=2e-4)
+    assert after.fy / before.fy == pytest.approx(1.001, abs=2e-4)
+    assert after.cx == pytest.approx(before.cx, abs=0.05)
