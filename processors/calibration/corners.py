@@ -129,14 +129,15 @@ def refine_on_board(gray: np.ndarray, model: CameraModel, camera_from_board: F64
     return pixels(found), ok
 
 
-def cross_corners(patches: np.ndarray, half: int, band: F64, iterations: int = 6) -> F64:
+def cross_corners(patches: np.ndarray, half_samples: int, band_samples: F64,
+                  iterations: int = 6) -> F64:
     """Corners ``(M, 2)`` (x, y in samples) of fronto-parallel board patches ``(M, S, S)``
     whose corner lies near the centre, from the gradients along the two edges through it
-    only: the samples within ``band`` ``(M,)`` samples of the corner's row or column and
-    within ``half`` of it along them. The estimator is cornerSubPix's (every gradient there
+    only: the samples within ``band_samples`` ``(M,)`` of the corner's row or column and
+    within ``half_samples`` of it along them. The estimator is cornerSubPix's (every gradient there
     points away from the corner: ``sum g g^T (q - p) = 0``), without the squares' interiors,
     where a ChArUco board's markers begin a fraction of a square from the corner and would
-    pull it: the edges are used out to ``half`` however close the markers come."""
+    pull it: the edges are used out to ``half_samples`` however close the markers come."""
     m, side, _ = patches.shape
     gy, gx = np.gradient(patches.astype(np.float64), axis=(1, 2))
     axis = np.arange(side, dtype=np.float64)
@@ -150,9 +151,10 @@ def cross_corners(patches: np.ndarray, half: int, band: F64, iterations: int = 6
         # each sample weighted by the fraction of it inside the bands, so that the bands
         # stay centred on the corner between samples (a hard edge would pull it to the side
         # where more of an edge's blurred profile is kept)
-        limit = band[:, None, None] + 0.5
+        limit = band_samples[:, None, None] + 0.5
         w = np.maximum(np.clip(limit - dx, 0.0, 1.0), np.clip(limit - dy, 0.0, 1.0)) \
-            * np.clip(half + 0.5 - dx, 0.0, 1.0) * np.clip(half + 0.5 - dy, 0.0, 1.0)
+            * np.clip(half_samples + 0.5 - dx, 0.0, 1.0) \
+            * np.clip(half_samples + 0.5 - dy, 0.0, 1.0)
         a11, a12, a22 = ((w * g).sum(axis=(1, 2)) for g in (gxx, gxy, gyy))
         b1, b2 = (w * qx).sum(axis=(1, 2)), (w * qy).sum(axis=(1, 2))
         det = a11 * a22 - a12 * a12
