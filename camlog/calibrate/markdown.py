@@ -57,6 +57,8 @@ def _camera_lines(camera: CameraSummary) -> list[str]:
             + ".")
         if e.blur is not None:
             lines.append(f"Motion blur: {e.blur}.")
+        if e.measured_again is not None:
+            lines.append(f"Corners measured again {e.measured_again}.")
     if camera.uncertainty is not None:
         u = camera.uncertainty
         lines.append(

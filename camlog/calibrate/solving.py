@@ -180,6 +180,22 @@ class RigSolution:
     joint: JointResult
     rig: ViewsOfRig
     circles: CircleSize | None = None
+    measured_again: list[str] | None = None  # per camera: what the second measurement did
+
+
+def measured_again(before: ViewsOfRig, after: ViewsOfRig, first: JointResult,
+                   final: JointResult, camera: int) -> str:
+    """One camera's second measurement in words: how many of its used corners moved, by how
+    much, and the corner noise before and after."""
+    shifts = [np.linalg.norm(b.corners_px - a.corners_px, axis=1)
+              for i, (b, a) in enumerate(zip(before.views, after.views, strict=True))
+              if b.camera == camera and i not in first.rejected]
+    moved = np.concatenate(shifts) if shifts else np.zeros(0)
+    changed = moved[moved > 0]
+    median = f", by {np.median(changed):.3f} px (median)" if len(changed) else ""
+    return (f"on the board plane through the first solve: {len(changed)} of {len(moved)} "
+            f"corners moved{median}; corner noise {first.sigma_px:.3f} → "
+            f"{final.sigma_px:.3f} px per coordinate")
 
 
 def _mono_result(joint: JointResult, rig: ViewsOfRig, camera: int) -> MonoResult:
@@ -275,10 +291,13 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
     points = board.points_in_board()
     joint = calibrate_cameras(points, rig.views, sizes, options, seeds=seeds,
                               disc_diameter_m=disc_diameter_m)
+    again = None
     if remeasure is not None:
+        first, before = joint, rig
         rig = remeasure(rig, joint)
         joint = calibrate_cameras(points, rig.views, sizes, options, seeds=joint.models,
                                   disc_diameter_m=disc_diameter_m)
+        again = [measured_again(before, rig, first, joint, c) for c in range(len(cameras))]
     statistics = camera_statistics(joint, rig.views, points, sizes,
                                    disc_diameter_m=disc_diameter_m, background=background)
     solutions = []
@@ -302,7 +321,7 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
         stereo = StereoSolution(rectified, [names[i] for i in rectified.view_ids],
                                 [(names[i], why) for i, why in
                                  sorted(rectified.rejected.items())])
-    return RigSolution(solutions, stereo, joint, rig, circles)
+    return RigSolution(solutions, stereo, joint, rig, circles, again)
 
 
 @dataclass(frozen=True)

@@ -74,7 +74,8 @@ def _evidence(camera: CalibratedCamera, index: int, solved: RigSolution) -> reco
         blurred_views=sum("motion blur" in r for r in reasons),
         outlier_corners=sum(int((~solution.result.inliers[name]).sum()) for name in used),
         corner_noise_px=joint.sigma_px, frame_scatter_px=solved.rig.frame_scatter_px,
-        blur=joint.blur.describe() if joint.blur is not None else None)
+        blur=joint.blur.describe() if joint.blur is not None else None,
+        measured_again=solved.measured_again[index] if solved.measured_again else None)
 
 
 def _median_worst(error_px: F64) -> tuple[float, float]:

@@ -153,8 +153,9 @@ class CoverageSummary:
 class EvidenceSummary:
     """What the frames gave: how many went into the used views (a held pose averages its
     frames into one view), views left out as outliers or as too blurred, outlier corners,
-    the corner noise the residuals show, the frame-to-frame scatter of held corners and the
-    motion-blur law (None when the views show no blur)."""
+    the corner noise the residuals show, the frame-to-frame scatter of held corners, the
+    motion-blur law (None when the views show no blur) and what measuring the corners again
+    did (None when they were not: a fisheye's chessboard and ChArUco corners are)."""
 
     frames_used: int
     views: int
@@ -165,6 +166,7 @@ class EvidenceSummary:
     corner_noise_px: float
     frame_scatter_px: float | None = field(default=None, metadata=OMIT_NONE)
     blur: str | None = field(default=None, metadata=OMIT_NONE)
+    measured_again: str | None = field(default=None, metadata=OMIT_NONE)
 
 
 @dataclass(frozen=True)

@@ -41,3 +41,20 @@ def test_corners_given_again_are_solved_again(mono_calibration_log: Path,
     assert after.fx / before.fx == pytest.approx(1.001, abs=2e-4)
     assert after.fy / before.fy == pytest.approx(1.001, abs=2e-4)
     assert after.cx == pytest.approx(before.cx, abs=0.05)
+    # the evidence says what the second measurement did: every used corner moved
+    evidence = run.summary.cameras[0].evidence
+    assert evidence is not None and evidence.measured_again is not None
+    used = sum(len(v.corners_px) for i, v in enumerate(run.solved.rig.views)
+               if i not in first[0].rejected)
+    assert f": {used} of {used} corners moved" in evidence.measured_again
+
+
+def test_a_pinhole_chessboard_is_measured_once(mono_calibration_log: Path,
+                                                tmp_path: Path) -> None:
+    log = mono_calibration_log.parent.parent / "mono.mcap"
+    run = calibrate_log(log, board=Board(7, 6, 0.01), cameras=["/simple_camera"],
+                        output_dir=tmp_path / "cal", options=CalibrationOptions(),
+                        progress=False, report=False)
+    assert run.solved.measured_again is None
+    evidence = run.summary.cameras[0].evidence
+    assert evidence is not None and evidence.measured_again is None
