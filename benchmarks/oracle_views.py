@@ -74,7 +74,9 @@ def ideal_corners(scenario: Scenario, board: Board, rng: np.random.Generator
                                      c.log_info.frame_id if c.log_info else None)
                  for c in cameras]
         true = true_rig(rig, cameras, truth, board=board, scenario=scenario)
-        assert true is not None and all(t is not None for t in truth), "the log has no truth"
+        if true is None or any(t is None for t in truth):
+            raise SystemExit("oracle_views: the log has no simulator truth for its cameras "
+                             "and board (record it with python -m benchmarks.calibrate_speed)")
         sigmas.append(joint.sigma_px)
         points = board.points_in_board()
         views = []

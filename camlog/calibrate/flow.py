@@ -150,10 +150,12 @@ def calibrate_log(
                 cameras_views = _checked(found, max_speed_px)
         # a fisheye's chessboard corners and every ChArUco corner are measured again through
         # a first solution (see .remeasure)
-        remeasure = partial(measure_again, cameras_views) if measure_again is not None \
-            else partial(remeasured_rig, reader, cameras_views, board=board, workers=workers,
-                         progress=progress) if remeasures(board, options.distortion_model) \
-            else None
+        remeasure: Callable[[ViewsOfRig, JointResult], ViewsOfRig] | None = None
+        if measure_again is not None:
+            remeasure = partial(measure_again, cameras_views)
+        elif remeasures(board, options.distortion_model):
+            remeasure = partial(remeasured_rig, reader, cameras_views, board=board,
+                                workers=workers, progress=progress)
         # with the report, a short log's statistics are computed while the evidence pass runs
         solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s,
                            diameter_m=diameter_m, background=report, remeasure=remeasure)

@@ -1,5 +1,4 @@
-"""A chessboard's corners measured again through a first calibration: a second pass over the
-log.
+"""A board's corners measured again through a first calibration: a second pass over the log.
 
 ``cornerSubPix`` is biased where squares are strongly distorted (on a fisheye a field of
 0.03-0.05 px outwards, which the solver reads as a lens), and ChArUco corners are refined in

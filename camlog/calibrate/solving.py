@@ -183,8 +183,8 @@ class RigSolution:
     measured_again: list[str] | None = None  # per camera: what the second measurement did
 
 
-def measured_again(before: ViewsOfRig, after: ViewsOfRig, first: JointResult,
-                   final: JointResult, camera: int) -> str:
+def measured_again_text(before: ViewsOfRig, after: ViewsOfRig, first: JointResult,
+                        final: JointResult, camera: int) -> str:
     """One camera's second measurement in words: how many of its used corners moved, by how
     much, and the corner noise before and after."""
     shifts = [np.linalg.norm(b.corners_px - a.corners_px, axis=1)
@@ -297,7 +297,7 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
         rig = remeasure(rig, joint)
         joint = calibrate_cameras(points, rig.views, sizes, options, seeds=joint.models,
                                   disc_diameter_m=disc_diameter_m)
-        again = [measured_again(before, rig, first, joint, c) for c in range(len(cameras))]
+        again = [measured_again_text(before, rig, first, joint, c) for c in range(len(cameras))]
     statistics = camera_statistics(joint, rig.views, points, sizes,
                                    disc_diameter_m=disc_diameter_m, background=background)
     solutions = []
