@@ -26,8 +26,12 @@ from .views import CameraViews, Frame, size_hint
 #: an approximately paired stereo frame joins its partner while the board moves less than
 #: this (px per frame) in both
 STILL_PX = 0.25
+#: frames further apart than this from both neighbours are snapshots (a folder of photos, a
+#: triggered pair every second): motion between them is not observable, so an approximately
+#: paired snapshot joins its partner whatever its neighbours show
+SNAPSHOT_GAP_S = 0.25
 
-__all__ = ["STILL_PX", "Instant", "ViewsOfRig", "rig_views", "stereo_pairs"]
+__all__ = ["SNAPSHOT_GAP_S", "STILL_PX", "Instant", "ViewsOfRig", "rig_views", "stereo_pairs"]
 
 
 @dataclass(frozen=True)
@@ -97,6 +101,19 @@ def _still(frame: Frame) -> bool:
     return frame.speed_px is not None and frame.speed_px <= STILL_PX
 
 
+def _snapshots(views: CameraViews) -> set[int]:
+    """Distinct frames whose neighbouring distinct frames are both at least
+    :data:`SNAPSHOT_GAP_S` away in time."""
+    distinct = [f for f in views.frames if not f.duplicate]
+    stamps = np.array([f.stamp_ns for f in distinct], dtype=np.int64)
+    order = np.argsort(stamps, kind="stable")
+    gaps = np.diff(stamps[order]) / 1e9
+    before = np.concatenate([[np.inf], gaps])
+    after = np.concatenate([gaps, [np.inf]])
+    alone = np.minimum(before, after) >= SNAPSHOT_GAP_S
+    return {distinct[int(i)].index for i in order[alone]}
+
+
 def _sources(views: CameraViews) -> list[int]:
     """Per frame, the distinct frame it shows (itself, or the one it repeats byte for byte)."""
     out: list[int] = []
@@ -115,14 +132,16 @@ def _instants(cameras: list[CameraViews], candidates: list[list[int]],
     if len(cameras) == 2:
         left, right = cameras
         source = [_sources(c) for c in cameras]
+        snapshots = [_snapshots(c) for c in cameras] if approximate_s is not None else []
         for li_frame, ri_frame in stereo_pairs(left, right, approximate_s):
             # a repeated frame stands for the frame it repeats
             li, ri = source[0][li_frame], source[1][ri_frame]
             if li not in usable[0] or ri not in usable[1] or li in paired[0] \
                     or ri in paired[1]:
                 continue
-            if approximate_s is not None and not (_still(left.frames[li])
-                                                  and _still(right.frames[ri])):
+            if approximate_s is not None and not (
+                    (_still(left.frames[li]) or li in snapshots[0])
+                    and (_still(right.frames[ri]) or ri in snapshots[1])):
                 continue
             out.append(Instant({0: li, 1: ri}, left.frames[li].stamp_ns))
             paired[0].add(li)
@@ -139,6 +158,13 @@ def rig_views(cameras: list[CameraViews], board: Board, *, approximate_s: float 
     candidates = [_candidates(v, board, f" (camera {v.source.namespace})" if stereo_note
                               else "") for v in cameras]
     instants = _instants(cameras, candidates, approximate_s)
+    if len(cameras) == 2 and not any(len(i.frames) == 2 for i in instants):
+        still = "" if approximate_s is None else (
+            " with the board still in both (a moving board is at another pose in each "
+            "camera; hold it still, or resync the log)")
+        raise CalibrationError(
+            f"{cameras[0].source.image_topic} and {cameras[1].source.image_topic} never see "
+            f"the board at the same instant{still}")
     seen = [{c: Seen(cameras[c].detection(i).ids, cameras[c].corners(i))
              for c, i in instant.frames.items()} for instant in instants]
     groups = holds(seen)

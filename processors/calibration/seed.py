@@ -180,11 +180,11 @@ def rig_transform(camera_from_board: list[F64], reference_from_board: list[F64])
     """``camera_from_reference`` (4, 4) most views agree on, from pairs of board poses seen by
     both cameras at the same instants: rotations within :data:`RIG_AGREEMENT_RAD` of the
     best-supported one are averaged, translations by their median."""
+    if not camera_from_board:
+        raise ProcessorError("a camera never sees the board at the same time as the first one")
     candidates = np.stack([c @ np.linalg.inv(r) for c, r in zip(camera_from_board,
                                                                  reference_from_board,
                                                                  strict=True)])
-    if not len(candidates):
-        raise ProcessorError("a camera never sees the board at the same time as the first one")
     rvecs = rotation.rotation_vectors(candidates[:, :3, :3])
     best = int(np.argmax(rotation.support(candidates[:, :3, :3], RIG_AGREEMENT_RAD)))
     agree = rotation.within(candidates[:, :3, :3], candidates[best, :3, :3], RIG_AGREEMENT_RAD)

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from camlog.calibrate.instants import rig_views
 from camlog.calibrate.views import CameraSource, CameraViews, Frame, board_speeds
+from camlog.errors import CalibrationError
 from processors.calibration.board import Board
 from processors.calibration.detect import Detection
 
@@ -14,11 +16,12 @@ GRID = np.array([[100.0 + 20 * c, 100.0 + 20 * r] for r in range(2) for c in ran
 
 
 def camera(corners: list[np.ndarray | None], *, duplicates: list[bool] | None = None,
-           name: str = "/cam") -> CameraViews:
+           name: str = "/cam", period_ns: int = 1000, offset_ns: int = 0) -> CameraViews:
     dup = duplicates or [False] * len(corners)
     detections = [Detection(c, True) if c is not None else None for c in corners]
     speeds = board_speeds(detections, dup)
-    frames = tuple(Frame(i, 1000 * i, dup[i], detections[i], speed_px=speeds[i])
+    frames = tuple(Frame(i, offset_ns + period_ns * i, dup[i], detections[i],
+                         speed_px=speeds[i])
                    for i in range(len(corners)))
     return CameraViews(CameraSource(name, f"{name}/image_raw", None), frames, (640, 480), None)
 
@@ -45,3 +48,26 @@ def test_a_repeated_frame_counts_once_and_stereo_pairs_share_an_instant() -> Non
     assert rig.frames_of == [[0], [0], [2], [2]]
     assert rig.pairs == [(0, 1), (2, 3)]
     assert rig.views[0].instant == rig.views[1].instant != rig.views[2].instant
+
+
+def test_offset_snapshots_pair_within_the_slop() -> None:
+    # a photo pair a second, the right camera 3 ms late: every pose differs from the last,
+    # yet each pair shows one pose (the board is not observed moving between photos)
+    poses = [GRID + 30.0 * i for i in range(5)]
+    left = camera(poses, name="/l", period_ns=1_000_000_000)
+    right = camera([p - 20.0 for p in poses], name="/r", period_ns=1_000_000_000,
+                   offset_ns=3_000_000)
+    rig = rig_views([left, right], BOARD, approximate_s=0.02, stereo_note=True)
+    assert len(rig.pairs) == 5
+    assert [rig.frames_of[lv] + rig.frames_of[rv] for lv, rv in rig.pairs] == \
+        [[i, i] for i in range(5)]
+
+
+def test_offset_video_of_a_moving_board_does_not_pair() -> None:
+    # 30 Hz video, the board moving 5 px a frame: 7 ms apart it is at another pose
+    poses = [GRID + 5.0 * i for i in range(6)]
+    left = camera(poses, name="/l", period_ns=33_333_333)
+    right = camera(poses, name="/r", period_ns=33_333_333, offset_ns=7_000_000)
+    with pytest.raises(CalibrationError, match="never see the board at the same instant "
+                                               "with the board still"):
+        rig_views([left, right], BOARD, approximate_s=0.02, stereo_note=True)

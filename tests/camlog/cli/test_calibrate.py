@@ -566,25 +566,33 @@ def test_transposed_size_is_the_same_board(plumb_bob: Path, plumb_bob_log: Path,
 
 # --- real images: camera_calibration's wide-stereo test set ----------------------------------
 
-@pytest.fixture(scope="module")
-def wide_stereo(realdata_dir: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """The 12 pairs as rgb8 images with identical stamps per pair."""
+def wide_stereo_log(realdata_dir: Path, path: Path, *, period_ns: int,
+                    right_offset_ns: int) -> Path:
+    """The 12 pairs as rgb8 images, a pair every ``period_ns``, the right image
+    ``right_offset_ns`` after the left."""
     folder = realdata_dir / "ros_wide_stereo"
     files = [folder / f"{side}{n:04d}.pgm" for n in range(3, 15) for side in ("left", "right")]
     missing = [f for f in files if not f.is_file()]
     if missing:
         pytest.skip(f"real data not available: {missing[0]}")
-    path = tmp_path_factory.mktemp("wide_stereo") / "wide_stereo.mcap"
     with open_writer(path) as writer:
         for i, n in enumerate(range(3, 15)):
-            stamp = 1_000_000_000 + i * 100_000_000
             for side in ("left", "right"):
+                stamp = 1_000_000_000 + i * period_ns + (right_offset_ns if side == "right"
+                                                         else 0)
                 bgr = cv2.imread(str(folder / f"{side}{n:04d}.pgm"), cv2.IMREAD_COLOR)
                 assert bgr is not None and bgr.shape == (480, 640, 3)
                 writer.write(f"/wide_stereo/{side}/image_raw",
                              Image(stamp, f"wide_stereo_{side}", "rgb8",
                                    cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)), log_time_ns=stamp)
     return path
+
+
+@pytest.fixture(scope="module")
+def wide_stereo(realdata_dir: Path, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """The 12 pairs with identical stamps per pair."""
+    return wide_stereo_log(realdata_dir, tmp_path_factory.mktemp("wide") / "wide_stereo.mcap",
+                           period_ns=100_000_000, right_offset_ns=0)
 
 
 WIDE_BOARD = ["--size", "8x6", "--square", "0.108"]
@@ -619,3 +627,22 @@ def test_wide_stereo_wrong_board(wide_stereo: Path, tmp_path: Path) -> None:
     line = bad_run(tmp_path, wide_stereo, "--size", "8x7", "--square", "0.108", "--left",
                    "/wide_stereo/left", "--right", "/wide_stereo/right")
     assert "no 8x7 board found" in line and "8x6" in line
+
+
+def test_wide_stereo_offset_stamps_pair_approximately(realdata_dir: Path,
+                                                       tmp_path: Path) -> None:
+    # a ROS1 bag of the pairs, one a second, the right camera's stamps 3 ms late: photos of
+    # a held board, paired within the slop although no instant is shared
+    log = wide_stereo_log(realdata_dir, tmp_path / "offset.bag", period_ns=1_000_000_000,
+                          right_offset_ns=3_000_000)
+    line = assert_failed_cleanly(
+        run("calibrate", log, *WIDE_BOARD, "--left", "/wide_stereo/left", "--right",
+            "/wide_stereo/right", "-o", tmp_path / "out", "--no-progress"),
+        tmp_path, keep=frozenset({"offset.bag"}))
+    assert "never pair with identical stamps" in line and "--approximate" in line
+    out = calibrate(log, tmp_path / "rig", "--left", "/wide_stereo/left", "--right",
+                    "/wide_stereo/right", "--approximate", "0.02", board=WIDE_BOARD)
+    s = summary(out)["stereo"]
+    assert s["joint_views"] == 12
+    assert s["epipolar_rms_px"] < 0.2
+    assert s["baseline_m"] == pytest.approx(0.09, abs=0.003)
