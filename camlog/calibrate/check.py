@@ -10,6 +10,7 @@ import numpy as np
 
 from processors.calibration.board import Board
 from processors.calibration.check import ViewFit, fit_view, linearity_error
+from processors.calibration.holds import Seen
 from processors.calibration.stereo import epipolar_errors, orient_right_views
 from replay.calibration_yaml import load_calibration
 from replay.camera import CameraModel
@@ -19,7 +20,7 @@ from replay.messages import F64
 from ..errors import CalibrationError, InputError, UsageError
 from .instants import stereo_pairs
 from .solving import CircleSize, circle_size
-from .views import detect_views, resolve_camera, size_hint
+from .views import CameraViews, detect_views, resolve_camera, size_hint
 
 
 @dataclass
@@ -96,9 +97,9 @@ def check_log(log: Path, *, board: Board, cameras: list[str], calibrations: list
                  and np.array_equal(left.detection(li).ids, right.detection(ri).ids)]
         if not pairs:
             raise CalibrationError("no stereo pair shows the whole board in both cameras")
-        right_views = orient_right_views(
-            points, [left.corners(li) for li, _ in pairs], [right.corners(ri) for _, ri in pairs],
-            left_model=models[0], right_model=models[1])
+        right_views = [seen.corners_px for seen in orient_right_views(
+            points, [_seen(left, li) for li, _ in pairs], [_seen(right, ri) for _, ri in pairs],
+            left_model=models[0], right_model=models[1])]
         fit_of = dict(zip(candidates, fits, strict=True))
         left_centres = [_centres(left.corners(li), fit_of[li]) for li, _ in pairs]
         right_centres = [
@@ -109,6 +110,11 @@ def check_log(log: Path, *, board: Board, cameras: list[str], calibrations: list
                                    right_model=models[1], r1=infos[0].r, p1=infos[0].p,
                                    r2=infos[1].r, p2=infos[1].p)
     return CheckResult(len(first), linear, reproj, epipolar, circles)
+
+
+def _seen(views: CameraViews, index: int) -> Seen:
+    detection = views.detection(index)
+    return Seen(detection.ids, detection.corners_px)
 
 
 def _centres(corners_px: F64, fit: ViewFit | None) -> F64:

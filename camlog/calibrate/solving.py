@@ -19,6 +19,7 @@ import cv2
 import numpy as np
 
 from processors.calibration.board import Board
+from processors.calibration.holds import Seen
 from processors.calibration.joint import MIN_VIEWS, BoardView, JointResult, calibrate_cameras
 from processors.calibration.options import CalibrationOptions
 from processors.calibration.seed import seed_model
@@ -233,18 +234,22 @@ def _seeds(rig: ViewsOfRig, board: Board, sizes: list[tuple[int, int]],
     return seeds
 
 
+def _seen(view: BoardView) -> Seen:
+    return Seen(view.point_ids, view.corners_px)
+
+
 def _oriented(rig: ViewsOfRig, board: Board, seeds: list[CameraModel]) -> ViewsOfRig:
     """Right views numbered from the same end of a symmetric board as their left views."""
     if not rig.pairs or not board.symmetric:
         return rig
     points = board.points_in_board()
-    right = orient_right_views(points, [rig.views[lv].corners_px for lv, _ in rig.pairs],
-                               [rig.views[rv].corners_px for _, rv in rig.pairs],
+    right = orient_right_views(points, [_seen(rig.views[lv]) for lv, _ in rig.pairs],
+                               [_seen(rig.views[rv]) for _, rv in rig.pairs],
                                left_model=seeds[0], right_model=seeds[1])
     views = list(rig.views)
-    for (_, rv), corners in zip(rig.pairs, right, strict=True):
-        views[rv] = BoardView(views[rv].camera, views[rv].instant, views[rv].point_ids,
-                              corners, speed_px=views[rv].speed_px)
+    for (_, rv), seen in zip(rig.pairs, right, strict=True):
+        views[rv] = BoardView(views[rv].camera, views[rv].instant, seen.point_ids,
+                              seen.corners_px, speed_px=views[rv].speed_px)
     return ViewsOfRig(views, rig.frames_of, rig.pairs, rig.candidates, rig.frame_scatter_px)
 
 

@@ -20,8 +20,11 @@ from replay.messages import F64
 
 from .board import Board
 
-#: corners closer than this to the image border make a view unreliable (camera_calibration: 8)
+#: corners closer than this to the image border are left out of a view: their refinement
+#: window is cut by the border (camera_calibration rejects the whole view at 8 px)
 BORDER_PX = 8.0
+#: fewest chessboard corners left inside the border that still make a view
+MIN_INSIDE_CORNERS = 6
 #: fraction of corners whose four squares may fail the parity check (noise, blur)
 PARITY_TOLERANCE = 0.08
 MIN_CONTRAST = 12.0
@@ -73,6 +76,10 @@ def track_chessboard(gray: np.ndarray, predicted_px: F64, board: Board) -> Detec
     if not spacing > 4.0:
         return None
     radius = max(2, min(11, math.ceil(spacing * 0.5)))
+    h, w = gray.shape
+    if (predicted_px < radius + 1).any() or (predicted_px[:, 0] > w - 2 - radius).any() \
+            or (predicted_px[:, 1] > h - 2 - radius).any():
+        return None  # a window would leave the image: detect afresh
     criteria = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 60, 0.001)
     start = predicted_px.astype(np.float32).reshape(-1, 1, 2)
     refined = cv2.cornerSubPix(gray, start.copy(), (radius, radius), (-1, -1),
@@ -80,7 +87,7 @@ def track_chessboard(gray: np.ndarray, predicted_px: F64, board: Board) -> Detec
     if float(np.linalg.norm(refined - predicted_px, axis=1).max()) > spacing / 3.0:
         return None
     found = check_detection(gray, canonical_order(refined, board), board)
-    return found if found.accepted else None
+    return found if found.accepted and found.point_ids is None else None
 
 
 def _min_spacing(corners: np.ndarray, board: Board) -> float:
@@ -99,13 +106,12 @@ def canonical_order(corners_px: F64, board: Board) -> F64:
 
 
 def check_detection(gray: np.ndarray, corners_px: F64, board: Board) -> Detection:
-    """Accept a detection only if it lies inside the image, alternates like a board in
-    every row and column, and is not part of a larger board (``--size`` too small)."""
+    """Accept a detection only if it alternates like a board in every row and column and is
+    not part of a larger board (``--size`` too small); corners within :data:`BORDER_PX` of
+    the image border are left out (``point_ids`` then says which remain)."""
     h, w = gray.shape
-    u, v = corners_px[:, 0], corners_px[:, 1]
-    if u.min() < BORDER_PX or v.min() < BORDER_PX or u.max() > w - 1 - BORDER_PX \
-            or v.max() > h - 1 - BORDER_PX:
-        return Detection(corners_px, False, "touches the image border")
+    if not np.isfinite(corners_px).all():
+        return Detection(corners_px, False, "corner refinement failed")
     grid: F64 = corners_px.reshape(board.rows, board.cols, 2)
     # local grid axes; with one axis np.gradient returns a single array
     dx: F64 = np.gradient(grid, axis=1)
@@ -145,7 +151,25 @@ def check_detection(gray: np.ndarray, corners_px: F64, board: Board) -> Detectio
             return Detection(corners_px, False,
                              f"the board goes on beyond this {board.cols}x{board.rows} grid "
                              "(board size too small?)")
-    return Detection(corners_px, True)
+    return _inside_border(corners_px, (w, h), board)
+
+
+def _inside_border(corners_px: F64, size: tuple[int, int], board: Board) -> Detection:
+    """The detection without its corners within :data:`BORDER_PX` of the image border;
+    rejected when fewer than :data:`MIN_INSIDE_CORNERS` remain or they lie on one line."""
+    w, h = size
+    inside = ((corners_px >= BORDER_PX) & (corners_px <= [w - 1 - BORDER_PX, h - 1 - BORDER_PX])
+              ).all(axis=1)
+    if inside.all():
+        return Detection(corners_px, True)
+    ids = np.flatnonzero(inside).astype(np.int64)
+    kept = corners_px[inside]
+    if len(ids) < MIN_INSIDE_CORNERS or len(np.unique(ids // board.cols)) < 2 \
+            or len(np.unique(ids % board.cols)) < 2:
+        return Detection(corners_px, False,
+                         f"touches the image border ({len(ids)} corners inside, need "
+                         f"{MIN_INSIDE_CORNERS} not on one line)")
+    return Detection(kept, True, point_ids=ids)
 
 
 def _square_values(blurred: np.ndarray, points: F64, dx: F64, dy: F64) -> np.ndarray:

@@ -165,9 +165,12 @@ def board_pose(points: F64, corners: F64, model: CameraModel) -> F64 | None:
     keep = np.isfinite(normalized).all(axis=1)
     if keep.sum() < 4:
         return None
-    ok, rvec, tvec = cv2.solvePnP(points[keep].astype(np.float64),
-                                  normalized[keep].astype(np.float64), np.eye(3), None,
-                                  flags=cv2.SOLVEPNP_IPPE)
+    try:
+        ok, rvec, tvec = cv2.solvePnP(points[keep].astype(np.float64),
+                                      normalized[keep].astype(np.float64), np.eye(3), None,
+                                      flags=cv2.SOLVEPNP_IPPE)
+    except cv2.error:  # degenerate corners (all on one line): no pose
+        return None
     if not ok:
         return None
     pose = np.eye(4)

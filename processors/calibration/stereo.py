@@ -22,6 +22,7 @@ from replay.camera import CameraModel
 from replay.messages import F64
 
 from ..errors import ProcessorError
+from .holds import Seen
 from .joint import JointResult
 from .rotation import support
 from .seed import board_pose
@@ -88,38 +89,45 @@ def epipolar_errors(left: list[F64], right: list[F64], *, left_model: CameraMode
             for cl, cr in zip(left, right, strict=True)]
 
 
-def _rotation_of(points: F64, corners: F64, model: CameraModel) -> F64 | None:
-    pose = board_pose(points, corners, model)
+def _rotation_of(points: F64, seen: Seen, model: CameraModel) -> F64 | None:
+    pose = board_pose(points[seen.point_ids], seen.corners_px, model)
     return None if pose is None else pose[:3, :3]
+
+
+def turned(seen: Seen, point_count: int) -> Seen:
+    """The same corners numbered from the other end of a board turned by 180 degrees."""
+    return Seen(np.ascontiguousarray(point_count - 1 - seen.point_ids[::-1]),
+                np.ascontiguousarray(seen.corners_px[::-1]))
 
 
 def _angle_rad(a: F64, b: F64) -> float:
     return math.acos(max(-1.0, min(1.0, (float(np.trace(a @ b.T)) - 1) / 2)))
 
 
-def orient_right_views(points_in_board: F64, left: list[F64], right: list[F64], *,
-                       left_model: CameraModel, right_model: CameraModel) -> list[F64]:
-    """The right views ``(N, 2)`` numbered from the same board corner as the left ones.
+def orient_right_views(points_in_board: F64, left: list[Seen], right: list[Seen], *,
+                       left_model: CameraModel, right_model: CameraModel) -> list[Seen]:
+    """The right views numbered from the same board corner as the left ones.
 
     A chessboard turned by 180 degrees looks the same, so each camera's detection may start
     from either end of it; near the turn where the two choices meet, the two cameras of a
     pair can disagree. The rig's rotation (right from left) is the same in every view: each
-    right view is kept or reversed, whichever gives the rotation that most views support.
+    right view is kept or turned (:func:`turned`), whichever gives the rotation that most
+    views support.
     """
+    count = len(points_in_board)
     candidates = []
     for cl, cr in zip(left, right, strict=True):
         left_from_board = _rotation_of(points_in_board, cl, left_model)
-        turned = [_rotation_of(points_in_board, c, right_model) for c in (cr, cr[::-1])]
-        if left_from_board is None or turned[0] is None or turned[1] is None:
+        options = [_rotation_of(points_in_board, c, right_model) for c in (cr, turned(cr, count))]
+        if left_from_board is None or options[0] is None or options[1] is None:
             candidates.append([np.eye(3), -np.eye(3)])
             continue
-        candidates.append([t @ left_from_board.T for t in turned])  # type: ignore[operator]
+        candidates.append([t @ left_from_board.T for t in options])  # type: ignore[operator]
     if not candidates:
         return []
     flat = [rotation for pair in candidates for rotation in pair]
     consensus = flat[int(np.argmax(support(np.array(flat), ORIENTATION_AGREEMENT_RAD, group=2)))]
-    return [cr if _angle_rad(a, consensus) <= _angle_rad(b, consensus)
-            else np.ascontiguousarray(cr[::-1])
+    return [cr if _angle_rad(a, consensus) <= _angle_rad(b, consensus) else turned(cr, count)
             for cr, (a, b) in zip(right, candidates, strict=True)]
 
 

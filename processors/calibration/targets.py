@@ -137,13 +137,26 @@ def detect_segment(grays: list[np.ndarray], board: Board, model: CameraModel | N
     guided by ``model`` when given)."""
     out: list[Detection | None] = []
     for gray in grays:
-        last = out[-1] if out else None
-        found = None
-        if board.pattern == "chessboard" and last is not None and last.accepted:
-            before = out[-2] if len(out) > 1 else None
-            velocity = last.corners_px - before.corners_px \
-                if before is not None and before.accepted \
-                and np.abs(last.corners_px - before.corners_px).max() < 50 else 0.0
-            found = track_chessboard(gray, last.corners_px + velocity, board)
-        out.append(found if found is not None else find_board(gray, board, model))
+        try:
+            out.append(_detect_next(gray, out, board, model))
+        except cv2.error as err:  # one frame OpenCV cannot handle is that frame's reason
+            message = str(err).strip().splitlines()[-1]
+            out.append(Detection(np.zeros((0, 2)), False, f"OpenCV failed: {message}"))
     return out
+
+
+def _detect_next(gray: np.ndarray, previous: list[Detection | None], board: Board,
+                 model: CameraModel | None) -> Detection | None:
+    """The next frame's detection: tracked from the previous two when a whole chessboard
+    was found in them, else found afresh."""
+    last = previous[-1] if previous else None
+    if board.pattern == "chessboard" and last is not None and last.accepted \
+            and last.point_ids is None:
+        before = previous[-2] if len(previous) > 1 else None
+        velocity = last.corners_px - before.corners_px \
+            if before is not None and before.accepted and before.point_ids is None \
+            and np.abs(last.corners_px - before.corners_px).max() < 50 else 0.0
+        found = track_chessboard(gray, last.corners_px + velocity, board)
+        if found is not None:
+            return found
+    return find_board(gray, board, model)
