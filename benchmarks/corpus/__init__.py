@@ -1,0 +1,1 @@
+"""A corpus of third-party calibration datasets: manifest, fetcher, OpenCV reference, runner."""

@@ -1,0 +1,61 @@
+"""The calibration corpus: its manifest always, the OpenCV reference when the cache holds data."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from benchmarks.corpus.manifest import (
+    LICENCES,
+    CorpusError,
+    default_cache,
+    load_manifest,
+)
+from benchmarks.corpus.reference import reference_calibration
+from benchmarks.corpus.run import camlog_args
+
+SMALL = "boofcv_sony_chess"
+
+
+def test_every_entry_has_provenance_licence_and_board() -> None:
+    datasets = load_manifest()
+    assert len(datasets) >= 8
+    for dataset in datasets:
+        assert dataset.licence in LICENCES and dataset.licence_source
+        assert dataset.board.square_m > 0 and dataset.board.note
+        assert dataset.files
+    kinds = {(d.model, d.stereo, d.board.pattern) for d in datasets}
+    assert {m for m, _s, _p in kinds} >= {"plumb_bob", "equidistant"}
+    assert {s for _m, s, _p in kinds} == {False, True}
+    assert {p for _m, _s, p in kinds} >= {"chessboard", "circles"}
+
+
+def test_a_broken_entry_names_its_field(tmp_path: Path) -> None:
+    text = Path("benchmarks/corpus/manifest.toml").read_text()
+    broken = tmp_path / "manifest.toml"
+    broken.write_text(text.replace('licence = "CC-BY-4.0"', 'licence = "GPL-9"', 1))
+    with pytest.raises(CorpusError, match="licence 'GPL-9'"):
+        load_manifest(broken)
+
+
+def test_camlog_options_follow_the_board() -> None:
+    circles = next(d for d in load_manifest() if d.board.pattern == "circles")
+    args = camlog_args(circles)
+    assert args[:6] == ["--size", "8x10", "--square", "0.025", "--pattern", "circles"]
+    assert "--diameter" in args and args[-2:] == ["--camera", "/corpus"]
+
+
+def test_opencv_reference_on_a_small_dataset() -> None:
+    dataset = next(d for d in load_manifest() if d.name == SMALL)
+    folder = default_cache() / SMALL
+    if not folder.is_dir():
+        pytest.skip(f"corpus cache {folder} absent: run python -m benchmarks.corpus.fetch "
+                    "(--mirror-root /work/.mirror without network)")
+    result = reference_calibration(dataset, folder)
+    (camera,) = result.cameras
+    assert camera.views == 13
+    assert camera.rms_px < 0.3
+    assert dataset.reference is not None
+    assert abs(camera.fx - dataset.reference.fx) / dataset.reference.fx < 0.02
+    assert abs(camera.cx - dataset.reference.cx) < 5
