@@ -21,17 +21,13 @@ from processors.calibration.joint import BoardView
 from processors.resync import pair_stamps
 
 from ..errors import CalibrationError
-from .views import CameraViews, Frame, size_hint
+from .views import SNAPSHOT_GAP_S, CameraViews, Frame, size_hint
 
 #: an approximately paired stereo frame joins its partner while the board moves less than
 #: this (px per frame) in both
 STILL_PX = 0.25
-#: frames further apart than this from both neighbours are snapshots (a folder of photos, a
-#: triggered pair every second): motion between them is not observable, so an approximately
-#: paired snapshot joins its partner whatever its neighbours show
-SNAPSHOT_GAP_S = 0.25
 
-__all__ = ["SNAPSHOT_GAP_S", "STILL_PX", "Instant", "ViewsOfRig", "rig_views", "stereo_pairs"]
+__all__ = ["STILL_PX", "Instant", "ViewsOfRig", "rig_views", "stereo_pairs"]
 
 
 @dataclass(frozen=True)
@@ -103,7 +99,8 @@ def _still(frame: Frame) -> bool:
 
 def _snapshots(views: CameraViews) -> set[int]:
     """Distinct frames whose neighbouring distinct frames are both at least
-    :data:`SNAPSHOT_GAP_S` away in time."""
+    :data:`~.views.SNAPSHOT_GAP_S` away in time: an approximately paired snapshot joins its
+    partner whatever its neighbours show, since motion between them is not observable."""
     distinct = [f for f in views.frames if not f.duplicate]
     stamps = np.array([f.stamp_ns for f in distinct], dtype=np.int64)
     order = np.argsort(stamps, kind="stable")

@@ -40,8 +40,13 @@ from .pixels import TopicFrames
 
 #: frames kept per camera to suggest another board size when none is found
 HINT_SAMPLES = 12
+#: a frame this long or longer after the camera's previous distinct frame is a snapshot (a
+#: photo in a folder, a triggered pair a second): no neighbouring frame shows its pose, so
+#: it is searched with every detector and its motion is not observable
+SNAPSHOT_GAP_S = 0.25
 
 __all__ = [
+    "SNAPSHOT_GAP_S",
     "CameraSource",
     "CameraViews",
     "Frame",
@@ -168,7 +173,16 @@ class _Seen:
     truth_stamps: dict[str, list[int]] = field(default_factory=dict)
     truth_poses: dict[str, array[float]] = field(default_factory=dict)
     last: bytes = b""
-    run: list[tuple[int, np.ndarray]] = field(default_factory=list)  # frames to detect
+    last_distinct_ns: int | None = None
+    #: frames to detect: index, pixels, whether a snapshot
+    run: list[tuple[int, np.ndarray, bool]] = field(default_factory=list)
+
+    def snapshot(self, stamp_ns: int) -> bool:
+        """Whether a distinct frame at ``stamp_ns`` comes :data:`SNAPSHOT_GAP_S` or more
+        after the previous one (the first frame does); remembers it as the previous one."""
+        gap = self.last_distinct_ns
+        self.last_distinct_ns = stamp_ns
+        return gap is None or abs(stamp_ns - gap) >= SNAPSHOT_GAP_S * 1e9
 
     def add(self, gray: np.ndarray, stamp_ns: int, where: str) -> tuple[int, bool]:
         """Record a frame; its index and whether it repeats the previous one."""
@@ -264,10 +278,11 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
                        progress=progress)
 
     def submit(camera: _Seen) -> None:
-        indices = [i for i, _ in camera.run]
+        indices = [i for i, _, _ in camera.run]
         model = (models or {}).get(camera.source.namespace)
-        pending.append((camera, indices, pool.submit(detect_segment,
-                                                     [g for _, g in camera.run], board, model)))
+        pending.append((camera, indices, pool.submit(
+            detect_segment, [g for _, g, _ in camera.run], board, model,
+            [photo for _, _, photo in camera.run])))
         camera.run = []
         while len(pending) > 2 * workers + 2:
             done, at, future = pending.popleft()
@@ -301,7 +316,8 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
             if not duplicate:
                 # frames wait for detection in runs: a view of the log's chunk would keep
                 # the whole chunk until then
-                camera.run.append((index, gray if gray.base is None else gray.copy()))
+                camera.run.append((index, gray if gray.base is None else gray.copy(),
+                                   camera.snapshot(image.stamp_ns)))
                 if len(camera.run) >= SEGMENT_FRAMES:
                     submit(camera)
             bar.update()

@@ -28,6 +28,10 @@ MIN_INSIDE_CORNERS = 6
 #: fraction of corners whose four squares may fail the parity check (noise, blur)
 PARITY_TOLERANCE = 0.08
 MIN_CONTRAST = 12.0
+#: squares are sampled this far (in squares, along both grid axes) from a corner: well inside
+#: a square even where perspective or a fisheye shrinks the outer squares, or the board's
+#: edge cuts them (half a square lands on the edge there)
+SAMPLE_AT = 0.35
 
 
 @dataclass(frozen=True)
@@ -50,10 +54,23 @@ class Detection:
         return self.point_ids
 
 
-def find_chessboard(gray: np.ndarray, board: Board) -> Detection | None:
-    """Detect ``board`` in a ``(H, W)`` uint8 image; None when no board is found."""
-    flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE | cv2.CALIB_CB_FAST_CHECK
-    found, corners = cv2.findChessboardCorners(gray, board.pattern_size, flags=flags)
+def find_chessboard(gray: np.ndarray, board: Board, *, thorough: bool = False
+                    ) -> Detection | None:
+    """Detect ``board`` in a ``(H, W)`` uint8 image; None when no board is found.
+
+    OpenCV's classic detector with its fast check first (a few ms on a frame without a
+    board); ``thorough`` (a photo, whose view no neighbouring frame can replace) then tries
+    the classic detector without the fast check and the sector-based one
+    (``findChessboardCornersSB``), which find boards on strongly distorted lenses and under
+    uneven light that the fast check turns away, at up to tens of times the cost."""
+    flags = cv2.CALIB_CB_ADAPTIVE_THRESH | cv2.CALIB_CB_NORMALIZE_IMAGE
+    found, corners = cv2.findChessboardCorners(gray, board.pattern_size,
+                                               flags=flags | cv2.CALIB_CB_FAST_CHECK)
+    if thorough and not found:
+        found, corners = cv2.findChessboardCornersSB(gray, board.pattern_size,
+                                                     flags=cv2.CALIB_CB_EXHAUSTIVE)
+    if thorough and not found:
+        found, corners = cv2.findChessboardCorners(gray, board.pattern_size, flags=flags)
     if not found or corners is None or len(corners) != board.corner_count:
         return None
     corners = corners.reshape(-1, 2).astype(np.float32)
@@ -173,9 +190,9 @@ def _inside_border(corners_px: F64, size: tuple[int, int], board: Board) -> Dete
 
 
 def _square_values(blurred: np.ndarray, points: F64, dx: F64, dy: F64) -> np.ndarray:
-    """Brightness ``(4, ...)`` at the centres of the squares around each point: the two
-    diagonal ones (+x+y, -x-y), then the two anti-diagonal ones."""
-    centers = np.stack([points + sx * 0.5 * dx + sy * 0.5 * dy
+    """Brightness ``(4, ...)`` inside the squares around each point (:data:`SAMPLE_AT`): the
+    two diagonal ones (+x+y, -x-y), then the two anti-diagonal ones."""
+    centers = np.stack([points + sx * SAMPLE_AT * dx + sy * SAMPLE_AT * dy
                         for sx, sy in ((1, 1), (-1, -1), (1, -1), (-1, 1))])
     h, w = blurred.shape
     xs = np.clip(np.rint(centers[..., 0]), 0, w - 1).astype(int)

@@ -82,18 +82,39 @@ def seed_model(points: list[F64], corners: list[F64], size: tuple[int, int],
     and the seed solved again, twice at most.
     """
     pick = spread(len(corners), SEED_VIEWS)
-    model = _opencv_calibration([points[i] for i in pick], [corners[i] for i in pick], size,
-                                options)
+    pick, model = _without_stopping_views(points, corners, pick, size, options)
     for _round in range(2):
         errors = np.array([view_rms_px(points[i], corners[i], model) for i in pick])
         limit = max(SEED_OUTLIER_FACTOR * float(np.nanmedian(errors)), SEED_OUTLIER_FLOOR_PX)
         keep = [i for i, e in zip(pick, errors, strict=True) if e <= limit]
         if len(keep) == len(pick) or len(keep) < max(5, len(pick) // 2):
             break
-        pick = keep
-        model = _opencv_calibration([points[i] for i in pick], [corners[i] for i in pick],
-                                    size, options)
+        try:
+            pick, model = _without_stopping_views(points, corners, keep, size, options)
+        except ProcessorError:
+            break  # the views without the far ones do not solve: keep the solution with them
     return model
+
+
+def _without_stopping_views(points: list[F64], corners: list[F64], pick: list[int],
+                            size: tuple[int, int], options: CalibrationOptions
+                            ) -> tuple[list[int], CameraModel]:
+    """OpenCV's calibration of the views ``pick``; when it stops on one view (a degenerate
+    pose on the way, which OpenCV asserts against), that view, found by solving without one
+    view at a time, is left out."""
+    try:
+        return pick, _opencv_calibration([points[i] for i in pick],
+                                         [corners[i] for i in pick], size, options)
+    except ProcessorError as err:
+        failure = err
+    for i in pick:
+        rest = [j for j in pick if j != i]
+        try:
+            return rest, _opencv_calibration([points[j] for j in rest],
+                                             [corners[j] for j in rest], size, options)
+        except ProcessorError:
+            continue
+    raise failure
 
 
 def view_rms_px(points: F64, corners: F64, model: CameraModel) -> float:

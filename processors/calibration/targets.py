@@ -34,15 +34,17 @@ GUIDING_MODELS = ("plumb_bob", "rational_polynomial")
 _LOCAL = threading.local()
 
 
-def find_board(gray: np.ndarray, board: Board, model: CameraModel | None = None
-               ) -> Detection | None:
+def find_board(gray: np.ndarray, board: Board, model: CameraModel | None = None, *,
+               thorough: bool = False) -> Detection | None:
     """Detect ``board`` in a ``(H, W)`` uint8 image; None when no board is found. ``model``
-    (the camera's, from a first calibration) guides a ChArUco detection (see the module)."""
+    (the camera's, from a first calibration) guides a ChArUco detection (see the module);
+    ``thorough`` tries OpenCV's slower detectors when the fast ones find nothing (a photo,
+    which no neighbouring frame can stand in for)."""
     if board.pattern == "charuco":
         return find_charuco(gray, board, model)
     if board.circle_grid:
-        return find_circles(gray, board)
-    return find_chessboard(gray, board)
+        return find_circles(gray, board, thorough=thorough)
+    return find_chessboard(gray, board, thorough=thorough)
 
 
 def guides_charuco(distortion_model: str) -> bool:
@@ -94,10 +96,12 @@ def find_charuco(gray: np.ndarray, board: Board, model: CameraModel | None = Non
     return Detection(corners_px, True, "", point_ids)
 
 
-def find_circles(gray: np.ndarray, board: Board) -> Detection | None:
+def find_circles(gray: np.ndarray, board: Board, *, thorough: bool = False
+                 ) -> Detection | None:
     """The circles of a symmetric or asymmetric grid, all of them or none: the area centroids
     of their discs' images (grey-level moments where a circle can be measured, else the blob
-    detector's), and the circles' diameter (the median over the circles)."""
+    detector's), and the circles' diameter (the median over the circles). ``thorough`` tries
+    ``findCirclesGrid``'s clustering search too, which finds grids seen at steep angles."""
     flags = cv2.CALIB_CB_ASYMMETRIC_GRID if board.pattern == "acircles" \
         else cv2.CALIB_CB_SYMMETRIC_GRID
     params = cv2.SimpleBlobDetector.Params()
@@ -107,6 +111,10 @@ def find_circles(gray: np.ndarray, board: Board) -> Detection | None:
     detector = cv2.SimpleBlobDetector.create(params)
     found, centres = cv2.findCirclesGrid(gray, board.pattern_size, flags=flags,
                                          blobDetector=detector)
+    if thorough and not found:
+        found, centres = cv2.findCirclesGrid(gray, board.pattern_size,
+                                             flags=flags | cv2.CALIB_CB_CLUSTERING,
+                                             blobDetector=detector)
     if not found or centres is None or len(centres) != board.corner_count:
         return None
     centres_px = np.asarray(centres, dtype=np.float64).reshape(-1, 2)
@@ -129,16 +137,18 @@ def find_circles(gray: np.ndarray, board: Board) -> Detection | None:
 SEGMENT_FRAMES = 8
 
 
-def detect_segment(grays: list[np.ndarray], board: Board, model: CameraModel | None = None
-                   ) -> list[Detection | None]:
+def detect_segment(grays: list[np.ndarray], board: Board, model: CameraModel | None = None,
+                   thorough: list[bool] | None = None) -> list[Detection | None]:
     """Detections of consecutive frames ``(H, W)`` uint8: the first found afresh, each next
     chessboard tracked from the previous two (their motion carried on) and found afresh
     only when tracking fails; other targets found afresh in every frame (a ChArUco board
-    guided by ``model`` when given)."""
+    guided by ``model`` when given). ``thorough[i]``: frame ``i`` is a photo, searched with
+    every detector when the fast ones fail (see :func:`find_board`)."""
     out: list[Detection | None] = []
-    for gray in grays:
+    for i, gray in enumerate(grays):
         try:
-            out.append(_detect_next(gray, out, board, model))
+            out.append(_detect_next(gray, out, board, model,
+                                    thorough=thorough[i] if thorough else False))
         except cv2.error as err:  # one frame OpenCV cannot handle is that frame's reason
             message = str(err).strip().splitlines()[-1]
             out.append(Detection(np.zeros((0, 2)), False, f"OpenCV failed: {message}"))
@@ -146,7 +156,7 @@ def detect_segment(grays: list[np.ndarray], board: Board, model: CameraModel | N
 
 
 def _detect_next(gray: np.ndarray, previous: list[Detection | None], board: Board,
-                 model: CameraModel | None) -> Detection | None:
+                 model: CameraModel | None, *, thorough: bool) -> Detection | None:
     """The next frame's detection: tracked from the previous two when a whole chessboard
     was found in them, else found afresh."""
     last = previous[-1] if previous else None
@@ -159,4 +169,4 @@ def _detect_next(gray: np.ndarray, previous: list[Detection | None], board: Boar
         found = track_chessboard(gray, last.corners_px + velocity, board)
         if found is not None:
             return found
-    return find_board(gray, board, model)
+    return find_board(gray, board, model, thorough=thorough)
