@@ -11,7 +11,9 @@ complete. The rules:
 - an output that is one of the run's inputs, lies inside one (a rosbag2 directory) or would
   replace a directory holding one is refused before anything is written;
 - only what this run created is ever deleted: its own temporary output, and — with
-  ``overwrite`` — the previous output under the final name, which the user asked to replace.
+  ``overwrite`` — the previous output under the final name, which the user asked to replace;
+- a run about to write ``NAME`` says in one line which temporary outputs earlier runs left
+  for it, and how to recover them (:mod:`replay.leftovers`).
 """
 
 from __future__ import annotations
@@ -101,6 +103,13 @@ def _check_parent(final: Path) -> None:
         raise OutputError(f"cannot write {final}: directory {parent} is not writable")
 
 
+def _warn_leftovers(final: Path) -> None:
+    """Say which temporary outputs earlier runs left for ``final`` (:mod:`replay.leftovers`)."""
+    from .leftovers import warn_leftovers
+
+    warn_leftovers(final)
+
+
 def _remove(path: Path) -> None:
     """Delete a file or directory tree this run created."""
     if path.is_dir() and not path.is_symlink():
@@ -160,6 +169,7 @@ class AtomicOutput(_Staged):
             raise OutputError(f"refusing to replace {final}: it is a directory but not "
                               f"{what}")
         _check_parent(final)
+        _warn_leftovers(final)
         self.temp = temp_sibling(final)
         self.done = False
 
@@ -213,6 +223,7 @@ class AtomicFolder(_Staged):
             raise OutputError(f"{folder} already holds {', '.join(existing)} "
                               "(pass --overwrite to replace them)")
         _check_parent(folder)
+        _warn_leftovers(folder)
         self.path = temp_sibling(folder)
         self.path.mkdir()
         self.done = False
