@@ -19,8 +19,6 @@ complete. The rules:
 from __future__ import annotations
 
 import os
-import re
-import secrets
 import shutil
 from collections.abc import Callable, Iterable
 from pathlib import Path
@@ -28,6 +26,8 @@ from types import TracebackType
 from typing import Self
 
 from .errors import OutputError
+from .leftovers import warn_leftovers
+from .temp_names import is_temp_output, temp_output_of, temp_sibling
 
 __all__ = [
     "AtomicFolder",
@@ -40,28 +40,6 @@ __all__ = [
     "write_bytes_atomic",
     "write_text_atomic",
 ]
-
-_TEMP = re.compile(r"^\.(?P<name>.+)\.camlog-[0-9a-f]{16}\.tmp$")
-
-
-def temp_sibling(final: Path) -> Path:
-    """A hidden name next to ``final`` that no file has: ``.NAME.camlog-<random>.tmp``."""
-    while True:
-        temp = final.parent / f".{final.name}.camlog-{secrets.token_hex(8)}.tmp"
-        if not (temp.exists() or temp.is_symlink()):
-            return temp
-
-
-def is_temp_output(path: Path) -> bool:
-    """Whether ``path`` is named like a camlog temporary output."""
-    return _TEMP.match(path.name) is not None
-
-
-def temp_output_of(path: Path) -> Path | None:
-    """The final path a camlog temporary output was meant for (None: not a temp name)."""
-    match = _TEMP.match(path.name)
-    return path.with_name(match["name"]) if match else None
-
 
 def _real(path: Path) -> Path:
     """Absolute path with symlinks resolved, for paths that may not exist yet."""
@@ -101,13 +79,6 @@ def _check_parent(final: Path) -> None:
         raise OutputError(f"cannot write {final}: directory {parent} does not exist")
     if not os.access(parent, os.W_OK):
         raise OutputError(f"cannot write {final}: directory {parent} is not writable")
-
-
-def _warn_leftovers(final: Path) -> None:
-    """Say which temporary outputs earlier runs left for ``final`` (:mod:`replay.leftovers`)."""
-    from .leftovers import warn_leftovers
-
-    warn_leftovers(final)
 
 
 def _remove(path: Path) -> None:
@@ -169,7 +140,7 @@ class AtomicOutput(_Staged):
             raise OutputError(f"refusing to replace {final}: it is a directory but not "
                               f"{what}")
         _check_parent(final)
-        _warn_leftovers(final)
+        warn_leftovers(final)
         self.temp = temp_sibling(final)
         self.done = False
 
@@ -223,7 +194,7 @@ class AtomicFolder(_Staged):
             raise OutputError(f"{folder} already holds {', '.join(existing)} "
                               "(pass --overwrite to replace them)")
         _check_parent(folder)
-        _warn_leftovers(folder)
+        warn_leftovers(folder)
         self.path = temp_sibling(folder)
         self.path.mkdir()
         self.done = False

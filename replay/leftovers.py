@@ -15,13 +15,18 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from .atomic import temp_output_of
+from .sizes import bytes_on_disk, format_size
+from .temp_names import temp_output_of
 
 __all__ = ["Leftover", "describe_leftovers", "format_leftovers", "leftovers_in", "leftovers_of",
            "warn_leftovers"]
 
 #: leftovers a warning was printed for in this process (one line each, once)
 _WARNED: set[Path] = set()
+#: how a log file begins: MCAP, ROS1 bag
+LOG_MAGICS = (b"\x89MCAP", b"#ROSBAG V2.0")
+#: what a rosbag2 folder holds (a temporary one holds its storage one folder down)
+ROSBAG2_FILES = ("metadata.yaml", "*.mcap", "*.db3", "*/*.mcap", "*/*.db3")
 
 
 @dataclass(frozen=True, slots=True)
@@ -34,10 +39,8 @@ class Leftover:
     @property
     def size_bytes(self) -> int:
         """Bytes of the file, or of every file below the folder."""
-        from .info import size_on_disk
-
         try:
-            return size_on_disk(self.path)
+            return bytes_on_disk(self.path)
         except OSError:
             return 0
 
@@ -53,14 +56,14 @@ class Leftover:
     def is_log(self) -> bool:
         """Whether it is a log (an MCAP file, a rosbag2 folder, a ROS1 bag), which
         ``camlog convert --recover`` reads up to its last complete chunk."""
-        from .errors import ReplayError
-        from .formats import detect_format
-
         try:
-            detect_format(self.path)
-        except (ReplayError, OSError):
+            if self.path.is_dir():
+                return any(next(self.path.glob(files), None) for files in ROSBAG2_FILES)
+            with self.path.open("rb") as f:
+                head = f.read(16)
+        except OSError:
             return False
-        return True
+        return head.startswith(LOG_MAGICS)
 
     def recovery(self, *, final_in_use: bool) -> str:
         """What to do with it: the command that recovers a log into ``final`` (or, when
@@ -75,8 +78,6 @@ class Leftover:
 
     def describe(self, *, final_in_use: bool = False) -> str:
         """``PATH (SIZE, AGE old), meant to become NAME; recover it with: ...``"""
-        from .info import format_size
-
         size = format_size(self.size_bytes).split(" (")[0]
         kind = "folder" if self.path.is_dir() else "file"
         return (f"{self.path} ({kind}, {size}, {format_age(self.age_s)} old), left by a run "
@@ -128,8 +129,6 @@ def describe_leftovers(leftovers: list[Leftover]) -> list[str]:
 def format_leftovers(folder: Path, leftovers: list[Leftover]) -> str:
     """The listing ``camlog info FOLDER`` prints (no trailing newline): per leftover its
     name, kind, size, age, the name it was meant to become and what to do with it."""
-    from .info import format_size
-
     lines = [f"folder:    {folder}",
              f"leftovers: {len(leftovers)} (temporary outputs of camlog runs that did not "
              "finish)"]
