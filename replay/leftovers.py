@@ -25,8 +25,9 @@ __all__ = ["Leftover", "describe_leftovers", "format_leftovers", "leftovers_in",
 _WARNED: set[Path] = set()
 #: how a log file begins: MCAP, ROS1 bag
 LOG_MAGICS = (b"\x89MCAP", b"#ROSBAG V2.0")
-#: what a rosbag2 folder holds (a temporary one holds its storage one folder down)
-ROSBAG2_FILES = ("metadata.yaml", "*.mcap", "*.db3", "*/*.mcap", "*/*.db3")
+#: the files of a rosbag2 folder that has no metadata.yaml yet: storage files and SQLite's
+#: journals (a temporary one holds them one folder down)
+STORAGE_FILES = (".mcap", ".db3", ".db3-journal", ".db3-wal", ".db3-shm")
 
 
 @dataclass(frozen=True, slots=True)
@@ -58,7 +59,7 @@ class Leftover:
         ``camlog convert --recover`` reads up to its last complete chunk."""
         try:
             if self.path.is_dir():
-                return any(next(self.path.glob(files), None) for files in ROSBAG2_FILES)
+                return _is_rosbag2(self.path)
             with self.path.open("rb") as f:
                 head = f.read(16)
         except OSError:
@@ -83,6 +84,15 @@ class Leftover:
         return (f"{self.path} ({kind}, {size}, {format_age(self.age_s)} old), left by a run "
                 f"that did not finish writing {self.final.name}; "
                 f"{self.recovery(final_in_use=final_in_use)}")
+
+
+def _is_rosbag2(folder: Path) -> bool:
+    """A rosbag2 folder: its metadata.yaml, or nothing but storage files (a calibration
+    folder also holds a ``calibration.mcap``, beside YAML and JSON files)."""
+    if (folder / "metadata.yaml").is_file():
+        return True
+    files = [f.name for f in folder.rglob("*") if f.is_file()]
+    return bool(files) and all(name.endswith(STORAGE_FILES) for name in files)
 
 
 def format_age(age_s: float) -> str:

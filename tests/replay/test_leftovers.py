@@ -13,6 +13,7 @@ import pytest
 from replay import Image, open_writer
 from replay.atomic import AtomicFolder, write_text_atomic
 from replay.leftovers import format_age, leftovers_in, leftovers_of
+from replay.sizes import format_size
 
 HEX = "0123456789abcdef"
 
@@ -44,13 +45,16 @@ def test_a_folder_leftover_can_be_removed(
     leftover = tmp_path / f".calib.camlog-{HEX}.tmp"
     leftover.mkdir()
     (leftover / "left.yaml").write_text("x: 1\n")
+    with open_writer(leftover / "calibration.mcap") as writer:  # a log in it: still no log
+        writer.write("/cam/image_raw", Image(0, "cam", "mono8", np.zeros((4, 4), np.uint8)))
+    size = format_size(sum(f.stat().st_size for f in leftover.iterdir())).split(" (")[0]
     old_s = time.time() - 7200
     os.utime(leftover, (old_s, old_s))
     with AtomicFolder(tmp_path / "calib", ["left.yaml"], overwrite=False) as folder:
         (folder.path / "left.yaml").write_text("x: 2\n")
     (line,) = capsys.readouterr().err.splitlines()
-    assert line == (f"warning: {leftover} (folder, 5 B, 2 h old), left by a run that did not "
-                    f"finish writing calib; it can be removed: rm -r {leftover}")
+    assert line == (f"warning: {leftover} (folder, {size}, 2 h old), left by a run that "
+                    f"did not finish writing calib; it can be removed: rm -r {leftover}")
     assert leftover.is_dir()  # never deleted by a later run
 
 
