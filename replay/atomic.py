@@ -11,14 +11,14 @@ complete. The rules:
 - an output that is one of the run's inputs, lies inside one (a rosbag2 directory) or would
   replace a directory holding one is refused before anything is written;
 - only what this run created is ever deleted: its own temporary output, and — with
-  ``overwrite`` — the previous output under the final name, which the user asked to replace.
+  ``overwrite`` — the previous output under the final name, which the user asked to replace;
+- a run about to write ``NAME`` says in one line which temporary outputs earlier runs left
+  for it, and how to recover them (:mod:`replay.leftovers`).
 """
 
 from __future__ import annotations
 
 import os
-import re
-import secrets
 import shutil
 from collections.abc import Callable, Iterable
 from pathlib import Path
@@ -26,6 +26,8 @@ from types import TracebackType
 from typing import Self
 
 from .errors import OutputError
+from .leftovers import warn_leftovers
+from .temp_names import is_temp_output, temp_output_of, temp_sibling
 
 __all__ = [
     "AtomicFolder",
@@ -38,28 +40,6 @@ __all__ = [
     "write_bytes_atomic",
     "write_text_atomic",
 ]
-
-_TEMP = re.compile(r"^\.(?P<name>.+)\.camlog-[0-9a-f]{16}\.tmp$")
-
-
-def temp_sibling(final: Path) -> Path:
-    """A hidden name next to ``final`` that no file has: ``.NAME.camlog-<random>.tmp``."""
-    while True:
-        temp = final.parent / f".{final.name}.camlog-{secrets.token_hex(8)}.tmp"
-        if not (temp.exists() or temp.is_symlink()):
-            return temp
-
-
-def is_temp_output(path: Path) -> bool:
-    """Whether ``path`` is named like a camlog temporary output."""
-    return _TEMP.match(path.name) is not None
-
-
-def temp_output_of(path: Path) -> Path | None:
-    """The final path a camlog temporary output was meant for (None: not a temp name)."""
-    match = _TEMP.match(path.name)
-    return path.with_name(match["name"]) if match else None
-
 
 def _real(path: Path) -> Path:
     """Absolute path with symlinks resolved, for paths that may not exist yet."""
@@ -160,6 +140,7 @@ class AtomicOutput(_Staged):
             raise OutputError(f"refusing to replace {final}: it is a directory but not "
                               f"{what}")
         _check_parent(final)
+        warn_leftovers(final)
         self.temp = temp_sibling(final)
         self.done = False
 
@@ -213,6 +194,7 @@ class AtomicFolder(_Staged):
             raise OutputError(f"{folder} already holds {', '.join(existing)} "
                               "(pass --overwrite to replace them)")
         _check_parent(folder)
+        warn_leftovers(folder)
         self.path = temp_sibling(folder)
         self.path.mkdir()
         self.done = False

@@ -24,13 +24,16 @@ from .errors import ImageFolderError, OptionError
 from .format_names import DEFAULT_START_NS
 from .formats import open_writer
 from .messages import CameraInfo, Image
+from .topics import camera_of
 
 __all__ = [
     "EXTENSIONS",
+    "RAW_IMAGE_SUFFIXES",
     "ImportResult",
     "frame_id_for",
     "image_files",
     "import_images",
+    "import_topic",
     "natural_key",
     "read_image",
     "stamps_ns",
@@ -136,6 +139,29 @@ class ImportResult:
     wall_s: float = 0.0
 
 
+#: image topic names below a camera namespace that hold raw images (``sensor_msgs/Image``)
+RAW_IMAGE_SUFFIXES = ("image_raw", "image_rect", "image")
+
+
+def import_topic(camera: str) -> tuple[str, str]:
+    """(namespace, image topic) an import writes for ``camera``: a namespace gets
+    ``NS/image_raw``; a raw image topic's name (:data:`RAW_IMAGE_SUFFIXES`) is kept.
+
+    >>> import_topic("/fisheye"), import_topic("/cam/image_raw/")
+    (('/fisheye', '/fisheye/image_raw'), ('/cam', '/cam/image_raw'))
+    """
+    name = "/" + camera.strip("/")
+    namespace = camera_of(name)
+    if namespace is None:
+        return name, f"{name.rstrip('/')}/image_raw"
+    suffix = name.removeprefix(namespace).strip("/")
+    if suffix not in RAW_IMAGE_SUFFIXES:
+        raise OptionError(f"{name} is a topic for compressed images or video; import writes "
+                          f"raw images: name the camera {namespace} (images on "
+                          f"{namespace.rstrip('/')}/image_raw)")
+    return namespace, name
+
+
 def _camera_infos(paths: Sequence[Path], namespaces: Sequence[str]) -> list[CameraInfo | None]:
     if not paths:
         return [None] * len(namespaces)
@@ -149,7 +175,7 @@ def import_images(
     folder: Path,
     output: Path,
     *,
-    topic: str | None = None,
+    camera: str | None = None,
     rate_hz: float = 10.0,
     stereo: bool = False,
     camera_info: Sequence[Path] = (),
@@ -161,9 +187,11 @@ def import_images(
 ) -> ImportResult:
     """Write the images of ``folder`` to the log ``output`` (atomically).
 
-    Mono: ``topic`` (default ``/camera/image_raw``), camera_info beside it when ``topic``
-    ends in ``/image_raw``. Stereo: ``topic`` is a namespace (default ``/stereo``) and the
-    log gets ``{ns}/left/image_raw`` and ``{ns}/right/image_raw`` (+ ``camera_info``).
+    Mono: ``camera`` is a camera namespace (default ``/camera``) and the log gets
+    ``{ns}/image_raw`` (+ ``{ns}/camera_info``); a name ending in a raw image topic's name
+    (``/cam/image_raw``, ``/cam/image_rect``, ``/cam/image``) is that image topic. Stereo:
+    ``camera`` is the rig's namespace (default ``/stereo``) and the log gets
+    ``{ns}/left/image_raw`` and ``{ns}/right/image_raw`` (+ ``camera_info``).
     """
     started = time.perf_counter()
     files = image_files(folder)
@@ -172,14 +200,17 @@ def import_images(
         pairs, skipped = stereo_pairs(files)
         if not pairs:
             raise ImageFolderError(f"{folder}: no left*/right* file pairs with matching names")
-        ns = "/" + (topic or "/stereo").strip("/")
+        ns = "/" + (camera or "/stereo").strip("/")
+        if camera_of(ns) is not None:
+            raise OptionError(f"with --stereo, --camera names the rig's namespace (e.g. "
+                              f"{camera_of(ns)}), not an image topic: {ns}")
         namespaces = [f"{ns}/{side}" for side in SIDES]
+        image_topics = [f"{n}/image_raw" for n in namespaces]
         frames: list[tuple[Path, ...]] = list(pairs)
     else:
-        image_topic = "/" + (topic or "/camera/image_raw").strip("/")
-        namespaces = [image_topic.removesuffix("/image_raw")]
+        namespace, image_topic = import_topic(camera or "/camera")
+        namespaces, image_topics = [namespace], [image_topic]
         frames = [(path,) for path in files]
-    image_topics = [f"{n}/image_raw" for n in namespaces] if stereo else [image_topic]
     infos = _camera_infos(camera_info, namespaces)
     if frame_id is None:
         frame_ids = [frame_id_for(n) for n in namespaces]

@@ -21,11 +21,13 @@ from .buffer_layout import check_buffer
 from .errors import ReplayError
 from .formats.base import ROS_SERIALIZATIONS, LogReader, RawMessage
 from .msgtypes import CAMERA_INFO_TYPES, CDR, DECODABLE, FRAME_TYPES
+from .sizes import bytes_on_disk, format_size
 
 if TYPE_CHECKING:
     from .frames import FrameStream
 
-__all__ = ["FrameCheck", "LogSummary", "TopicSummary", "format_summary", "summarize"]
+__all__ = ["FrameCheck", "LogSummary", "TopicSummary", "format_size", "format_summary",
+           "size_on_disk", "summarize"]
 
 #: topics whose first messages lie this close in log time are read together
 FIRST_MESSAGES_WINDOW_NS = 1_000_000_000
@@ -276,9 +278,7 @@ def size_on_disk(path: Path | str) -> int:
     """Bytes of a file, or of all files below a directory (local or a URI)."""
     if isinstance(path, str):
         return storage.size(path)
-    if path.is_dir():
-        return sum(f.stat().st_size for f in path.rglob("*") if f.is_file())
-    return path.stat().st_size
+    return bytes_on_disk(path)
 
 
 def _frames_line(check: FrameCheck | None) -> str:
@@ -298,17 +298,6 @@ def format_stamp(stamp_ns: int | None) -> str:
     sec, nsec = divmod(stamp_ns, 1_000_000_000)
     iso = datetime.fromtimestamp(sec, tz=UTC).strftime("%Y-%m-%dT%H:%M:%S")
     return f"{iso}.{nsec:09d}Z ({stamp_ns} ns)"
-
-
-def format_size(size_bytes: int) -> str:
-    """``3.9 MiB (4129654 bytes)``."""
-    value = float(size_bytes)
-    for unit in ("B", "KiB", "MiB", "GiB"):
-        if value < 1024 or unit == "GiB":
-            break
-        value /= 1024
-    scaled = f"{size_bytes} B" if unit == "B" else f"{value:.1f} {unit}"
-    return f"{scaled} ({size_bytes} bytes)"
 
 
 def format_summary(summary: LogSummary) -> str:

@@ -29,6 +29,7 @@ __all__ = [
     "DETECTIONS",
     "GROUND_TRUTH",
     "IMAGE_RECT",
+    "IMAGE_SUFFIXES",
     "PROCESSED",
     "RESIDUALS",
     "RESYNC_PREFIX",
@@ -36,6 +37,7 @@ __all__ = [
     "VIEW_ERROR",
     "CameraTopics",
     "ResyncTopics",
+    "camera_of",
     "read_record",
     "split_ground_truth",
 ]
@@ -58,6 +60,25 @@ RESIDUALS = "calibration/residuals"
 VIEW_ERROR = "calibration/view_error"
 CALIBRATED_INFO = "calibrated/camera_info"
 IMAGE_RECT = "image_rect"
+
+#: a camera namespace's image topics, most preferred first: image_transport's names (and
+#: ``convert --compress h264``'s), then names Foxglove-style logs use
+IMAGE_SUFFIXES = ("image_raw", "image_raw/compressed", "image_raw/video", "image_rect",
+                  "image", "image/compressed", "image/video", "compressed", "video")
+#: the longest suffix first, so that ``image_raw/compressed`` wins over ``compressed``
+_SUFFIXES_LONGEST_FIRST = sorted(IMAGE_SUFFIXES, key=len, reverse=True)
+
+
+def camera_of(image_topic: str) -> str | None:
+    """The camera namespace of an image topic named with one of :data:`IMAGE_SUFFIXES`.
+
+    >>> camera_of("/fisheye/image_raw"), camera_of("/c/image_raw/compressed"), camera_of("/f")
+    ('/fisheye', '/c', None)
+    """
+    for suffix in _SUFFIXES_LONGEST_FIRST:
+        if image_topic.endswith(f"/{suffix}"):
+            return image_topic.removesuffix(f"/{suffix}") or "/"
+    return None
 
 
 @dataclass(frozen=True)

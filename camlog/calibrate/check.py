@@ -18,9 +18,10 @@ from replay.formats import open_reader
 from replay.messages import F64
 
 from ..errors import CalibrationError, InputError, UsageError
+from ..processing.cameras import find_camera
 from .instants import stereo_pairs
 from .solving import CircleSize, circle_size
-from .views import CameraViews, detect_views, resolve_camera, size_hint
+from .views import CameraViews, detect_views, size_hint
 
 
 @dataclass
@@ -64,7 +65,7 @@ def check_log(log: Path, *, board: Board, cameras: list[str], calibrations: list
                          f"got {len(calibrations)}")
     infos = [load_calibration(p).camera_info for p in calibrations]
     with open_reader(log, recover=recover) as reader:
-        sources = [resolve_camera(reader, ns) for ns in cameras]
+        sources = [find_camera(reader, ns) for ns in cameras]
         streams = detect_views(reader, sources, board, workers=os.cpu_count() or 2,
                                progress=progress).cameras
     models = []

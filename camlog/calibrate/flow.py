@@ -27,6 +27,7 @@ from replay.records import CalibrationSummary, Scenario
 from replay.storage import Location, local_paths
 
 from ..errors import InputError
+from ..processing.cameras import find_camera
 from .evidence import write_evidence, write_summary
 from .instants import ViewsOfRig
 from .remeasure import remeasured_rig
@@ -40,7 +41,7 @@ from .solving import (
     solve_rig,
 )
 from .summary import build_summary
-from .views import CameraViews, LogViews, detect_views, resolve_camera, with_speed_limit
+from .views import CameraViews, LogViews, detect_views, with_speed_limit
 
 __all__ = ["CalibrationRun", "MeasureAgain", "calibrate_log"]
 
@@ -136,7 +137,7 @@ def calibrate_log(
             open_reader(log, recover=recover) as reader:
         if reader.message_count == 0:
             raise InputError(f"{log} is empty (no messages)")
-        sources = [resolve_camera(reader, ns) for ns in cameras]
+        sources = [find_camera(reader, ns) for ns in cameras]
         workers = workers or os.cpu_count() or 2
         found = detect_views(reader, sources, board, workers=workers, progress=progress)
         cameras_views = _checked(found, max_speed_px)

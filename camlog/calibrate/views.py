@@ -32,10 +32,10 @@ from replay.geometry import transform_from_pose
 from replay.messages import F64, CameraInfo, PoseStamped
 from replay.progress import progress_bar
 from replay.records import Scenario
-from replay.topics import SCENARIO, CameraTopics, split_ground_truth
+from replay.topics import SCENARIO, split_ground_truth
 
 from ..errors import InputError
-from ..processing.checks import IMAGE_SUFFIXES, IMAGE_TYPES, camera_info_topic
+from ..processing.cameras import CameraSource
 from .pixels import TopicFrames
 
 #: frames kept per camera to suggest another board size when none is found
@@ -53,42 +53,9 @@ __all__ = [
     "LogViews",
     "board_speeds",
     "detect_views",
-    "resolve_camera",
     "size_hint",
     "with_speed_limit",
 ]
-
-
-@dataclass(frozen=True)
-class CameraSource:
-    """The topics of one camera namespace in a log."""
-
-    namespace: str
-    image_topic: str
-    info_topic: str | None
-
-    @property
-    def name(self) -> str:
-        """A file-name friendly name: ``/stereo/left`` -> ``stereo_left``."""
-        return self.namespace.strip("/").replace("/", "_") or "camera"
-
-
-def resolve_camera(reader: LogReader, namespace: str) -> CameraSource:
-    """The image and camera_info topics of a camera namespace."""
-    ns = namespace.rstrip("/") or "/"
-    topics = CameraTopics(ns)
-    for topic in (f"{ns}/{suffix}" for suffix in IMAGE_SUFFIXES):
-        info = reader.topics.get(topic)
-        if info is not None and info.count > 0 and info.msgtype in IMAGE_TYPES:
-            break
-    else:
-        images = sorted(t for t, i in reader.topics.items()
-                        if i.msgtype in IMAGE_TYPES and i.count)
-        raise InputError(
-            f"{reader.path}: no images under camera {ns} (expected {topics.image_raw} or "
-            f"{topics.image_raw}/compressed; image topics: {', '.join(images) or 'none'})"
-        )
-    return CameraSource(ns, topic, camera_info_topic(reader, ns))
 
 
 @dataclass(frozen=True, slots=True)

@@ -18,6 +18,7 @@ import threading
 from collections.abc import Callable, Collection, Sequence
 from typing import Any, NoReturn
 
+from .decoder_messages import filter_decoder_messages
 from .memory import keep_freed_memory
 
 #: subcommand name -> (one-line help, module under camlog.cli with add_arguments and run)
@@ -153,6 +154,11 @@ def _run(argv: list[str], command: str | None, where: str, *, as_program: bool) 
             # import) and spin beside camlog's own threads. Read once, when numpy loads; a
             # user's setting stands.
             os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+            # damaged frames are camlog's to report, in one line per topic: OpenCV's own
+            # warnings about them are left out (a user's setting stands), and so are the
+            # lines its libjpeg and libpng print from C
+            os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
+            filter_decoder_messages()
         args = build_parser([command] if command else []).parse_args(argv)
         args.as_program = as_program  # the process is camlog's own (see camlog.cli.lean)
         if as_program:

@@ -31,9 +31,9 @@ MODELS = ("plumb_bob", "rational_polynomial", "equidistant", "fisheye")
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Register the ``calibrate`` arguments (camera_calibration's vocabulary)."""
     p.epilog = (
-        "Mono: --camera NS (the namespace that owns image_raw[/compressed] and camera_info). "
-        "Stereo: --left NS --right NS; frames pair by identical stamps, or within "
-        "--approximate SEC. Writes OUTDIR/{ost.yaml | left.yaml, right.yaml}, ost.txt, "
+        "Mono: --camera NS (the namespace that owns image_raw[/compressed] and camera_info, or "
+        "its image topic). Stereo: --left NS --right NS; frames pair by identical stamps, "
+        "or within --approximate SEC. Writes OUTDIR/{ost.yaml | left.yaml, right.yaml}, ost.txt, "
         "calibration.mcap (the log plus detections, residuals, calibrated camera_info and "
         "rectified images), calibration.json, report.md and PNG figures. "
         "camera_calibration's spellings are accepted too: -s/--size, -q/--square, "
@@ -48,10 +48,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-p", "--pattern", default="chessboard", choices=PATTERNS,
                    help="calibration target (default chessboard)")
     p.add_argument("--camera", type=name, metavar="NS",
-                   help="mono camera namespace, e.g. /simple_camera (default: the log's only "
-                        "camera)")
-    p.add_argument("--left", type=name, metavar="NS", help="stereo left camera namespace")
-    p.add_argument("--right", type=name, metavar="NS", help="stereo right camera namespace")
+                   help="mono camera namespace, e.g. /simple_camera, or its image topic, e.g. "
+                        "/simple_camera/image_raw (default: the log's only camera)")
+    p.add_argument("--left", type=name, metavar="NS",
+                   help="stereo left camera namespace (or its image topic)")
+    p.add_argument("--right", type=name, metavar="NS",
+                   help="stereo right camera namespace (or its image topic)")
     p.add_argument("--approximate", type=non_negative, metavar="SEC",
                    help="pair stereo frames whose stamps differ by at most SEC")
     p.add_argument("-o", "--output", type=output_path, metavar="OUTDIR",
@@ -99,6 +101,7 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def cameras_from(args: argparse.Namespace) -> list[str]:
     """The camera namespaces to calibrate, from the options or the log's only camera."""
+    from camlog.processing.cameras import cameras_in
     from replay.formats import open_reader
 
     if args.left or args.right:
@@ -110,10 +113,12 @@ def cameras_from(args: argparse.Namespace) -> list[str]:
     if args.camera:
         return [args.camera]
     with open_reader(args.log, recover=args.recover) as reader:
-        spaces = sorted({t.rsplit("/image_raw", 1)[0] for t, i in reader.topics.items()
-                         if "/image_raw" in t and i.count})
+        cameras = cameras_in(reader)
+    # a camera's raw images first: processed images (masks, edges) are cameras of their own
+    raw = {namespace for namespace, topic in cameras if "/image_raw" in topic}
+    spaces = sorted(raw or {namespace for namespace, _topic in cameras})
     if len(spaces) != 1:
-        raise UsageError(f"name the camera with --camera (or --left/--right); image_raw "
+        raise UsageError(f"name the camera with --camera (or --left/--right); camera "
                          f"namespaces in {args.log}: {', '.join(spaces) or 'none'}")
     return spaces
 

@@ -24,14 +24,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.epilog = (
         "Files (.png, .jpg, .jpeg, .ppm, .pgm, .pnm; 8 or 16 bit) are taken in natural order "
         "and stamped START + i/RATE. Colour images become rgb8, grey ones mono8/mono16. "
-        "--stereo pairs left*/right* files with the same rest of the name into "
-        "NS/left/image_raw and NS/right/image_raw with identical stamps."
+        "Images go to NS/image_raw under the --camera namespace, as every camlog command "
+        "names a camera (--topic is the same option). --stereo pairs left*/right* files with "
+        "the same rest of the name into NS/left/image_raw and NS/right/image_raw with "
+        "identical stamps."
     )
     p.add_argument("folder", metavar="DIR", type=Path, help="folder of image files")
     p.add_argument("-o", "--output", type=output_path, required=True, metavar="LOG",
                    help="output log: .mcap, .bag or a directory name (rosbag2)")
-    p.add_argument("--topic", type=name, metavar="T",
-                   help="image topic (default /camera/image_raw); with --stereo the camera "
+    p.add_argument("--camera", "--topic", dest="camera", type=name, metavar="NS",
+                   help="camera namespace: images on NS/image_raw, camera_info on "
+                        "NS/camera_info (default /camera); a raw image topic (NS/image_raw, "
+                        "NS/image_rect, NS/image) is taken as it is; with --stereo the rig's "
                         "namespace (default /stereo)")
     p.add_argument("--rate", type=number(above=0.0, high=1e6), default=10.0, metavar="HZ",
                    help="frame rate of the stamps (default 10)")
@@ -55,7 +59,7 @@ def run(args: argparse.Namespace) -> int:
     from replay.importer import import_images
 
     result = import_images(
-        args.folder, args.output, topic=args.topic, rate_hz=args.rate, stereo=args.stereo,
+        args.folder, args.output, camera=args.camera, rate_hz=args.rate, stereo=args.stereo,
         camera_info=args.camera_info, start_ns=args.start_time, frame_id=args.frame_id,
         fmt=args.format, overwrite=args.overwrite,
         progress=False if args.no_progress else None)

@@ -24,10 +24,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--output", type=output_path, required=True, metavar="OUT",
                    help="output log: .mcap, .bag or a rosbag2 directory name")
     p.add_argument("--left", type=name, default="/unsynced/left", metavar="NS",
-                   help="left camera namespace with image_raw[/compressed] and camera_info "
-                        "(default /unsynced/left)")
+                   help="left camera namespace with image_raw[/compressed] and camera_info, or "
+                        "its image topic (default /unsynced/left)")
     p.add_argument("--right", type=name, default="/unsynced/right", metavar="NS",
-                   help="right camera namespace (default /unsynced/right)")
+                   help="right camera namespace or its image topic (default /unsynced/right)")
     p.add_argument("--slop", type=number(low=0.0, high=3600.0), metavar="SEC",
                    help="largest |right - left| stamp difference of a pair "
                         "(default: half the median frame period)")

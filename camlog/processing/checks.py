@@ -17,10 +17,6 @@ STAMPED_TYPES = (*IMAGE_TYPES, "sensor_msgs/msg/CameraInfo", "geometry_msgs/msg/
                  "geometry_msgs/msg/PoseStamped")
 #: types of camera models (ROS camera_info, Foxglove CameraCalibration)
 INFO_TYPES = tuple(sorted(t for t, kind in RECORD_TYPES.items() if kind is CameraInfo))
-#: a camera namespace's image topics, most preferred first: image_transport's names (and
-#: ``convert --compress h264``'s), then names Foxglove-style logs use
-IMAGE_SUFFIXES = ("image_raw", "image_raw/compressed", "image_raw/video", "image_rect",
-                  "image", "image/compressed", "image/video", "compressed", "video")
 #: a camera namespace's camera model topic, most preferred first
 INFO_SUFFIXES = ("camera_info", "calibration", "camera_calibration")
 

@@ -36,13 +36,8 @@ from replay.storage import Location, local_paths
 from replay.topics import RESYNC_PREFIX, ResyncTopics
 
 from ..errors import InputError, SyncError
-from .checks import (
-    IMAGE_SUFFIXES,
-    IMAGE_TYPES,
-    camera_info_topic,
-    require_free_topics,
-    require_messages,
-)
+from .cameras import find_camera, image_suffix
+from .checks import require_free_topics, require_messages
 
 SIDES = ("left", "right")
 
@@ -77,20 +72,14 @@ class _Side:
         return self.encoder(frame)
 
 
-def _side(reader: LogReader, name: str, namespace: str, prefix: str) -> _Side:
-    namespace = namespace.rstrip("/")
-    candidates = [f"{namespace}/{suffix}" for suffix in IMAGE_SUFFIXES]
-    found = [t for t in candidates if t in reader.topics and reader.topics[t].count]
-    if not found:
-        listed = ", ".join(sorted(t for t, i in reader.topics.items() if i.count)) or "none"
-        raise InputError(f"{reader.path} has no {name} images {candidates[0]} "
-                         f"(topics: {listed})")
-    image_topic = found[0]
-    if reader.topics[image_topic].msgtype not in IMAGE_TYPES:
-        raise InputError(f"{reader.path}: {image_topic} is {reader.topics[image_topic].msgtype}"
-                         ", not an image topic")
-    suffix = image_topic.removeprefix(f"{namespace}/")
-    return _Side(name, image_topic, camera_info_topic(reader, namespace),
+def _side(reader: LogReader, name: str, camera: str, prefix: str) -> _Side:
+    """One camera of the pair, named by its namespace or its image topic."""
+    try:
+        source = find_camera(reader, camera)
+    except InputError as err:
+        raise InputError(f"{name} camera: {err}") from None
+    suffix = image_suffix(source, reader.topics[source.image_topic].msgtype)
+    return _Side(name, source.image_topic, source.info_topic,
                  f"{prefix}/{name}/{suffix}", f"{prefix}/{name}/camera_info")
 
 

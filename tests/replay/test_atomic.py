@@ -36,7 +36,7 @@ def test_temp_names_are_hidden_unique_siblings(tmp_path: Path) -> None:
 
 def test_temp_name_skips_a_taken_name(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     tokens = iter(["0" * 16, "0" * 16, "1" * 16])
-    monkeypatch.setattr("replay.atomic.secrets.token_hex", lambda _n: next(tokens))
+    monkeypatch.setattr("replay.temp_names.secrets.token_hex", lambda _n: next(tokens))
     (tmp_path / f".x.camlog-{'0' * 16}.tmp").write_text("someone's")
     assert temp_sibling(tmp_path / "x").name == f".x.camlog-{'1' * 16}.tmp"
 

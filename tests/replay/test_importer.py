@@ -43,7 +43,7 @@ def test_every_file_kind_keeps_its_pixels(tmp_path: Path) -> None:
         assert cv2.imwrite(str(folder / name), array)
     (folder / "notes.txt").write_text("not an image")
     out = tmp_path / "log.mcap"
-    result = import_images(folder, out, topic="/cam/image_raw", rate_hz=20.0, progress=False)
+    result = import_images(folder, out, camera="/cam/image_raw", rate_hz=20.0, progress=False)
     got = images(out, "/cam/image_raw")
     assert result.frames == 6 and result.topics == ["/cam/image_raw"]
     assert [m.stamp_ns for m in got] == [DEFAULT_START_NS + i * 50_000_000 for i in range(6)]
@@ -69,7 +69,7 @@ def test_stereo_pairs_share_stamps_and_camera_info(tmp_path: Path) -> None:
         calibrations.append(tmp_path / f"{side}.yaml")
         save_calibration(calibrations[-1], info, camera_name=side)
     out = tmp_path / "stereo_bag"
-    result = import_images(folder, out, stereo=True, topic="/rig", camera_info=calibrations,
+    result = import_images(folder, out, stereo=True, camera="/rig", camera_info=calibrations,
                            start_ns=5, progress=False)
     assert [p.name for p in result.skipped] == ["left0099.png"]
     left, right = images(out, "/rig/left/image_raw"), images(out, "/rig/right/image_raw")

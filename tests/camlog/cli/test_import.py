@@ -20,7 +20,7 @@ def test_import_a_mono_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str]
     for i in range(3):
         cv2.imwrite(str(folder / f"f{i}.png"), np.full((16, 20), 40 * i, np.uint8))
     out = tmp_path / "frames.mcap"
-    assert main(["import", str(folder), "-o", str(out), "--topic", "/cam/image_raw",
+    assert main(["import", str(folder), "-o", str(out), "--camera", "/cam",
                  "--rate", "5", "--start-time", "0", "--no-progress"]) == 0
     assert capsys.readouterr().out.startswith("imported 3 frames per camera to /cam/image_raw")
     converted = rerun_cli("mcap", "convert", str(out), "-o", "frames.rrd", cwd=tmp_path)

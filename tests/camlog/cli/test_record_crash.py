@@ -12,6 +12,7 @@ import os
 import pty
 import re
 import select
+import shlex
 import signal
 import struct
 import subprocess
@@ -24,6 +25,10 @@ import pytest
 
 from replay import Image, open_reader
 from tests.conftest import REPO_ROOT
+
+#: subprocesses import this checkout's packages from any folder
+ENV = {**os.environ, "PYTHONPATH": os.pathsep.join(
+    filter(None, [str(REPO_ROOT), os.environ.get("PYTHONPATH")]))}
 
 FRAMES = 20_000  # per camera; the recording is killed long before
 PROGRESS = re.compile(rb"(\d+)/" + str(2 * FRAMES).encode())  # shots of both cameras
@@ -39,22 +44,21 @@ def only_entry(folder: Path) -> Path:
     return entries[0]
 
 
-@pytest.mark.parametrize("fmt", ["mcap", "rosbag2", "rosbag2-sqlite3", "ros1"])
-def test_killed_recording_keeps_all_but_the_last_second(tmp_path: Path, fmt: str) -> None:
-    out = tmp_path / "out"
-    out.mkdir()
-    name = "run.bag" if fmt == "ros1" else "run.mcap" if fmt == "mcap" else "run"
+def record_until_killed(output: Path, *, fmt: str, seconds: float) -> list[tuple[float, int]]:
+    """Run ``camlog record`` into ``output`` and kill it with SIGKILL once it has rendered for
+    ``seconds``; returns (when the test saw it, frames rendered) of its progress, with the
+    moment of the kill last (frames -1)."""
     master, terminal = pty.openpty()  # tqdm shows its bar on a terminal only
     fcntl.ioctl(terminal, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 120, 0, 0))
     process = subprocess.Popen(
-        [sys.executable, "-m", "camlog", "record", "red_block", "-o", str(out / name),
+        [sys.executable, "-m", "camlog", "record", "red_block", "-o", str(output),
          "--format", fmt, "--frames", str(FRAMES), "--resolution", "160x120"],
         cwd=REPO_ROOT, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=terminal)
     os.close(terminal)
-    rendered: list[tuple[float, int]] = []  # (when the test saw it, frames rendered)
+    rendered: list[tuple[float, int]] = []
     try:
         deadline = time.monotonic() + 120
-        while not rendered or rendered[-1][0] - rendered[0][0] < 3.0:
+        while not rendered or rendered[-1][0] - rendered[0][0] < seconds:
             assert time.monotonic() < deadline and process.poll() is None, "no progress"
             if select.select([master], [], [], 0.5)[0]:
                 chunk = os.read(master, 65536)
@@ -62,12 +66,21 @@ def test_killed_recording_keeps_all_but_the_last_second(tmp_path: Path, fmt: str
                 if counts and counts[-1] > 0:
                     rendered.append((time.monotonic(), counts[-1]))
         process.send_signal(signal.SIGKILL)
-        killed_at = time.monotonic()
+        rendered.append((time.monotonic(), -1))
     finally:
         process.kill()
         process.wait(timeout=30)
         os.close(master)
     assert process.returncode == -signal.SIGKILL
+    return rendered
+
+
+@pytest.mark.parametrize("fmt", ["mcap", "rosbag2", "rosbag2-sqlite3", "ros1"])
+def test_killed_recording_keeps_all_but_the_last_second(tmp_path: Path, fmt: str) -> None:
+    out = tmp_path / "out"
+    out.mkdir()
+    name = "run.bag" if fmt == "ros1" else "run.mcap" if fmt == "mcap" else "run"
+    *rendered, (killed_at, _) = record_until_killed(out / name, fmt=fmt, seconds=3.0)
     assert not (out / name).exists()
     durable = max((n for seen, n in rendered if seen <= killed_at - 1.0), default=0)
     assert durable > 0
@@ -80,6 +93,39 @@ def test_killed_recording_keeps_all_but_the_last_second(tmp_path: Path, fmt: str
         assert stamps == sorted(set(stamps))
         assert len(stamps) >= durable // 2
     assert len(images) <= rendered[-1][1] + 50  # not more than was rendered (bar lags a bit)
+
+
+def camlog(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
+    """``camlog ARGS`` run in ``cwd``."""
+    return subprocess.run([sys.executable, "-m", "camlog", *args], cwd=cwd, env=ENV,
+                          capture_output=True, text=True, timeout=300, check=False)
+
+
+def test_a_killed_recordings_leftover_is_found_and_recovered(tmp_path: Path) -> None:
+    record_until_killed(tmp_path / "rec.mcap", fmt="mcap", seconds=1.5)
+    leftover = only_entry(tmp_path)
+    assert leftover.name.startswith(".rec.mcap.camlog-")
+
+    listed = camlog("info", ".", cwd=tmp_path)
+    assert listed.returncode == 0, listed.stderr
+    assert f"  {leftover.name}\n" in listed.stdout
+    assert "meant to become rec.mcap" in listed.stdout
+    assert f"camlog convert --recover {leftover.name} rec.mcap\n" in listed.stdout
+
+    again = camlog("record", "red_block", "-o", "rec.mcap", "--frames", "3",
+                   "--resolution", "160x120", "--no-progress", cwd=tmp_path)
+    assert again.returncode == 0, again.stderr
+    (warning,) = [line for line in again.stderr.splitlines() if leftover.name in line]
+    assert warning.startswith(f"warning: {leftover.name} (file, ")
+    assert "did not finish writing rec.mcap" in warning
+    command = warning.split("recover it with: ")[1]
+    assert command == f"camlog convert --recover {leftover.name} rec-recovered.mcap"
+
+    recovered = camlog(*shlex.split(command)[1:], cwd=tmp_path)
+    assert recovered.returncode == 0, recovered.stderr
+    with open_reader(tmp_path / "rec-recovered.mcap") as reader:
+        assert sum(1 for _ in reader.raw_messages(IMAGE_TOPICS)) > 0
+    assert leftover.exists()  # recovering keeps it: removing it is the user's choice
 
 
 #: moments to interrupt, from the first line of camlog's code: start-up (imports, argument

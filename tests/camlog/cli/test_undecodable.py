@@ -6,6 +6,8 @@ pictures before the first keyframe), made with OpenCV, the mcap libraries and Py
 from __future__ import annotations
 
 import json
+import subprocess
+import sys
 from pathlib import Path
 
 import av
@@ -19,8 +21,9 @@ from mcap_protobuf.writer import Writer as ProtobufWriter
 from mcap_ros2.writer import Writer as Ros2Writer
 
 from camlog.cli import main
-from replay import Image, PointStamped, open_reader
+from replay import CompressedImage, Image, PointStamped, open_reader, open_writer
 from replay.wire import ros2_typestore
+from tests.conftest import REPO_ROOT
 from tests.encodings import HEIGHT, RED_CENTROID, WIDTH, scene_rgb
 from tests.rrd import load_rrd
 
@@ -277,3 +280,45 @@ def test_calibrate_leaves_out_undecodable_frames_and_says_so(
     (camera,) = json.loads((out / "calibration.json").read_text())["cameras"]
     assert camera["frames"] == total - cut
     assert _count(out / "calibration.mcap")[topic] == total  # the input, copied whole
+
+
+def _damaged_stills_log(path: Path) -> Path:
+    """JPEG and PNG topics whose frames are whole, cut short (neither decodes) or, for the
+    JPEG, with bytes of its entropy-coded data overwritten (it decodes, and libjpeg prints
+    ``Corrupt JPEG data: ...`` on fd 2)."""
+    bgr = cv2.cvtColor(scene_rgb(), cv2.COLOR_RGB2BGR)
+    jpeg = cv2.imencode(".jpg", bgr)[1].tobytes()
+    png = cv2.imencode(".png", bgr)[1].tobytes()
+    at = len(jpeg) * 9 // 10  # in the entropy-coded data, past the headers
+    corrupt = jpeg[:at] + b"\xff\x00" * 32 + jpeg[at + 64:]
+    frames = {"/jpeg/image_raw/compressed": [jpeg, jpeg[: len(jpeg) // 2], corrupt, jpeg],
+              "/png/image_raw/compressed": [png, png[: len(png) // 2], png[:-20], png]}
+    with open_writer(path) as writer:
+        for topic, datas in frames.items():
+            fmt = topic.split("/")[1]
+            for i, data in enumerate(datas):
+                writer.write(topic, CompressedImage(T0_NS + i * PERIOD_NS, "cam", fmt, data))
+    return path
+
+
+def test_decoders_own_messages_stay_off_the_terminal(tmp_path: Path) -> None:
+    log = _damaged_stills_log(tmp_path / "damaged.mcap")
+    done = subprocess.run(
+        [sys.executable, "-m", "camlog", "process", str(log), "--topic",
+         "/jpeg/image_raw/compressed", "--topic", "/png/image_raw/compressed", "--red-pixels",
+         "-o", str(tmp_path / "out.mcap")],
+        cwd=REPO_ROOT, capture_output=True, text=True, timeout=300, check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr.splitlines() == [
+        "warning: /jpeg/image_raw/compressed: 1 frames did not decode (copied, not processed)",
+        "warning: /png/image_raw/compressed: 2 frames did not decode (copied, not processed)"]
+
+
+def test_the_decoders_message_lines_are_told_from_others() -> None:
+    from camlog.cli.decoder_messages import forward
+
+    data = (b"Corrupt JPEG data: 3 extraneous bytes before marker 0xd9\n0/40 frames\r\n"
+            b"Premature end of JPEG file\r\nlibpng error: IDAT: CRC error\n"
+            b"camlog process: error: Corrupt JPEG data: no\nCorrupt JPEG")
+    assert forward(data) == (b"0/40 frames\r\ncamlog process: error: Corrupt JPEG data: no\n",
+                             b"Corrupt JPEG")
