@@ -3,7 +3,9 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -11,7 +13,7 @@ from replay.geometry import invert, rotation_about
 from replay.messages import F64
 
 from .cameras import CameraSpec
-from .coverage import anchor_order, image_pose, view_angles
+from .coverage import ANCHORS, anchor_order, image_pose, view_angles
 from .errors import ScenarioError
 from .target_spec import TargetSpec
 from .targets import center_in_target, outline_in_target
@@ -20,7 +22,10 @@ from .targets import center_in_target, outline_in_target
 #: the image border: the calibration's detector drops corners within 8 px of it
 IN_VIEW_MARGIN_PX = 8.0
 REFERENCE_WIDTH_PX = 640
+#: draws a pose slot gets; a slot none of them meets is drawn again (an image aim moves to
+#: another anchor), up to MAX_ROUNDS times, before the scene counts as unable to show it
 MAX_TRIES = 5000
+MAX_ROUNDS = len(ANCHORS)
 
 
 @dataclass(frozen=True)
@@ -37,27 +42,36 @@ class Trajectory:
         return pose
 
 
-def visible_fraction(
+def _seen_fractions(
     world_from_target: F64, points_in_target: F64, cameras: tuple[CameraSpec, ...],
-    margin_px: float = IN_VIEW_MARGIN_PX,
-) -> float:
-    """Smallest fraction, over cameras, of the points that project inside the image, at
-    least ``margin_px`` (scaled to a 640 px wide image) from its border."""
-    worst = 1.0
+    margin_px: float,
+) -> Iterator[float]:
+    """Per camera, the fraction of the points that project inside the image, at least
+    ``margin_px`` (scaled to a 640 px wide image) from its border (0 when one is behind it)."""
     for camera in cameras:
         margin = margin_px * min(1.0, camera.model.width / REFERENCE_WIDTH_PX)
         camera_from_target = invert(camera.world_from_camera) @ world_from_target
         pts = points_in_target @ camera_from_target[:3, :3].T + camera_from_target[:3, 3]
         if np.any(pts[:, 2] <= 0.01):
-            return 0.0
+            yield 0.0
+            continue
         uv = camera.model.project(pts)
         w, h = camera.model.width, camera.model.height
         inside = (
             (uv[:, 0] >= margin) & (uv[:, 0] <= w - 1 - margin)
             & (uv[:, 1] >= margin) & (uv[:, 1] <= h - 1 - margin)
         )
-        worst = min(worst, float(np.mean(inside)))
-    return worst
+        yield float(np.mean(inside))
+
+
+def visible_fraction(
+    world_from_target: F64, points_in_target: F64, cameras: tuple[CameraSpec, ...],
+    margin_px: float = IN_VIEW_MARGIN_PX,
+) -> float:
+    """Smallest fraction, over cameras, of the points that project inside the image, at
+    least ``margin_px`` (scaled to a 640 px wide image) from its border."""
+    return min(_seen_fractions(world_from_target, points_in_target, cameras, margin_px),
+               default=1.0)
 
 
 def _random_parameters(target: TargetSpec, rng: np.random.Generator) -> F64:
@@ -117,30 +131,113 @@ def _smooth_parameters(parameters: F64) -> F64:
     return np.column_stack([parameters[:, :3], yaw, tilt])
 
 
+def _seen_as_asked(world_from_target: F64, outline: F64, judged: tuple[CameraSpec, ...], *,
+                   partly: bool) -> bool:
+    """Every judged camera sees the whole outline, or, for a deliberately partial view, the
+    worst of them sees 25-100 % of it."""
+    lowest = 0.25 if partly else 1.0
+    worst = 1.0
+    for seen in _seen_fractions(world_from_target, outline, judged, IN_VIEW_MARGIN_PX):
+        if seen < lowest:  # no need to look through the other cameras
+            return False
+        worst = min(worst, seen)
+    return worst < 1.0 if partly else True
+
+
+#: a draw of a pose slot: (what the plan keeps, ``world_from_target``), None when rejected
+Draw = Callable[[], tuple[F64, F64] | None]
+
+
+def _first_visible(draw: Draw, outline: F64, judged: tuple[CameraSpec, ...], *,
+                   partly: bool) -> F64 | None:
+    """What the plan keeps of the first of ``MAX_TRIES`` draws that ``judged`` sees as asked
+    (:func:`_seen_as_asked`); None when none is."""
+    for _try in range(MAX_TRIES):
+        drawn = draw()
+        if drawn is not None and _seen_as_asked(drawn[1], outline, judged, partly=partly):
+            return drawn[0]
+    return None
+
+
+def _no_pose(target: TargetSpec, *, partly: bool, where: str, hint: str) -> ScenarioError:
+    """The one-line error of a pose slot that no round of draws met."""
+    return ScenarioError(
+        f"target {target.name!r}: no {'partly' if partly else 'fully'} visible pose {where}; "
+        f"{hint}")
+
+
+def _world_draw(target: TargetSpec, rng: np.random.Generator) -> tuple[F64, F64]:
+    parameters = _random_parameters(target, rng)
+    return parameters, _pose(target, parameters)
+
+
+def _world_parameters(target: TargetSpec, cameras: tuple[CameraSpec, ...], count: int,
+                      rng: np.random.Generator) -> F64:
+    """Pose parameters (:func:`_random_parameters`) ``(count, 6)``, each fully in view of
+    every camera (or deliberately partly); a slot whose draws all miss is drawn again."""
+    outline = outline_in_target(target)
+    draw = partial(_world_draw, target, rng)
+    chosen = []
+    for _ in range(count):
+        partly = rng.uniform() < target.motion.partial_view_probability
+        for _round in range(MAX_ROUNDS):
+            found = _first_visible(draw, outline, cameras, partly=partly)
+            if found is not None:
+                chosen.append(found)
+                break
+        else:
+            raise _no_pose(target, partly=partly,
+                           where=f"found in {MAX_ROUNDS} x {MAX_TRIES} tries",
+                           hint="widen the camera view or shrink the motion ranges")
+    return np.stack(chosen)
+
+
+def _image_draw(target: TargetSpec, camera: CameraSpec, anchor: int, outline: F64,
+                rng: np.random.Generator, *, partly: bool) -> tuple[F64, F64] | None:
+    pose = image_pose(target, camera, anchor, partial=partly, rng=rng)
+    if pose is None or view_angles(camera, pose, outline).max() > target.motion.max_view_angle_rad:
+        return None
+    return pose, pose
+
+
+def _anchors_from(anchor: int, rng: np.random.Generator) -> Iterator[int]:
+    """``anchor``, then (drawn only when asked for) the other anchors in a random order."""
+    yield anchor
+    others = [a for a in range(len(ANCHORS)) if a != anchor]
+    for index in rng.permutation(len(others)):
+        yield others[int(index)]
+
+
 def _image_poses(target: TargetSpec, cameras: tuple[CameraSpec, ...], count: int,
                  rng: np.random.Generator) -> F64:
     """Held poses that cover the image (:mod:`recorder.coverage`), each fully in view (or
-    deliberately partly) of every camera, or of the camera it is aimed at (``visible_in``)."""
+    deliberately partly) of every camera, or of the camera it is aimed at (``visible_in``).
+    A slot whose anchor no draw meets (a corner of one camera's image that the other camera
+    cannot see) moves to another anchor, and that anchor is not tried again."""
     motion = target.motion
     outline = outline_in_target(target)
+    unmet: set[tuple[int, int, bool]] = set()  # (camera, anchor, partly) no draw could meet
     poses = []
     for index, anchor in enumerate(anchor_order(count, rng)):
-        camera = cameras[index % len(cameras)] if motion.visible_in == "any" else cameras[0]
+        aimed = index % len(cameras) if motion.visible_in == "any" else 0
+        camera = cameras[aimed]
         judged = (camera,) if motion.visible_in == "any" else cameras
-        partial = rng.uniform() < motion.partial_view_probability
-        for _try in range(MAX_TRIES):
-            pose = image_pose(target, camera, anchor, partial=partial, rng=rng)
-            if pose is None or view_angles(camera, pose, outline).max() > motion.max_view_angle_rad:
+        partly = rng.uniform() < motion.partial_view_probability
+        pose = None
+        for tried in _anchors_from(anchor, rng):
+            if (aimed, tried, partly) in unmet:
                 continue
-            seen = visible_fraction(pose, outline, judged)
-            if (0.25 <= seen < 1.0) if partial else seen == 1.0:
-                poses.append(pose)
+            draw = partial(_image_draw, target, camera, tried, outline, rng, partly=partly)
+            pose = _first_visible(draw, outline, judged, partly=partly)
+            if pose is not None:
                 break
-        else:
-            raise ScenarioError(
-                f"target {target.name!r}: no {'partly' if partial else 'fully'} visible pose "
-                f"aimed at the image found in {MAX_TRIES} tries; change distance_m or "
-                "max_tilt_rad")
+            unmet.add((aimed, tried, partly))
+        if pose is None:
+            raise _no_pose(target, partly=partly,
+                           where=f"aimed at camera {camera.name!r}'s image found at any of the "
+                                 f"{len(ANCHORS)} anchors in {MAX_TRIES} tries each",
+                           hint="change distance_m or max_tilt_rad")
+        poses.append(pose)
     return np.stack(poses)
 
 
@@ -154,25 +251,11 @@ def plan_trajectory(
     motion = target.motion
     if motion.kind == "static":
         return Trajectory(duration_s + 1.0, motion.world_from_target[None])
-    outline = outline_in_target(target)
     step_s = motion.segment_s if motion.kind == "smooth" else motion.hold_s
     count = math.ceil(duration_s / step_s) + (2 if motion.kind == "smooth" else 1)
     if motion.aim == "image":
         return Trajectory(motion.hold_s, _image_poses(target, cameras, count, rng))
-    chosen = []
-    for _ in range(count):
-        partial = rng.uniform() < motion.partial_view_probability
-        for _try in range(MAX_TRIES):
-            parameters = _random_parameters(target, rng)
-            seen = visible_fraction(_pose(target, parameters), outline, cameras)
-            if (0.25 <= seen < 1.0) if partial else seen == 1.0:
-                chosen.append(parameters)
-                break
-        else:
-            raise ScenarioError(
-                f"target {target.name!r}: no {'partly' if partial else 'fully'} visible pose "
-                f"found in {MAX_TRIES} tries; widen the camera view or shrink the motion ranges"
-            )
+    chosen = _world_parameters(target, cameras, count, rng)
     if motion.kind == "smooth":
-        return SmoothTrajectory(target, motion.segment_s, _smooth_parameters(np.stack(chosen)))
+        return SmoothTrajectory(target, motion.segment_s, _smooth_parameters(chosen))
     return Trajectory(motion.hold_s, np.stack([_pose(target, p) for p in chosen]))

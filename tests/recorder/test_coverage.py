@@ -1,5 +1,6 @@
 """Poses aimed at the image: boards in all four corners (camera_calibration's X and Y
-coverage >= 90 %), partial ChArUco views, stereo poses fully visible in at least one camera."""
+coverage >= 90 %), partial ChArUco views, stereo poses fully visible in at least one camera,
+anchors a stereo pair cannot both see replaced by others."""
 
 from __future__ import annotations
 
@@ -11,8 +12,9 @@ import pytest
 
 from processors.calibration.board import Board
 from processors.calibration.selection import coverage, view_parameters
+from recorder import motion
 from recorder.cameras import CameraSpec
-from recorder.coverage import ANCHORS, anchor_order, view_angles
+from recorder.coverage import ANCHORS, anchor_order, image_pose, view_angles
 from recorder.errors import ScenarioError
 from recorder.motion import Trajectory, plan_trajectory, visible_fraction
 from recorder.record import MOTION_STREAM, rng_for
@@ -138,3 +140,45 @@ def test_image_aim_plans_held_poses_only() -> None:
     raw["targets"][0]["motion"]["aim"] = "image"
     with pytest.raises(ScenarioError, match="aim"):
         parse_scenario(raw, "test")
+
+
+def stereo_heldout_visible_in(visible_in: str, **motion_changes: object) -> Scenario:
+    raw = tomllib.loads((builtin_dir() / "stereo_heldout.toml").read_text())
+    raw["targets"][0]["motion"].update(visible_in=visible_in, **motion_changes)
+    return parse_scenario(raw, "test")
+
+
+def test_anchors_both_stereo_cameras_cannot_see_move_to_others(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # the anchors both cameras see meet within a few tries: 300 are plenty
+    monkeypatch.setattr(motion, "MAX_TRIES", 300)
+    scenario = stereo_heldout_visible_in("all")
+    left, right = scenario.cameras
+    (target,) = scenario.targets
+    outline = outline_in_target(target)
+    # a board pushed to the left image's left border is out of the right camera's view
+    rng = np.random.default_rng(0)
+    left_border = ANCHORS.index((0.0, None))
+    for _ in range(300):
+        pose = image_pose(target, left, left_border, partial=False, rng=rng)
+        assert pose is None or visible_fraction(pose, outline, (left, right)) < 1.0
+    trajectory = plan_trajectory(target, scenario.cameras, 60.0,
+                                 rng_for(scenario, MOTION_STREAM, 0))
+    assert isinstance(trajectory, Trajectory)
+    seen = np.array([visible_fraction(p, outline, (left, right))
+                     for p in trajectory.world_from_target])
+    assert len(seen) == 121
+    assert (seen[seen < 1.0] >= 0.25).all()
+    assert (seen == 1.0).mean() > 0.85
+
+
+def test_an_image_no_anchor_can_meet_is_one_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(motion, "MAX_TRIES", 50)
+    # 2 cm from the lens the 8 x 7 cm board is always wider than the image
+    scenario = stereo_heldout_visible_in("any", distance_m=[0.02, 0.02],
+                                         partial_view_probability=0.0)
+    with pytest.raises(ScenarioError, match=(
+            r"^target 'checkerboard': no fully visible pose aimed at camera 'left''s image "
+            r"found at any of the 9 anchors in 50 tries each; change distance_m")):
+        plan_trajectory(scenario.targets[0], scenario.cameras, 1.0, np.random.default_rng(0))

@@ -1,17 +1,23 @@
-"""Target trajectories: random held poses in view, static poses, determinism."""
+"""Target trajectories: random held poses in view, static poses, determinism, long plans."""
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import pickle
 
 import numpy as np
 import pytest
 
+from recorder import motion
+from recorder.builtin import builtin_names
+from recorder.coverage import view_angles
 from recorder.errors import ScenarioError
 from recorder.motion import Trajectory, plan_trajectory, visible_fraction
+from recorder.record import MOTION_STREAM, rng_for
 from recorder.scenario import Scenario, load_scenario
 from recorder.target_spec import TargetSpec
+from recorder.targets import outline_in_target
 from replay.geometry import invert
 from replay.messages import F64
 
@@ -138,10 +144,61 @@ def test_static_target_relative_to_a_camera() -> None:
     assert target.motion.kind == "static"
 
 
-def test_unreachable_view_is_an_error() -> None:
+def test_unreachable_view_is_an_error(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(motion, "MAX_TRIES", 200)  # every round misses: no need for 5000
     s = scenario()
     # a 8 x 7 cm board 5 mm below a camera with a 0.6 rad view is never fully visible
     target = with_motion(s.targets[0], partial_view_probability=0.0, z_range_m=(0.495, 0.495),
                          xy_range_m=0.0)
     with pytest.raises(ScenarioError, match="no fully visible pose"):
         plan(s, target, holds=1)
+
+
+LONG_S = 300.0
+SEEDS = (0, 1, 2)
+
+
+def moving_stereo_scenarios() -> list[list[str]]:
+    """Built-in scenarios with several cameras and a moving target, grouped by what shapes
+    their poses (targets, camera models and poses): a group plans the same poses."""
+    groups: dict[bytes, list[str]] = {}
+    for name in builtin_names():
+        s = load_scenario(name)
+        if len(s.cameras) > 1 and any(t.motion.kind != "static" for t in s.targets):
+            shape = pickle.dumps((s.targets, [(c.model, c.world_from_camera) for c in s.cameras]))
+            groups.setdefault(shape, []).append(name)
+    return list(groups.values())
+
+
+def test_stereo_scenarios_sharing_poses_are_grouped() -> None:
+    groups = moving_stereo_scenarios()
+    names = sorted(name for group in groups for name in group)
+    assert names == ["stereo_checkerboard", "stereo_heldout", "stereo_unsynced"]
+    assert ["stereo_checkerboard", "stereo_unsynced"] in groups
+
+
+@pytest.mark.parametrize("seed", SEEDS)
+@pytest.mark.parametrize("names", moving_stereo_scenarios(), ids="+".join)
+def test_long_stereo_recordings_plan_every_pose_as_asked(names: list[str], seed: int) -> None:
+    """Hundreds of poses: a slot whose draws all miss (stereo_checkerboard, seed 0, slot 209
+    at 104.5 s) is drawn again instead of failing the recording."""
+    s = load_scenario(names[0], {"seed": seed})
+    for index, target in enumerate(s.targets):
+        trajectory = plan_trajectory(target, s.cameras, LONG_S, rng_for(s, MOTION_STREAM, index))
+        assert isinstance(trajectory, Trajectory)
+        poses = trajectory.world_from_target
+        spec = target.motion
+        assert len(poses) == math.ceil(LONG_S / spec.hold_s) + 1
+        outline = outline_in_target(target)
+        seen = []
+        for i, pose in enumerate(poses):
+            # "any": the cameras take turns at being the one a pose is aimed at
+            judged = (s.cameras[i % len(s.cameras)],) if spec.visible_in == "any" else s.cameras
+            seen.append(visible_fraction(pose, outline, judged))
+            if spec.aim == "image":
+                assert view_angles(judged[0], pose, outline).max() <= spec.max_view_angle_rad
+        fractions = np.array(seen)
+        partial = fractions < 1.0
+        assert (fractions[partial] >= 0.25).all()
+        p = spec.partial_view_probability
+        assert abs(partial.mean() - p) < 4 * math.sqrt(p * (1 - p) / len(fractions))
