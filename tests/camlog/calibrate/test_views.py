@@ -11,7 +11,8 @@ import pytest
 
 from camlog.calibrate import views as views_module
 from camlog.calibrate.solving import guiding_models
-from camlog.calibrate.views import detect_views, resolve_camera
+from camlog.calibrate.views import detect_views
+from camlog.processing.cameras import find_camera
 from processors.calibration.board import make_board
 from processors.calibration.options import CalibrationOptions
 from replay import Image, PoseStamped, open_reader, open_writer
@@ -64,7 +65,7 @@ def test_guided_charuco_detection_finds_more_corners_where_the_truth_says(
     camera = scenario.camera_for(NAMESPACE)
     assert camera is not None
     with open_reader(charuco_log) as reader:
-        source = resolve_camera(reader, NAMESPACE)
+        source = find_camera(reader, NAMESPACE)
         plain = detect_views(reader, [source], BOARD, workers=2, progress=False)
         guided = detect_views(reader, [source], BOARD, workers=2, progress=False,
                               models={NAMESPACE: camera.model()})
@@ -108,7 +109,7 @@ def test_the_frames_kept_for_detection_and_size_hints_are_copies(
 
     monkeypatch.setattr(views_module, "detect_segment", detect_segment)
     with open_reader(path) as reader:
-        found = detect_views(reader, [resolve_camera(reader, "/cam")], make_board(
+        found = detect_views(reader, [find_camera(reader, "/cam")], make_board(
             "7x6", 0.01, "chessboard"), workers=2, progress=False)
     samples = found.cameras[0].samples
     assert len(samples) > 1 and len(waiting) == 40
@@ -120,7 +121,7 @@ def test_true_poses_are_kept_only_where_a_view_can_read_them(charuco_log: Path) 
     camera, points = scenario.camera_for(NAMESPACE), scenario.targets[0].points_in_target()
     assert camera is not None and points is not None
     with open_reader(charuco_log) as reader:
-        found = detect_views(reader, [resolve_camera(reader, NAMESPACE)], BOARD, workers=2,
+        found = detect_views(reader, [find_camera(reader, NAMESPACE)], BOARD, workers=2,
                              progress=False)
     views = found.cameras[0]
     (poses,) = views.true_camera_from_target.values()
