@@ -48,7 +48,10 @@ def test_record_leaves_earlier_leftovers_and_user_files_alone(
     user_file.write_text("mine")
     before = snapshot(tmp_path)
     code, _, err = run(capsys, "record", "mono_checkerboard", "-o", str(output), *QUICK)
-    assert (code, err) == (0, "")
+    # the leftover is named, with the command that recovers it, and left where it is
+    assert code == 0
+    (line,) = err.splitlines()
+    assert line.startswith(f"warning: {leftover}") and "camlog convert --recover" in line
     assert snapshot(tmp_path) | {"run.mcap": b""} == before | {"run.mcap": b""}
     assert temp_outputs(tmp_path) == [leftover]
 
