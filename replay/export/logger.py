@@ -22,8 +22,9 @@ from typing import Any
 import numpy as np
 import rerun as rr
 
+from ..bounded import json_loads
 from ..camera import CameraModel
-from ..errors import EncodingError, ReplayError
+from ..errors import EncodingError, RecordError, ReplayError
 from ..formats.base import RawMessage
 from ..frames import decode_frame
 from ..messages import CameraInfo, CompressedImage, Image, Message, PointStamped, PoseStamped, Text
@@ -392,8 +393,9 @@ class SceneLogger:
         message = self._decode(raw)
         assert isinstance(message, Text)
         try:
-            text = "```json\n" + json.dumps(json.loads(message.data), indent=1) + "\n```"
-        except json.JSONDecodeError:
+            parsed = json_loads(message.data, raw.topic, RecordError)
+            text = "```json\n" + json.dumps(parsed, indent=1) + "\n```"
+        except (json.JSONDecodeError, RecordError):  # shown as it is
             text = message.data
         self._times(raw, None)
         self._emit(text_entity(raw.topic), rr.TextDocument(text, media_type="text/markdown"))
