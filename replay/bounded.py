@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 __all__ = ["MAX_DEPTH", "MAX_FILE_BYTES", "MAX_RECORD_BYTES", "check_size", "json_loads",
-           "read_text", "toml_loads", "yaml_load"]
+           "read_text", "reindent_json", "toml_loads", "yaml_load"]
 
 #: levels of nested lists and tables any parsed input may have
 MAX_DEPTH = 64
@@ -148,3 +148,12 @@ def json_loads(text: str | bytes, name: str, error: Error, *,
         return json.loads(text)
     except RecursionError:
         raise _too_deep(name, error) from None
+
+
+def reindent_json(text: str, *, indent: int = 1) -> str | None:
+    """``text`` as JSON written again with ``indent``; None when it is not JSON within the
+    limits."""
+    try:
+        return json.dumps(json_loads(text, "", ValueError), indent=indent)
+    except ValueError:  # json.JSONDecodeError is one
+        return None

@@ -14,7 +14,6 @@ before its first keyframe) are counted per topic and reported."""
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -22,9 +21,9 @@ from typing import Any
 import numpy as np
 import rerun as rr
 
-from ..bounded import json_loads
+from ..bounded import reindent_json
 from ..camera import CameraModel
-from ..errors import EncodingError, RecordError, ReplayError
+from ..errors import EncodingError, ReplayError
 from ..formats.base import RawMessage
 from ..frames import decode_frame
 from ..messages import CameraInfo, CompressedImage, Image, Message, PointStamped, PoseStamped, Text
@@ -392,10 +391,7 @@ class SceneLogger:
     def _text(self, raw: RawMessage, route: Route) -> None:
         message = self._decode(raw)
         assert isinstance(message, Text)
-        try:
-            parsed = json_loads(message.data, raw.topic, RecordError)
-            text = "```json\n" + json.dumps(parsed, indent=1) + "\n```"
-        except (json.JSONDecodeError, RecordError):  # shown as it is
-            text = message.data
+        indented = reindent_json(message.data)  # None: shown as it is
+        text = message.data if indented is None else f"```json\n{indented}\n```"
         self._times(raw, None)
         self._emit(text_entity(raw.topic), rr.TextDocument(text, media_type="text/markdown"))

@@ -14,6 +14,7 @@ from replay.bounded import (
     check_depth,
     json_loads,
     read_text,
+    reindent_json,
     toml_loads,
     yaml_load,
 )
@@ -90,6 +91,12 @@ def test_size_limits(tmp_path: Path) -> None:
     assert read_text(path, RefusedError, max_bytes=600) == "x = 1\n" * 100
     with pytest.raises(RefusedError, match="does not exist"):
         read_text(tmp_path / "none", RefusedError)
+
+
+def test_reindent_json_shows_only_bounded_json() -> None:
+    assert reindent_json('{"a": [1]}') == '{\n "a": [\n  1\n ]\n}'
+    assert reindent_json("not json") is None
+    assert reindent_json("[" * DEEP + "]" * DEEP) is None
 
 
 def camlog(*args: str) -> subprocess.CompletedProcess[str]:
