@@ -13,6 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from replay.bounded import read_text, toml_loads
+
 from .builtin import DEFAULT_SCENARIO, MAX_FRAMES, builtin_dir, builtin_names
 from .cameras import CameraSpec, parse_camera
 from .errors import ScenarioError
@@ -77,12 +79,11 @@ def load_scenario(
                 f"unknown scenario {name_or_path!r} (built-in: {', '.join(builtin_names())}; "
                 "or give a path to a .toml spec)"
             )
+    text = read_text(path, ScenarioError, what="scenario file")
     try:
-        raw = tomllib.loads(path.read_text())
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as err:
+        raw = toml_loads(text, source, ScenarioError)
+    except tomllib.TOMLDecodeError as err:
         raise ScenarioError(f"{source}: not valid TOML: {err}") from None
-    except OSError as err:
-        raise ScenarioError(f"cannot read {path}: {err.strerror}") from None
     raw = apply_overrides(raw, overrides or {})
     return parse_scenario(raw, source)
 

@@ -19,9 +19,9 @@ from typing import Any
 import numpy as np
 
 from .atomic import write_text_atomic
+from .bounded import read_text, yaml_load
 from .errors import OutputError, ReplayError
 from .messages import F64, CameraInfo
-from .storage import read_local_text
 
 __all__ = [
     "Calibration",
@@ -72,11 +72,10 @@ def _matrix_block(name: str, value: Any, rows: int, cols: int | None) -> F64:
 
 def calibration_from_yaml(text: str) -> Calibration:
     """Parse camera_info_manager YAML text."""
-    from ruamel.yaml import YAML
     from ruamel.yaml.error import YAMLError
 
     try:
-        raw = YAML(typ="safe", pure=True).load(text)
+        raw = yaml_load(text, "the calibration YAML", CalibrationFileError)
     except YAMLError as err:
         first = str(err).strip().splitlines()[0] if str(err).strip() else type(err).__name__
         raise CalibrationFileError(f"not valid YAML: {first}") from None
@@ -124,7 +123,7 @@ def calibration_to_yaml(info: CameraInfo, *, camera_name: str) -> str:
 def load_calibration(path: str | Path) -> Calibration:
     """Read a calibration file; errors name the path."""
     path = Path(path)
-    text = read_local_text(path, CalibrationFileError)
+    text = read_text(path, CalibrationFileError)
     try:
         return calibration_from_yaml(text)
     except (CalibrationFileError, ValueError) as err:

@@ -10,7 +10,6 @@ endpoints come from each backend's usual configuration (for S3: ``AWS_*`` variab
 from __future__ import annotations
 
 import re
-from collections.abc import Callable
 from pathlib import Path
 from typing import IO, Any
 
@@ -180,19 +179,6 @@ def read_bytes(location: Location) -> bytes:
         raise StorageError(f"{location} does not exist") from None
     except Exception as err:
         raise _failed(str(location), "read", err) from None
-
-
-def read_local_text(path: Path, error: Callable[[str], Exception], *, what: str = "",
-                    missing_hint: str = "") -> str:
-    """The text of a local file; a missing or unreadable one raises ``error`` with one line
-    naming it (``what``, e.g. "pipeline file", before the path)."""
-    named = f"{what} {path}" if what else str(path)
-    try:
-        return path.read_text()
-    except FileNotFoundError:
-        raise error(f"{named} does not exist{missing_hint}") from None
-    except (OSError, UnicodeDecodeError) as err:
-        raise error(f"cannot read {named}: {err}") from None
 
 
 def write_bytes(location: Location, data: bytes) -> None:

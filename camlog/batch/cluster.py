@@ -3,7 +3,9 @@
 ``address`` names the cluster (``host:port`` or ``auto``, as ``RAY_ADDRESS``); without
 one, a local instance is started, bound to 127.0.0.1. Before any log is sent, every node
 is asked to import camlog (the same version) and the filesystems the batch's URIs need,
-so a cluster without them fails at once with one line instead of once per log. Each log
+so a cluster without them fails at once with one line instead of once per log; a cluster
+that refuses the connection (a missing token, another Ray version, an address Ray replaced)
+is one line with Ray's reason. Each log
 is a task with ``cpus_per_log`` CPUs; Ray runs it again (``retries`` times) when its
 worker or its node dies, and a log that runs out of retries is reported failed while the
 others go on.
@@ -11,9 +13,13 @@ others go on.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import re
 import socket
+import sys
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 from replay import storage
@@ -60,11 +66,16 @@ def _connect(ray: Any, address: str | None, cpus: float) -> None:
         return
     if address != "auto":
         _require_reachable(address)
+        if not address.startswith("ray://"):
+            target = _bootstrap_address(address)
+            if target != address:
+                _require_reachable(target, given=address)
+            _require_admitted(ray, target, given=address)
     try:
         ray.init(address=address, log_to_driver=False, configure_logging=False)
     except Exception as err:  # Ray raises ConnectionError, RuntimeError, ValueError, …
         raise ClusterError(f"cannot connect to the Ray cluster at {address}: "
-                          f"{_one_line(err)}") from None
+                          f"{_refusal(err, address)}") from None
 
 
 def _start_local(ray: Any, cpus: float) -> None:
@@ -87,7 +98,8 @@ def _start_local(ray: Any, cpus: float) -> None:
             ray_constants.ENABLE_RAY_CLUSTER = saved
 
 
-def _require_reachable(address: str) -> None:
+def _require_reachable(address: str, *, given: str | None = None) -> None:
+    """A TCP connection to ``address``, which Ray made of ``given`` (when it differs)."""
     host, _, port = address.removeprefix("ray://").rpartition(":")
     if not host or not port.isdigit():
         raise UsageError(f"--address {address!r}: give HOST:PORT of the cluster's head or "
@@ -96,8 +108,74 @@ def _require_reachable(address: str) -> None:
         with socket.create_connection((host.strip("[]"), int(port)), CONNECT_TIMEOUT_S):
             pass
     except OSError as err:
-        raise ClusterError(f"cannot reach the Ray cluster at {address}: "
-                          f"{err.strerror or err}") from None
+        reason = err.strerror or err
+        if given is None:
+            raise ClusterError(f"cannot reach the Ray cluster at {address}: {reason}") \
+                from None
+        raise ClusterError(
+            f"cannot reach the Ray cluster at {given}: Ray connects to {address} instead "
+            f"({reason}); it replaces 127.0.0.1 and localhost with this machine's address, "
+            "where a head bound to 127.0.0.1 does not listen: name the head by another name "
+            "of 127.0.0.1, such as the host name") from None
+
+
+def _bootstrap_address(address: str) -> str:
+    """The address ``ray.init`` connects to for ``address``."""
+    from ray._private import services  # no public way to ask
+
+    try:
+        return str(services.canonicalize_bootstrap_address(address) or address)
+    except Exception:  # Ray's own connect reports what is wrong with the address
+        return address
+
+
+def _require_admitted(ray: Any, address: str, *, given: str) -> None:
+    """Ask the cluster's GCS once whether it takes this process: a refusal (a token that is
+    missing or wrong) is said at once, where ``ray.init`` would retry for 20 s, print each
+    attempt on stderr and then name neither the reason nor the address it was given."""
+    client = getattr(ray._raylet, "GcsClient", None)  # no public way to ask
+    if client is None:
+        return
+    try:
+        with _quiet_stderr():  # Ray's C++ client logs each failed attempt there
+            client(address=address)
+    except Exception as err:
+        raise ClusterError(f"cannot connect to the Ray cluster at {given}: "
+                          f"{_refusal(err, given)}") from None
+
+
+@contextlib.contextmanager
+def _quiet_stderr() -> Iterator[None]:
+    sys.stderr.flush()
+    saved = os.dup(2)
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    try:
+        os.dup2(devnull, 2)
+        yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+        os.close(devnull)
+
+
+def _refusal(err: BaseException, address: str) -> str:
+    """Why Ray did not connect, as Ray says it: the innermost cause of ``err`` (its first
+    sentence and notes), with what to do about a token, and the address Ray went to when
+    it is not the one given (Ray replaces 127.0.0.1 with the machine's address)."""
+    tried = re.search(r"Failed to connect to Ray cluster at (\S+)", str(err))
+    cause = err
+    while cause.__cause__ is not None:
+        cause = cause.__cause__
+    line = _one_line(cause).removeprefix("ray.exceptions.")
+    first, *more = re.split(r"(?<=\.) ", line)
+    reason = " ".join([first, *(m for m in more if m.startswith("Note:"))])  # no help text
+    if type(cause).__name__ == "AuthenticationError" or "InvalidAuthToken" in line:
+        reason = (f"authentication failed: {reason} (the cluster uses token authentication: "
+                  "give its token in RAY_AUTH_TOKEN or a file named by RAY_AUTH_TOKEN_PATH, "
+                  "with RAY_AUTH_MODE=token)")
+    if tried and tried.group(1) != address:
+        reason += f" (Ray tried {tried.group(1)} instead of {address})"
+    return reason
 
 
 def _needed_filesystems(jobs: Iterable[Job]) -> list[str]:

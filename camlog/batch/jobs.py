@@ -29,6 +29,7 @@ from typing import Any
 from processors.errors import ProcessorError
 from recorder.errors import RecorderError
 from replay import storage
+from replay.bounded import MAX_FILE_BYTES, json_loads
 from replay.errors import ReplayError
 from replay.storage import Location
 
@@ -64,7 +65,8 @@ def _file_size(location: str) -> int | None:
 def up_to_date(job: Job) -> dict[str, Any] | None:
     """The previous status when the outputs are complete for this input and pipeline."""
     try:
-        status = json.loads(storage.read_bytes(storage.join(job.out_dir, STATUS_FILE)))
+        status = json_loads(storage.read_bytes(storage.join(job.out_dir, STATUS_FILE)),
+                            STATUS_FILE, ValueError, max_bytes=MAX_FILE_BYTES)
         if not storage.exists(job.log):
             return None
         same = (status.get("status") == "ok"

@@ -44,7 +44,8 @@ from processors.errors import OptionValueError
 from processors.registry import SPECS, spec_of
 from processors.spec import Configured, ProcessorSpec
 from replay.atomic import write_text_atomic
-from replay.storage import Location, read_local_text
+from replay.bounded import read_text, toml_loads, yaml_load
+from replay.storage import Location
 from replay.topics import RESYNC_PREFIX
 
 from ..errors import PipelineError
@@ -316,18 +317,18 @@ def parse_pipeline(raw: Any, source: str) -> Pipeline:
 
 def load_pipeline(path: Path) -> Pipeline:
     """Read a pipeline from a .toml, .yaml or .yml file."""
-    text = read_local_text(path, PipelineError, what="pipeline file")
+    text = read_text(path, PipelineError, what="pipeline file")
+    name = f"pipeline file {path}"
     if path.suffix in (".yaml", ".yml"):
-        from ruamel.yaml import YAML
         from ruamel.yaml.error import YAMLError
 
         try:
-            raw = YAML(typ="safe", pure=True).load(text)
+            raw = yaml_load(text, name, PipelineError)
         except YAMLError as err:
             raise PipelineError(f"{path}: not valid YAML: {str(err).splitlines()[0]}") from None
     else:
         try:
-            raw = tomllib.loads(text)
+            raw = toml_loads(text, name, PipelineError)
         except tomllib.TOMLDecodeError as err:
             raise PipelineError(f"{path}: not valid TOML: {err}") from None
     return parse_pipeline(raw, str(path))

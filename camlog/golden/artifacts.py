@@ -23,7 +23,9 @@ import cv2
 import numpy as np
 
 from replay.atomic import write_bytes_atomic, write_text_atomic
+from replay.bounded import json_loads, yaml_load
 
+from ..errors import GoldenError
 from .tolerances import tolerance_for
 
 __all__ = [
@@ -93,10 +95,8 @@ def _write_png(path: Path, image: np.ndarray) -> None:
     write_bytes_atomic(path, png.tobytes())
 
 
-def _yaml_tree(text: str) -> Any:
-    from ruamel.yaml import YAML
-
-    return YAML(typ="safe", pure=True).load(text)
+def _yaml_tree(name: str, text: str) -> Any:
+    return yaml_load(text, name, GoldenError)
 
 
 class _Kind(NamedTuple):
@@ -186,7 +186,8 @@ def _compare_json(name: str, expected: Any, actual: Any, _diff_dir: Path | None
 
 def _compare_yaml(name: str, expected: str, actual: str, diff_dir: Path | None
                   ) -> list[Difference]:
-    return _compare_json(name, _yaml_tree(expected), _yaml_tree(actual), diff_dir)
+    return _compare_json(name, _yaml_tree(f"expected {name}", expected),
+                         _yaml_tree(f"computed {name}", actual), diff_dir)
 
 
 def _compare_png(name: str, expected: np.ndarray, actual: np.ndarray, diff_dir: Path | None
@@ -228,7 +229,7 @@ def _write_text(path: Path, text: str) -> None:
 
 
 def _read_json(path: Path) -> Any:
-    return json.loads(path.read_text())
+    return json_loads(path.read_text(), str(path), GoldenError)
 
 
 def _write_json(path: Path, value: Any) -> None:

@@ -26,6 +26,7 @@ from typing import Any
 import cv2
 
 from replay.atomic import write_text_atomic
+from replay.bounded import MAX_FILE_BYTES, json_loads, read_text
 from replay.formats import open_reader
 from replay.records import Scenario
 from replay.topics import SCENARIO, read_record
@@ -155,10 +156,10 @@ def read_manifest(inputs_dir: Path) -> dict[str, Any]:
     """``manifest.json`` of a golden folder; errors name the path."""
     path = inputs_dir / MANIFEST
     try:
-        data = json.loads(path.read_text())
-    except FileNotFoundError:
-        raise GoldenError(f"{path} does not exist (camlog golden record writes it)") from None
-    except (OSError, json.JSONDecodeError) as err:
+        text = read_text(path, GoldenError,
+                         missing_hint=" (camlog golden record writes it)")
+        data = json_loads(text, str(path), GoldenError, max_bytes=MAX_FILE_BYTES)
+    except json.JSONDecodeError as err:
         raise GoldenError(f"cannot read {path}: {err}") from None
     if not isinstance(data, dict) or not isinstance(data.get("inputs"), list):
         raise GoldenError(f"{path}: expected an object with an 'inputs' list")

@@ -7,6 +7,7 @@ reaches rerun in message order and memory stays bounded.
 
 from __future__ import annotations
 
+import time
 from collections import deque
 from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -17,7 +18,7 @@ import rerun as rr
 
 from .blueprint import LOG_TIME, REPLAY_TIME, STAMP_TIME
 from .columns import ClearRow, ColumnBatcher, ImageRow, PointsRow, Times
-from .sink import flush_recording
+from .sink import FLUSH_INTERVAL_S, flush_recording
 
 __all__ = ["FLUSH_EVERY", "MAX_PENDING", "Emitter", "Flush"]
 
@@ -37,7 +38,8 @@ class Emitter:
     which runs on ``encoders`` worker threads), or a row (:mod:`replay.export.columns`),
     sent in a batch of its entity's rows with ``columns`` and as its archetype otherwise (a
     live replay shows every frame when it comes). Counts rows per entity. ``flush`` waits
-    for rerun's writer every :data:`FLUSH_EVERY` calls."""
+    for rerun's writer every :data:`FLUSH_EVERY` calls, and at least every
+    :data:`~.sink.FLUSH_INTERVAL_S` while calls come."""
 
     def __init__(self, rec: rr.RecordingStream, *, encoders: int = 0,
                  flush: Flush = None, columns: bool = False) -> None:
@@ -52,6 +54,7 @@ class Emitter:
         self._applied: Times | None = None  # times last set on the stream
         self._pending: deque[tuple[Times, str, Any]] = deque()
         self._logged = 0
+        self._flushed_at = time.monotonic()
 
     def at(self, log_time_ns: int, stamp_ns: int | None, replay_ns: int | None) -> None:
         """The times of the message whose calls follow."""
@@ -75,12 +78,14 @@ class Emitter:
             self._pending.popleft()
             self._send(times, entity, archetype)
             self._logged += 1
-            if self._logged % FLUSH_EVERY == 0:
+            if self._logged % FLUSH_EVERY == 0 or \
+                    time.monotonic() - self._flushed_at >= FLUSH_INTERVAL_S:
                 # rerun writes on its own thread; without back-pressure its queue grows with
                 # the log's length whenever logging outpaces writing
                 if self._columns is not None:
                     self._columns.flush()
                 self._flush()
+                self._flushed_at = time.monotonic()
 
     def _send(self, times: Times, entity: str, archetype: Any) -> None:
         if self._columns is not None:

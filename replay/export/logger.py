@@ -14,7 +14,6 @@ before its first keyframe) are counted per topic and reported."""
 
 from __future__ import annotations
 
-import json
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -22,6 +21,7 @@ from typing import Any
 import numpy as np
 import rerun as rr
 
+from ..bounded import reindent_json
 from ..camera import CameraModel
 from ..errors import EncodingError, ReplayError
 from ..formats.base import RawMessage
@@ -391,9 +391,7 @@ class SceneLogger:
     def _text(self, raw: RawMessage, route: Route) -> None:
         message = self._decode(raw)
         assert isinstance(message, Text)
-        try:
-            text = "```json\n" + json.dumps(json.loads(message.data), indent=1) + "\n```"
-        except json.JSONDecodeError:
-            text = message.data
+        indented = reindent_json(message.data)  # None: shown as it is
+        text = message.data if indented is None else f"```json\n{indented}\n```"
         self._times(raw, None)
         self._emit(text_entity(raw.topic), rr.TextDocument(text, media_type="text/markdown"))

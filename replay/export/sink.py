@@ -21,7 +21,7 @@ import rerun as rr
 
 from ..atomic import AtomicOutput
 from ..errors import ViewerError
-from .viewer import DEFAULT_PORT, LOCALHOST, grpc_url, require_listening, spawn_viewer
+from .viewer import DEFAULT_PORT, LOCALHOST, grpc_url, require_viewer, spawn_viewer
 
 __all__ = ["Destination", "RecordingSink", "flush_recording"]
 
@@ -39,12 +39,18 @@ def _require_space(path: Path) -> None:
                           f"({free} bytes free)")
 
 
-#: a flush that makes no progress for this long means rerun's file writer, or the viewer
-#: it sends to, is gone: rerun would wait for it forever
-STALL_S = 10.0
-NETWORK_STALL_S = 15.0
+#: seconds between blocking flushes of a recording however few its log calls (see
+#: :class:`~.emitter.Emitter`): a live replay logs a few calls a second
+FLUSH_INTERVAL_S = 2.0
 #: how long a recording whose writer failed may take to let go of it
 GIVE_UP_S = 2.0
+#: a flush that makes no progress for this long means rerun's file writer, or the viewer
+#: it sends to, is gone: rerun would wait for it forever. A viewer's is shorter by the
+#: flush interval and the time to give up, so that a viewer that stops taking data ends
+#: the command within :data:`VIEWER_DEADLINE_S`.
+STALL_S = 10.0
+VIEWER_DEADLINE_S = 15.0
+NETWORK_STALL_S = VIEWER_DEADLINE_S - FLUSH_INTERVAL_S - GIVE_UP_S
 
 
 def flush_recording(rec: rr.RecordingStream, watched: Path | None = None, *,
@@ -134,7 +140,7 @@ class RecordingSink:
                 _require_space(self._atomic.temp)
                 self.rec.save(self._atomic.temp, default_blueprint=self._blueprint)
             elif self._url is not None:
-                require_listening(self._url)
+                require_viewer(self._url)
                 self.rec.connect_grpc(self._url)
             else:
                 self._url = spawn_viewer(bind=self._bind, port=self._port)

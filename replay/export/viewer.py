@@ -11,6 +11,7 @@ from __future__ import annotations
 import os
 import re
 import socket
+import ssl
 import subprocess
 import sys
 import tempfile
@@ -20,10 +21,17 @@ from urllib.parse import urlsplit
 
 from ..errors import ViewerError
 
-__all__ = ["DEFAULT_PORT", "LOCALHOST", "grpc_url", "require_listening", "spawn_viewer"]
+__all__ = ["DEFAULT_PORT", "LOCALHOST", "grpc_url", "require_viewer", "spawn_viewer"]
 
 DEFAULT_PORT = 9876
 LOCALHOST = "127.0.0.1"
+#: how long a viewer may take to accept a connection, and then to answer its greeting
+CONNECT_S = 5.0
+ANSWER_S = 5.0
+#: HTTP/2's client preface and an empty SETTINGS frame, to which a server answers with its
+#: own SETTINGS frame (a 9-byte frame header first)
+_HTTP2_GREETING = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + bytes([0, 0, 0, 4, 0, 0, 0, 0, 0])
+_FRAME_HEADER_BYTES = 9
 #: a viewer that is not listening this long after it was started is not going to
 SPAWN_TIMEOUT_S = 20.0
 #: a viewer listens before it opens its window: it must still run this long after
@@ -47,16 +55,44 @@ def grpc_url(text: str) -> str:
                       "HOST:PORT)")
 
 
-def require_listening(url: str, *, timeout_s: float = 2.0) -> None:
-    """Fail early, with the address, when no viewer accepts connections at ``url`` (rerun
-    itself would buffer the recording and drop it silently)."""
+def require_viewer(url: str, *, connect_s: float = CONNECT_S,
+                   answer_s: float = ANSWER_S) -> None:
+    """Fail early, with the address, when nothing at ``url`` accepts a connection within
+    ``connect_s`` and answers an HTTP/2 greeting (as a viewer's gRPC server does at once)
+    within ``answer_s``: rerun itself would buffer the recording for a server that never
+    answers, and drop it silently where none listens."""
     parts = urlsplit(url.replace("rerun+", "", 1).replace("rerun://", "https://", 1))
     host, port = parts.hostname or LOCALHOST, parts.port or DEFAULT_PORT
     try:
-        socket.create_connection((host, port), timeout=timeout_s).close()
+        connection = socket.create_connection((host, port), timeout=connect_s)
+    except TimeoutError:
+        raise ViewerError(f"no rerun viewer answers at {url}: connecting took longer than "
+                          f"{connect_s:g} s") from None
     except OSError as err:
         raise ViewerError(f"no rerun viewer is listening at {url} ({err.strerror or err}); "
                           "start one with `rerun` or use --spawn") from None
+    try:
+        connection.settimeout(answer_s)
+        if parts.scheme == "https":
+            context = ssl.create_default_context()
+            context.check_hostname, context.verify_mode = False, ssl.CERT_NONE  # rerun checks
+            context.set_alpn_protocols(["h2"])
+            connection = context.wrap_socket(connection, server_hostname=host)
+        connection.sendall(_HTTP2_GREETING)
+        answer = connection.recv(_FRAME_HEADER_BYTES)
+    except TimeoutError:
+        raise ViewerError(f"the rerun viewer at {url} accepted the connection but did not "
+                          f"answer within {answer_s:g} s") from None
+    except OSError as err:
+        answer = b""
+        why = f" ({err.strerror or err})"
+    else:
+        why = ""
+    finally:
+        connection.close()
+    if not answer:
+        raise ViewerError(f"the rerun viewer at {url} closed the connection without "
+                          f"answering{why}")
 
 
 def _listening(host: str, port: int) -> bool:

@@ -13,6 +13,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ..bounded import MAX_RECORD_BYTES, read_text, yaml_load
+
 __all__ = ["BagMetadata", "count_warnings", "read_metadata"]
 
 
@@ -28,13 +30,12 @@ class BagMetadata:
 
 def read_metadata(folder: Path) -> BagMetadata | str:
     """The metadata of a rosbag2 folder, or what is wrong with its metadata.yaml."""
-    from ruamel.yaml import YAML
     from ruamel.yaml.error import YAMLError
 
     try:
-        text = (folder / "metadata.yaml").read_text(encoding="utf-8")
-        document = YAML(typ="safe").load(text)
-    except (OSError, UnicodeDecodeError, YAMLError) as err:
+        text = read_text(folder / "metadata.yaml", ValueError, max_bytes=MAX_RECORD_BYTES)
+        document = yaml_load(text, "it", ValueError, max_bytes=MAX_RECORD_BYTES, pure=False)
+    except (ValueError, YAMLError) as err:
         return f"metadata.yaml does not parse ({_first_line(err)})"
     try:
         return _metadata(document)

@@ -19,6 +19,7 @@ from typing import Any, ClassVar, Self, TypeVar, Union
 
 import numpy as np
 
+from ..bounded import json_loads
 from ..errors import RecordError
 from ..messages import Text
 
@@ -175,7 +176,7 @@ class JsonRecord:
     def from_json_text(cls, text: str) -> Self:
         """Parse the record from JSON text; RecordError when it is not one."""
         try:
-            data = json.loads(text)
+            data = json_loads(text, cls.what, RecordError)
         except json.JSONDecodeError as err:
             raise RecordError(f"{cls.what}: not valid JSON ({err.msg} at line {err.lineno})") \
                 from None

@@ -21,6 +21,7 @@ from mcap.decoder import DecoderFactory
 from mcap.exceptions import McapError
 from mcap.records import Schema
 
+from ..bounded import json_loads
 from ..errors import ReplayError
 from ..messages import CameraInfo, CompressedImage, CompressedVideo, Image, Message
 from ..msgtypes import JSON, PROTOBUF
@@ -147,7 +148,7 @@ class FoxgloveJsonFactory(DecoderFactory):
 
         def decode(data: bytes | memoryview) -> Message:
             try:
-                fields = json.loads(bytes(data))
+                fields = json_loads(bytes(data), f"{name} JSON", ReplayError)
                 if not isinstance(fields, dict):
                     raise TypeError("not a JSON object")
                 fields["stamp_ns"] = _json_stamp_ns(fields.get("timestamp"))

@@ -139,6 +139,28 @@ def test_a_cluster_without_a_needed_filesystem_is_one_line(
     assert "cannot run camlog on node" in errors[0] and "gcsfs" in errors[0]
 
 
+def test_a_batch_without_the_clusters_token_says_authentication_failed(
+    cluster: Cluster, cluster_logs: list[Path], tmp_path: Path
+) -> None:
+    """The cluster uses token auth; a batch from a home with no token is refused at once,
+    in one line that says why, as Ray reports it."""
+    home = tmp_path / "home"
+    home.mkdir()
+    env = {k: v for k, v in cluster.env.items() if not k.startswith("RAY_AUTH")}
+    started = time.monotonic()
+    batch = start_batch([str(cluster_logs[0].parent / "pipe.toml"), str(cluster_logs[0]),
+                         "-o", str(tmp_path / "o"), "--engine", "ray", "--address",
+                         cluster.address], env=env | {"HOME": str(home)})
+    _, stderr = batch.communicate(timeout=120)
+    assert batch.returncode == 1
+    (line,) = stderr.splitlines()
+    assert line.startswith(f"camlog batch: error: cannot connect to the Ray cluster at "
+                           f"{cluster.address}: authentication failed: "), line
+    assert "InvalidAuthToken" in line and "RAY_AUTH_TOKEN" in line, line
+    assert time.monotonic() - started < 30
+    assert not (home / ".ray").exists()
+
+
 def test_a_node_killed_mid_batch_changes_no_output(
     cluster: Cluster, cluster_logs: list[Path], tmp_path: Path
 ) -> None:

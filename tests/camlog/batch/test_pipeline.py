@@ -2,12 +2,16 @@
 
 from __future__ import annotations
 
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
 
 from camlog.batch.pipeline import load_pipeline, parse_pipeline
 from camlog.errors import PipelineError
+from replay.bounded import MAX_DEPTH, MAX_FILE_BYTES
+from tests.conftest import REPO_ROOT
 
 GOOD = """
 [[steps]]
@@ -125,3 +129,36 @@ def test_process_step_option_errors_name_the_keys(options: dict[str, object],
         for configured in step_processors(dict(options), SPECS):
             configured.build()
     assert "--" not in str(err.value)
+
+
+def camlog_batch(pipeline: Path, tmp_path: Path) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-m", "camlog", "batch", str(pipeline),
+                           str(tmp_path / "any.mcap"), "-o", str(tmp_path / "out")],
+                          cwd=REPO_ROOT, capture_output=True, text=True, timeout=120,
+                          check=False)
+
+
+@pytest.mark.parametrize(("name", "text"), [
+    ("deep.toml", "a = " + "[" * 3000 + "]" * 3000 + "\n"),
+    ("dotted.toml", ".".join(["a"] * 3000) + " = 1\n"),
+    ("deep.yaml", "a: " + "[" * 3000 + "]" * 3000 + "\n"),
+    ("block.yaml", "- " * 3000 + "x\n"),
+    ("aliases.yaml", "a: &a [1, *a]\n"),
+])
+def test_a_deeply_nested_pipeline_is_one_line(tmp_path: Path, name: str, text: str) -> None:
+    path = tmp_path / name
+    path.write_text(text)
+    result = camlog_batch(path, tmp_path)
+    assert result.returncode == 1
+    assert result.stderr.splitlines() == [
+        f"camlog batch: error: pipeline file {path} nests lists or tables more than "
+        f"{MAX_DEPTH} levels deep: refused"]
+
+
+def test_a_pipeline_file_of_many_megabytes_is_refused(tmp_path: Path) -> None:
+    path = tmp_path / "huge.toml"
+    path.write_text("# padding\n" * (MAX_FILE_BYTES // 10 + 1))
+    result = camlog_batch(path, tmp_path)
+    assert result.returncode == 1
+    (line,) = result.stderr.splitlines()
+    assert f"pipeline file {path} is larger than 4 MiB" in line, line

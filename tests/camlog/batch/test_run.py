@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import os
 import socket
 from pathlib import Path
 
@@ -98,15 +99,33 @@ def test_rerun_skips_completed_logs_and_redoes_changed_ones(
     assert [s["status"] for s in fourth.statuses] == ["ok", "skipped"]
 
 
+#: the home of the user running the tests (read before conftest's temporary_home replaces
+#: it), which they must leave as it is
+REAL_HOME = Path(os.environ.get("HOME") or Path.home())
+
+
+def listing(folder: Path) -> list[tuple[str, int, int]]:
+    """Every file under ``folder``: name, size and modification time."""
+    return sorted((str(p.relative_to(folder)), p.stat().st_size, p.stat().st_mtime_ns)
+                  for p in folder.rglob("*")) if folder.exists() else []
+
+
 def test_ray_engine_gives_the_same_results(logs: list[Path], pipeline: Path,
-                                           tmp_path: Path) -> None:
+                                           tmp_path: Path, temporary_home: Path) -> None:
+    """... and leaves the user's home alone: Ray's token for the local instance goes to
+    the tests' temporary home."""
     import ray  # the test extra installs the optional 'ray' extra
 
     assert ray.__version__
+    before = listing(REAL_HOME / ".ray")
     local = run_batch(load_pipeline(pipeline), logs, tmp_path / "local", jobs=2,
                       progress=False)
     ray_run = run_batch(load_pipeline(pipeline), logs, tmp_path / "ray", jobs=2,
                         engine="ray", progress=False)
+    assert listing(REAL_HOME / ".ray") == before
+    assert Path.home() == temporary_home
+    assert (temporary_home / ".ray" / "auth_token").is_file()
+    assert any((temporary_home / "tmp" / "ray").glob("session_*"))
     assert [s["status"] for s in ray_run.statuses] == [s["status"] for s in local.statuses]
     for a, b in zip(local.statuses, ray_run.statuses, strict=True):
         assert [st["figures"] | {"fps": None} for st in a.get("steps", [])] == \
