@@ -18,6 +18,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import shutil
 import socket
 import tempfile
 import time
@@ -31,6 +32,7 @@ from recorder.errors import RecorderError
 from replay import storage
 from replay.bounded import MAX_FILE_BYTES, json_loads
 from replay.errors import ReplayError
+from replay.leftovers import leftovers_in
 from replay.storage import Location
 
 from ..errors import CamlogError, InputError
@@ -143,6 +145,7 @@ def _run_steps(job: Job, status: dict[str, Any], scratch: Path | None) -> None:
         step_input = current if step.input == "previous" else logs[step.input]
         step_started = time.perf_counter()
         folder = f"{index + 1:02d}_{step.name}"
+        _clear_earlier_attempt(out / folder)
         outcome = run_step(step, step_input, out / folder, job.workers)
         if outcome.log is not None:
             logs[step.name] = outcome.log
@@ -157,6 +160,19 @@ def _run_steps(job: Job, status: dict[str, Any], scratch: Path | None) -> None:
             "seconds": round(time.perf_counter() - step_started, 3)})
     if remote_out:
         storage.upload(out, str(job.out_dir))
+
+
+def _clear_earlier_attempt(folder: Path) -> None:
+    """Remove the temporary outputs an earlier attempt at this log left in its step folder
+    (a worker killed mid-step): the folder is the batch's own, and the step makes them again
+    from its input."""
+    if not folder.is_dir():
+        return
+    for leftover in leftovers_in(folder):
+        if leftover.path.is_dir():
+            shutil.rmtree(leftover.path, ignore_errors=True)
+        else:
+            leftover.path.unlink(missing_ok=True)
 
 
 def _stage_input(log: Location, scratch: Path | None, status: dict[str, Any]) -> Location:

@@ -124,7 +124,8 @@ NESTED = "must be a value, a list of values or a table of values"
     ('steps = [{run = "resync", slop = nan}]', f"slop {NESTED}"),
     ('steps = [{run = "resync", slop = [1, [2]]}]', f"slop {NESTED}"),
     ('steps = [{run = "info", name = [1]}]', "name must be a non-empty text"),
-    ("steps:\n  - run: process\n    topic: &a [*a]\n", f"topic {NESTED}"),
+    # a list that holds itself: nested without end
+    ("steps:\n  - run: process\n    topic: &a [*a]\n", "more than 64 levels deep"),
     ("steps:\n  - run: process\n    topic: /x\n    edges: {low: [1, {a: .nan}]}\n",
      f"edges {NESTED}"),
 ])
