@@ -19,8 +19,8 @@ from replay.messages import F64
 
 from ..errors import CalibrationError, InputError, UsageError
 from ..processing.cameras import find_camera
+from .circles import CircleSize, circle_size
 from .instants import stereo_pairs
-from .solving import CircleSize, circle_size
 from .views import CameraViews, detect_views, size_hint
 
 

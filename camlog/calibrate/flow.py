@@ -26,7 +26,7 @@ from replay.formats.background import BackgroundWriter
 from replay.records import CalibrationSummary, Scenario
 from replay.storage import Location, local_paths
 
-from ..errors import InputError
+from ..errors import InputError, UsageError
 from ..processing.cameras import find_camera
 from .evidence import write_evidence, write_summary
 from .instants import ViewsOfRig
@@ -84,6 +84,15 @@ def _checked(found: LogViews, max_speed_px: float | None) -> list[CameraViews]:
     return out
 
 
+def _namespaces(log: Location, cameras: list[str], *, recover: bool) -> list[str]:
+    """The namespaces of cameras named by namespace or image topic (a rig's file names)."""
+    with open_reader(log, recover=recover) as reader:
+        spaces = [find_camera(reader, ns).namespace for ns in cameras]
+    if len(set(spaces)) != len(spaces):
+        raise UsageError(f"a camera is named twice: {', '.join(cameras)}")
+    return spaces
+
+
 def _write_report(reader: LogReader, folder: Path, calibrated: list[CalibratedCamera],
                   solved: RigSolution, *, board: Board, options: CalibrationOptions,
                   scenario: Scenario | None, camera_name: str | None,
@@ -122,17 +131,23 @@ def calibrate_log(
     recover: bool = False,
     report: bool = True,
     measure_again: MeasureAgain | None = None,
+    rig: bool = False,
 ) -> CalibrationRun:
-    """Calibrate one camera (``cameras=[ns]``) or a stereo pair (``[left_ns, right_ns]``);
-    a circle grid's circles are ``diameter_m`` across (None: measured in the images);
-    without ``report`` only the calibration files and calibration.json are written (no
+    """Calibrate one camera (``cameras=[ns]``), a stereo pair (``[left_ns, right_ns]``) or,
+    with ``rig`` or three cameras or more, a rig (every camera's file named after its
+    namespace, and rig.yaml with every camera's pose relative to the first); a circle
+    grid's circles are ``diameter_m`` across (None: measured in the images); without
+    ``report`` only the calibration files and calibration.json are written (no
     second pass over the log, no figures). ``measure_again`` gives the views' corners again
     after a first solve, which is then solved again (default: measured on the board plane
     where :func:`~processors.calibration.corners.remeasures` says; an analysis may give, for
     instance, ideal corners)."""
     started = time.perf_counter()
-    stereo_mode = len(cameras) == 2
-    with AtomicFolder(output_dir, output_names(stereo_mode, report=report),
+    as_rig = len(cameras) > 2 or (rig and len(cameras) > 1)
+    stereo_mode = len(cameras) == 2 and not as_rig
+    with AtomicFolder(output_dir, output_names(stereo_mode, report=report,
+                                               rig=_namespaces(log, cameras, recover=recover)
+                                               if as_rig else None),
                       overwrite=overwrite, inputs=local_paths(log)) as staged, \
             open_reader(log, recover=recover) as reader:
         if reader.message_count == 0:
@@ -159,7 +174,8 @@ def calibrate_log(
                                 workers=workers, progress=progress)
         # with the report, a short log's statistics are computed while the evidence pass runs
         solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s,
-                           diameter_m=diameter_m, background=report, remeasure=remeasure)
+                           diameter_m=diameter_m, background=report, remeasure=remeasure,
+                           as_rig=as_rig)
         solutions, stereo = solved.cameras, solved.stereo
         scenario = found.scenario
         truth = [scenario.camera_for(s.views.source.namespace,

@@ -1,8 +1,8 @@
 """From frames to the solver's views: instants, stereo pairs and held poses.
 
-The frames become instants — one per camera frame, or one per stereo pair shot at the same
-time (an approximately paired frame joins its partner only while the board holds still:
-7 ms apart a moving board is at another pose). Consecutive instants that show the board
+The frames become instants — one per camera frame, or one per set of frames the cameras shot
+at the same time (an approximately paired frame joins its partners only while the board holds
+still: 7 ms apart a moving board is at another pose). Consecutive instants that show the board
 held still become one view per camera, their corners averaged (:mod:`processors.calibration.
 holds`: the frames of a hold share the detector's error, so they are one observation, made
 more precise). Every view of every camera then goes into one least-squares problem
@@ -12,6 +12,7 @@ more precise). Every view of every camera then goes into one least-squares probl
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import combinations
 
 import numpy as np
 
@@ -45,26 +46,35 @@ class ViewsOfRig:
 
     views: list[BoardView]
     frames_of: list[list[int]]  # per view, its frames (of its camera)
-    pairs: list[tuple[int, int]]  # (left view, right view) seen at the same instants
+    pairs: list[tuple[int, int]]  # two cameras: (left view, right view) of each instant
     candidates: list[list[int]]  # per camera, frames whose board passed every check
     frame_scatter_px: float | None  # frame-to-frame scatter of held corners
 
 
-def stereo_pairs(left: CameraViews, right: CameraViews,
+def _stamp_pairs(left: CameraViews, right: CameraViews,
                  approximate_s: float | None) -> list[tuple[int, int]]:
-    """(left frame, right frame) indices shot at the same time (or within the slop)."""
+    """(left frame, right frame) indices shot at the same time (or within the slop); maybe
+    none."""
     left_ns = np.array([f.stamp_ns for f in left.frames], dtype=np.int64)
     right_ns = np.array([f.stamp_ns for f in right.frames], dtype=np.int64)
     if approximate_s is None:
         _common, li, ri = np.intersect1d(left_ns, right_ns, return_indices=True)
-        pairs = list(zip(li.tolist(), ri.tolist(), strict=True))
-    else:
-        pairing = pair_stamps(np.sort(left_ns), np.sort(right_ns),
-                              slop_ns=round(approximate_s * 1e9))
-        order_l, order_r = np.argsort(left_ns), np.argsort(right_ns)
-        pairs = [(int(order_l[a]), int(order_r[b]))
-                 for a, b in zip(pairing.left_index, pairing.right_index, strict=True)]
+        return list(zip(li.tolist(), ri.tolist(), strict=True))
+    pairing = pair_stamps(np.sort(left_ns), np.sort(right_ns),
+                          slop_ns=round(approximate_s * 1e9))
+    order_l, order_r = np.argsort(left_ns), np.argsort(right_ns)
+    return [(int(order_l[a]), int(order_r[b]))
+            for a, b in zip(pairing.left_index, pairing.right_index, strict=True)]
+
+
+def stereo_pairs(left: CameraViews, right: CameraViews,
+                 approximate_s: float | None) -> list[tuple[int, int]]:
+    """(left frame, right frame) indices shot at the same time (or within the slop); an
+    error when there are none."""
+    pairs = _stamp_pairs(left, right, approximate_s)
     if not pairs:
+        left_ns = np.array([f.stamp_ns for f in left.frames], dtype=np.int64)
+        right_ns = np.array([f.stamp_ns for f in right.frames], dtype=np.int64)
         gap = np.min(np.abs(left_ns[:, None] - right_ns[None, :])) / 1e6 \
             if len(left_ns) * len(right_ns) <= 4_000_000 else float("nan")
         how = "within the slop" if approximate_s is not None else "with identical stamps"
@@ -121,32 +131,74 @@ def _sources(views: CameraViews) -> list[int]:
 
 def _instants(cameras: list[CameraViews], candidates: list[list[int]],
               approximate_s: float | None) -> list[Instant]:
-    """Every candidate frame in one instant, paired stereo frames sharing one, in time
-    order."""
+    """Every candidate frame in one instant, frames of cameras shot at the same time sharing
+    one, in time order. Cameras pair two by two (0 with 1, 0 with 2, ..., 1 with 2, ...); a
+    pair joins its frames' instants unless that would put two frames of one camera in one."""
     usable = [set(c) for c in candidates]
-    out: list[Instant] = []
-    paired: list[set[int]] = [set() for _ in cameras]
-    if len(cameras) == 2:
-        left, right = cameras
-        source = [_sources(c) for c in cameras]
-        snapshots = [_snapshots(c) for c in cameras] if approximate_s is not None else []
-        for li_frame, ri_frame in stereo_pairs(left, right, approximate_s):
+    source = [_sources(c) for c in cameras]
+    snapshots = [_snapshots(c) for c in cameras] if approximate_s is not None else []
+
+    def still(camera: int, frame: int) -> bool:
+        return _still(cameras[camera].frames[frame]) or frame in snapshots[camera]
+
+    joined: dict[tuple[int, int], dict[int, int]] = {}  # (camera, frame) -> its instant
+    for a, b in combinations(range(len(cameras)), 2):
+        pairs = stereo_pairs(cameras[a], cameras[b], approximate_s) if len(cameras) == 2 \
+            else _stamp_pairs(cameras[a], cameras[b], approximate_s)
+        for a_frame, b_frame in pairs:
             # a repeated frame stands for the frame it repeats
-            li, ri = source[0][li_frame], source[1][ri_frame]
-            if li not in usable[0] or ri not in usable[1] or li in paired[0] \
-                    or ri in paired[1]:
+            ai, bi = source[a][a_frame], source[b][b_frame]
+            if ai not in usable[a] or bi not in usable[b]:
                 continue
-            if approximate_s is not None and not (
-                    (_still(left.frames[li]) or li in snapshots[0])
-                    and (_still(right.frames[ri]) or ri in snapshots[1])):
+            mine, theirs = joined.get((a, ai), {a: ai}), joined.get((b, bi), {b: bi})
+            if mine.keys() & theirs.keys():
                 continue
-            out.append(Instant({0: li, 1: ri}, left.frames[li].stamp_ns))
-            paired[0].add(li)
-            paired[1].add(ri)
+            if approximate_s is not None and not (still(a, ai) and still(b, bi)):
+                continue
+            merged = dict(sorted({**mine, **theirs}.items()))
+            for key in merged.items():
+                joined[key] = merged
+    out = [Instant(frames, cameras[first].frames[frames[first]].stamp_ns)
+           for frames in {id(f): f for f in joined.values()}.values()
+           for first in (min(frames),)]
     for camera, views in enumerate(cameras):
         out += [Instant({camera: i}, views.frames[i].stamp_ns)
-                for i in candidates[camera] if i not in paired[camera]]
+                for i in candidates[camera] if (camera, i) not in joined]
     return sorted(out, key=lambda instant: (instant.stamp_ns, sorted(instant.frames.items())))
+
+
+def _unlinked(cameras: int, instants: list[Instant]) -> list[int]:
+    """Cameras that share no instant with camera 0, directly or through other cameras."""
+    reached, grown = {0}, True
+    while grown:
+        grown = False
+        for instant in instants:
+            if len(instant.frames) > 1 and reached & instant.frames.keys() \
+                    and not instant.frames.keys() <= reached:
+                reached |= instant.frames.keys()
+                grown = True
+    return [c for c in range(cameras) if c not in reached]
+
+
+def _check_linked(cameras: list[CameraViews], instants: list[Instant],
+                  approximate_s: float | None) -> None:
+    """An error when a camera never sees the board at an instant another camera sees it
+    (directly, or through a chain of cameras, with the first one)."""
+    alone = _unlinked(len(cameras), instants) if len(cameras) > 1 else []
+    if not alone:
+        return
+    still = "" if approximate_s is None else (
+        f" with the board still in {'both' if len(cameras) == 2 else 'each'} (a moving board "
+        "is at another pose in each camera; hold it still, or resync the log)")
+    if len(cameras) == 2:
+        raise CalibrationError(
+            f"{cameras[0].source.image_topic} and {cameras[1].source.image_topic} never see "
+            f"the board at the same instant{still}")
+    others = ", ".join(c.source.namespace for i, c in enumerate(cameras) if i not in alone)
+    raise CalibrationError(
+        f"{cameras[alone[0]].source.image_topic} never sees the board at the same instant as "
+        f"{others}, directly or through another camera{still}; the rig's cameras must share "
+        "views to be calibrated together")
 
 
 def rig_views(cameras: list[CameraViews], board: Board, *, approximate_s: float | None,
@@ -155,13 +207,7 @@ def rig_views(cameras: list[CameraViews], board: Board, *, approximate_s: float 
     candidates = [_candidates(v, board, f" (camera {v.source.namespace})" if stereo_note
                               else "") for v in cameras]
     instants = _instants(cameras, candidates, approximate_s)
-    if len(cameras) == 2 and not any(len(i.frames) == 2 for i in instants):
-        still = "" if approximate_s is None else (
-            " with the board still in both (a moving board is at another pose in each "
-            "camera; hold it still, or resync the log)")
-        raise CalibrationError(
-            f"{cameras[0].source.image_topic} and {cameras[1].source.image_topic} never see "
-            f"the board at the same instant{still}")
+    _check_linked(cameras, instants, approximate_s)
     seen = [{c: Seen(cameras[c].detection(i).ids, cameras[c].corners(i))
              for c, i in instant.frames.items()} for instant in instants]
     groups = holds(seen)
@@ -178,6 +224,6 @@ def rig_views(cameras: list[CameraViews], board: Board, *, approximate_s: float 
             views.append(BoardView(camera, number, mean.point_ids, mean.corners_px,
                                    speed_px=speed))
             frames_of.append(frames)
-        if len(at) == 2:
+        if len(cameras) == 2 and len(at) == 2:
             pairs.append((at[0], at[1]))
     return ViewsOfRig(views, frames_of, pairs, candidates, frame_scatter_px(seen, groups))

@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from replay.records import CalibrationSummary, CameraSummary, StereoSummary
+import math
+
+from replay.records import CalibrationSummary, CameraSummary, RigSummary, StereoSummary
 
 __all__ = ["markdown_report"]
 
@@ -135,6 +137,45 @@ def _stereo_lines(s: StereoSummary) -> list[str]:
     return lines
 
 
+def _rig_lines(rig: RigSummary) -> list[str]:
+    lines = [
+        "## Rig", "",
+        f"Every camera's pose relative to {rig.reference} ({rig.convention}: X_camera = R "
+        "X_reference + t), with standard deviations per axis from the joint covariance "
+        "(rig.yaml holds the full poses).", "",
+        "| camera | t (m) | σ t (m) | rotation (°) | σ rotation (°, per axis) |"
+        + (" t error (m) | rotation error (°) |" if any(c.truth for c in rig.cameras) else ""),
+        "| --- | --- | --- | --- | --- |" + (" --- | --- |" if any(c.truth for c in rig.cameras)
+                                             else ""),
+    ]
+    for c in rig.cameras[1:]:
+        line = (f"| {c.namespace} | {_vector(c.translation_m, '.5f')} | "
+                f"{_vector(c.translation_std_m, '.1e')} | {c.rotation_deg:.4f} | "
+                f"{_vector([math.degrees(v) for v in c.rotation_std_rad], '.1e')} |")
+        if c.truth is not None:
+            line += (f" {_vector(c.truth.translation_error_m, '+.1e')} | "
+                     f"{_vector([math.degrees(v) for v in c.truth.rotation_error_rad], '+.1e')} |")
+        lines.append(line)
+    lines += ["", "Pairs that saw the board at the same instants (second_from_first; epipolar "
+              "RMS of their joint views after rectifying the pair):", "",
+              "| pair | joint views | baseline (m) | σ (m) | rotation (°) | σ (°) | RMS (px) | "
+              "epipolar RMS (px) | true baseline (m) | true rotation (°) |",
+              "|" + " --- |" * 10]
+    for pair in rig.pairs:
+        truth = f" {pair.truth.baseline_m:.6f} | {pair.truth.rotation_deg:.4f} |" \
+            if pair.truth is not None else " | |"
+        lines.append(f"| {pair.first} → {pair.second} | {pair.joint_views} | "
+                     f"{pair.baseline_m:.6f} | {pair.baseline_std_m:.2g} | "
+                     f"{pair.rotation_deg:.4f} | {pair.rotation_std_deg:.2g} | "
+                     f"{pair.rms_px:.4f} | {pair.epipolar_rms_px:.4f} |{truth}")
+    lines.append("")
+    return lines
+
+
+def _vector(values: list[float], spec: str) -> str:
+    return "[" + ", ".join(format(v, spec) for v in values) + "]"
+
+
 def markdown_report(summary: CalibrationSummary, figures: list[str]) -> str:
     """A short human summary of the calibration, with its figures."""
     board, options = summary.board, summary.options
@@ -156,5 +197,7 @@ def markdown_report(summary: CalibrationSummary, figures: list[str]) -> str:
         lines += _camera_lines(camera)
     if summary.stereo is not None:
         lines += _stereo_lines(summary.stereo)
+    if summary.rig is not None:
+        lines += _rig_lines(summary.rig)
     lines += ["## Figures", ""] + [f"![{name}]({name})" for name in figures] + [""]
     return "\n".join(lines)

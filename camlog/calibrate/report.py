@@ -17,20 +17,36 @@ from processors.calibration.figures import (
 from replay.calibration_ini import ost_text
 from replay.calibration_yaml import calibration_to_yaml
 from replay.records import CalibrationSummary
+from replay.rig_yaml import rig_to_yaml
 
 from .evidence import Evidence
 from .markdown import markdown_report
 from .solving import CalibratedCamera, StereoSolution
 
-__all__ = ["FIGURES", "output_names", "write_files"]
+__all__ = ["FIGURES", "camera_file_stem", "output_names", "write_files"]
 
 #: figures drawn per camera (stereo: prefixed ``left_`` / ``right_``)
 FIGURES = ("coverage.png", "view_errors.png", "residuals.png", "uncertainty.png")
 
 
-def output_names(stereo: bool, *, report: bool = True) -> list[str]:
+def camera_file_stem(namespace: str) -> str:
+    """A rig camera's file names start with its namespace, slashes made underscores
+    (``/rig/left`` -> ``rig_left``)."""
+    return namespace.strip("/").replace("/", "_") or "camera"
+
+
+def output_names(stereo: bool, *, report: bool = True, rig: list[str] | None = None
+                 ) -> list[str]:
     """Every file a calibration writes into its output folder (``report``: with the
-    annotated log, figures and Markdown report)."""
+    annotated log, figures and Markdown report; ``rig``: the namespaces of a rig's cameras,
+    calibrated as a rig)."""
+    if rig is not None:
+        stems = [camera_file_stem(ns) for ns in rig]
+        files = [*(f"{stem}.yaml" for stem in stems), "rig.yaml", "calibration.json"]
+        if not report:
+            return files
+        return [*files, *(f"{stem}_{f}" for stem in stems for f in FIGURES),
+                "calibration.mcap", "report.md"]
     calibrations = ["left.yaml", "right.yaml"] if stereo else ["ost.yaml"]
     if not report:
         return [*calibrations, "ost.txt", "calibration.json"]
@@ -72,11 +88,29 @@ def _figures(folder: Path, camera: CalibratedCamera, prefix: str) -> list[str]:
     return [f"{prefix}{name}" for name in figures]
 
 
-def write_files(folder: Path, cameras: list[CalibratedCamera], *,
-                stereo: StereoSolution | None, summary: CalibrationSummary,
-                evidence: Evidence | None, camera_name: str | None) -> None:
-    """Calibration files and the JSON summary into ``folder``, and with the ``evidence``
-    pass's results the figures and the Markdown report."""
+def _write_rig(folder: Path, cameras: list[CalibratedCamera], *, summary: CalibrationSummary,
+               evidence: Evidence | None, camera_name: str | None) -> list[str]:
+    """A rig's files: one calibration per camera, named after its namespace, and rig.yaml;
+    with the ``evidence`` its figures' names."""
+    assert summary.rig is not None
+    figures: list[str] = []
+    for camera in cameras:
+        source = camera.views.source
+        stem = camera_file_stem(source.namespace)
+        name = f"{camera_name}/{source.name}" if camera_name else source.name
+        (folder / f"{stem}.yaml").write_text(calibration_to_yaml(camera.camera_info,
+                                                                 camera_name=name))
+        if evidence is not None:
+            figures += _figures(folder, camera, f"{stem}_")
+    (folder / "rig.yaml").write_text(rig_to_yaml(summary.rig))
+    return figures
+
+
+def _write_camera_calibration(folder: Path, cameras: list[CalibratedCamera], *,
+                              stereo: StereoSolution | None, evidence: Evidence | None,
+                              camera_name: str | None) -> list[str]:
+    """A mono camera's or a stereo pair's files (camera_calibration's names); with the
+    ``evidence`` its figures' names."""
     figures: list[str] = []
     for index, camera in enumerate(cameras):
         side = "left" if index == 0 else "right"
@@ -99,6 +133,20 @@ def write_files(folder: Path, cameras: list[CalibratedCamera], *,
             figures.append("rectified.png")
     else:
         (folder / "ost.txt").write_text(ost_text(cameras[0].camera_info))
+    return figures
+
+
+def write_files(folder: Path, cameras: list[CalibratedCamera], *,
+                stereo: StereoSolution | None, summary: CalibrationSummary,
+                evidence: Evidence | None, camera_name: str | None) -> None:
+    """Calibration files and the JSON summary into ``folder``, and with the ``evidence``
+    pass's results the figures and the Markdown report."""
+    if summary.rig is not None:
+        figures = _write_rig(folder, cameras, summary=summary, evidence=evidence,
+                             camera_name=camera_name)
+    else:
+        figures = _write_camera_calibration(folder, cameras, stereo=stereo, evidence=evidence,
+                                            camera_name=camera_name)
     (folder / "calibration.json").write_text(summary.to_json_text(indent=1) + "\n")
     if evidence is not None:
         (folder / "report.md").write_text(markdown_report(summary, figures))

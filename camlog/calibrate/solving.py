@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from concurrent.futures import Future
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -34,15 +34,14 @@ from replay.messages import F64, CameraInfo
 from replay.records import ScenarioCamera
 
 from ..errors import CalibrationError
+from .circles import CircleSize, circle_size
 from .instants import ViewsOfRig, rig_views
+from .rig import PairSolution, rig_pairs
 from .statistics import CameraStatistics, camera_statistics
 from .views import CameraViews, Frame
 
-#: a given circle diameter this far (relative) from the measured one earns a warning
-DIAMETER_WARNING = 0.05
-
-__all__ = ["CalibratedCamera", "CameraSolution", "CircleSize", "RigSolution", "StereoSolution",
-           "calibrated_cameras", "circle_size", "solve_rig"]
+__all__ = ["CalibratedCamera", "CameraSolution", "RigSolution", "StereoSolution",
+           "calibrated_cameras", "solve_rig"]
 
 
 @dataclass(frozen=True)
@@ -126,53 +125,6 @@ class StereoSolution:
 
 
 @dataclass(frozen=True)
-class CircleSize:
-    """The diameter of a circle grid's circles the solve used: given, or ``measured`` in the
-    views (``measured_m``: the median over the candidate views, None when none measured)."""
-
-    diameter_m: float
-    measured: bool
-    measured_m: float | None
-
-    def describe(self) -> str:
-        """The diameter and where it came from, e.g. ``0.01000 m (measured from the
-        images)``."""
-        if self.measured:
-            return f"{self.diameter_m:.5f} m (measured from the images)"
-        seen = f"; the images show {self.measured_m:.5f} m" if self.measured_m else ""
-        return f"{self.diameter_m:.5f} m (given{seen})"
-
-    def warning(self) -> str | None:
-        """What the user should know when the given diameter is not what the images show."""
-        if self.measured or self.measured_m is None or \
-                abs(self.diameter_m / self.measured_m - 1) <= DIAMETER_WARNING:
-            return None
-        return (f"--diameter {self.diameter_m:g} m, but the images show circles "
-                f"{self.measured_m:.5f} m across")
-
-
-def circle_size(cameras: list[CameraViews], board: Board,
-                diameter_m: float | None) -> CircleSize | None:
-    """The circles' diameter: ``diameter_m`` when given, else the median of what the
-    candidate views measured; None when the board is not a circle grid."""
-    if not board.circle_grid:
-        return None
-    seen = [f.detection.diameter_m for c in cameras for f in c.frames
-            if f.candidate and f.detection is not None and f.detection.diameter_m is not None]
-    measured_m = float(np.median(seen)) if seen else None
-    if diameter_m is not None:
-        return CircleSize(diameter_m, False, measured_m)
-    if measured_m is None:
-        raise CalibrationError("the circles' diameter could not be measured in any view: "
-                               "give it with --diameter")
-    if not 0 < measured_m < board.nearest_m:
-        raise CalibrationError(f"the images show circles {measured_m:.5f} m across, which "
-                               f"would overlap at a spacing of {board.square_m:g} m: check "
-                               "--square, or give --diameter")
-    return CircleSize(measured_m, True, measured_m)
-
-
-@dataclass(frozen=True)
 class RigSolution:
     """Everything the joint solve found."""
 
@@ -182,6 +134,7 @@ class RigSolution:
     rig: ViewsOfRig
     circles: CircleSize | None = None
     measured_again: list[str] | None = None  # per camera: what the second measurement did
+    pairs: list[PairSolution] = field(default_factory=list)  # a rig's pairs (not stereo)
 
 
 def measured_again_text(before: ViewsOfRig, after: ViewsOfRig, first: JointResult,
@@ -238,18 +191,41 @@ def _seen(view: BoardView) -> Seen:
     return Seen(view.point_ids, view.corners_px)
 
 
+def _chain(at: list[dict[int, int]]) -> list[int]:
+    """The cameras in the order they link to camera 0 through the instants ``at`` (camera ->
+    view) they share: camera 0, the cameras sharing an instant with it, then theirs."""
+    order = [0]
+    while more := sorted({c for cameras in at if cameras.keys() & set(order)
+                          for c in cameras} - set(order)):
+        order += more
+    return order
+
+
 def _oriented(rig: ViewsOfRig, board: Board, seeds: list[CameraModel]) -> ViewsOfRig:
-    """Right views numbered from the same end of a symmetric board as their left views."""
-    if not rig.pairs or not board.symmetric:
+    """Every camera's views numbered from the same end of a symmetric board as those of a
+    camera it shares the instant with (camera 0 first, then along the chain; for a stereo
+    pair, the right views as the left ones)."""
+    if not board.symmetric:
         return rig
+    at: dict[int, dict[int, int]] = {}  # instant -> camera -> view
+    for index, view in enumerate(rig.views):
+        at.setdefault(view.instant, {})[view.camera] = index
+    order = _chain(list(at.values()))
     points = board.points_in_board()
-    right = orient_right_views(points, [_seen(rig.views[lv]) for lv, _ in rig.pairs],
-                               [_seen(rig.views[rv]) for _, rv in rig.pairs],
-                               left_model=seeds[0], right_model=seeds[1])
     views = list(rig.views)
-    for (_, rv), seen in zip(rig.pairs, right, strict=True):
-        views[rv] = BoardView(views[rv].camera, views[rv].instant, seen.point_ids,
-                              seen.corners_px, speed_px=views[rv].speed_px)
+    for position, camera in enumerate(order[1:], start=1):
+        by_partner: dict[int, list[tuple[int, int]]] = {}
+        for cameras in at.values():
+            partner = next((c for c in order[:position] if c in cameras), None)
+            if camera in cameras and partner is not None:
+                by_partner.setdefault(partner, []).append((cameras[partner], cameras[camera]))
+        for partner, pairs in by_partner.items():
+            turned = orient_right_views(points, [_seen(views[pv]) for pv, _ in pairs],
+                                        [_seen(views[cv]) for _, cv in pairs],
+                                        left_model=seeds[partner], right_model=seeds[camera])
+            for (_, cv), seen in zip(pairs, turned, strict=True):
+                views[cv] = BoardView(views[cv].camera, views[cv].instant, seen.point_ids,
+                                      seen.corners_px, speed_px=views[cv].speed_px)
     return ViewsOfRig(views, rig.frames_of, rig.pairs, rig.candidates, rig.frame_scatter_px)
 
 
@@ -280,9 +256,10 @@ def guiding_models(cameras: list[CameraViews], board: Board, options: Calibratio
 def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOptions, *,
               approximate_s: float | None, diameter_m: float | None = None,
               background: bool = False,
-              remeasure: Callable[[ViewsOfRig, JointResult], ViewsOfRig] | None = None
-              ) -> RigSolution:
-    """Calibrate every camera, and for two the stereo rig, from every view; a circle grid's
+              remeasure: Callable[[ViewsOfRig, JointResult], ViewsOfRig] | None = None,
+              as_rig: bool = False) -> RigSolution:
+    """Calibrate every camera, and for two the stereo rig (with ``as_rig``, or for three or
+    more cameras: every pair of the rig), from every view; a circle grid's
     circles are ``diameter_m`` across, or as the views measure them. ``remeasure`` gives the
     views measured again through a first solution (:mod:`.remeasure`), which are then solved
     again from it. With ``background`` the cameras' :class:`~.statistics.CameraStatistics`
@@ -318,15 +295,17 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
             {rig.frames_of[i][0]: len(rig.frames_of[i]) for i in mine},
             coverage(params, [c for c, _ in used], views.size),
             statistics[index]))
-    stereo = None
-    if len(cameras) == 2:
+    stereo, pairs = None, []
+    if as_rig or len(cameras) > 2:
+        pairs = rig_pairs(joint, rig, points_in_board=points, square_m=board.square_m)
+    elif len(cameras) == 2:
         rectified = stereo_result(joint, rig.pairs, points_in_board=points,
                                   square_m=board.square_m)
         names = [(rig.frames_of[lv][0], rig.frames_of[rv][0]) for lv, rv in rig.pairs]
         stereo = StereoSolution(rectified, [names[i] for i in rectified.view_ids],
                                 [(names[i], why) for i, why in
                                  sorted(rectified.rejected.items())])
-    return RigSolution(solutions, stereo, joint, rig, circles, again)
+    return RigSolution(solutions, stereo, joint, rig, circles, again, pairs)
 
 
 @dataclass(frozen=True)

@@ -9,6 +9,8 @@ from __future__ import annotations
 import numpy as np
 
 from processors.calibration.board import Board
+from processors.calibration.rig import angle_deg
+from processors.calibration.rotation import rotation_vectors
 from processors.calibration.solve import (
     CalibrationOptions,
     MonoResult,
@@ -16,10 +18,13 @@ from processors.calibration.solve import (
 )
 from processors.calibration.uncertainty import error_against
 from processors.calibration.validation import projection_difference
+from replay.geometry import invert
 from replay.messages import F64
 from replay.records import calibration as records
+from replay.records import rig as rig_records
 from replay.records.scenario import Scenario
 
+from .rig import PairSolution
 from .solving import CalibratedCamera, RigSolution, StereoSolution
 from .truth import TrueRig, true_rig
 
@@ -168,6 +173,43 @@ def _stereo(cameras: list[CalibratedCamera], stereo: StereoSolution) -> records.
         truth=truth)
 
 
+def _rig_camera(camera: CalibratedCamera, index: int, solved: RigSolution,
+                reference: CalibratedCamera) -> rig_records.RigCameraSummary:
+    pose = solved.joint.camera_from_reference[index]
+    std = np.sqrt(np.maximum(np.diag(solved.joint.rig_covariance[index]), 0.0))
+    truth = None
+    if camera.truth is not None and reference.truth is not None:
+        true_pose = invert(camera.truth.world_from_camera) @ reference.truth.world_from_camera
+        truth = rig_records.RigCameraTruth(
+            rotation_vectors(true_pose[None, :3, :3])[0].tolist(), true_pose[:3, 3].tolist(),
+            rotation_vectors((pose[:3, :3] @ true_pose[:3, :3].T)[None])[0].tolist(),
+            (pose[:3, 3] - true_pose[:3, 3]).tolist())
+    return rig_records.RigCameraSummary(
+        camera.views.source.namespace, camera.views.frame_id,
+        rotation_vectors(pose[None, :3, :3])[0].tolist(), std[:3].tolist(),
+        pose[:3, 3].tolist(), std[3:].tolist(), angle_deg(pose[:3, :3]), truth)
+
+
+def _rig_pair(cameras: list[CalibratedCamera], pair: PairSolution) -> rig_records.RigPairSummary:
+    first, second, s = cameras[pair.first], cameras[pair.second], pair.result
+    truth = None
+    if first.truth is not None and second.truth is not None:
+        true_pose = invert(second.truth.world_from_camera) @ first.truth.world_from_camera
+        truth = rig_records.RigPairTruth(float(np.linalg.norm(true_pose[:3, 3])),
+                                         angle_deg(true_pose[:3, :3]))
+    return rig_records.RigPairSummary(
+        first.views.source.namespace, second.views.source.namespace, len(s.view_epipolar_px),
+        s.baseline_m, s.baseline_std_m, s.rotation_deg, s.rotation_std_deg,
+        s.right_from_left[:3, 3].tolist(), s.rms_px, s.epipolar_rms_px, truth)
+
+
+def _rig(cameras: list[CalibratedCamera], solved: RigSolution) -> rig_records.RigSummary:
+    return rig_records.RigSummary(
+        cameras[0].views.source.namespace, "camera_from_reference",
+        [_rig_camera(c, i, solved, cameras[0]) for i, c in enumerate(cameras)],
+        [_rig_pair(cameras, pair) for pair in solved.pairs])
+
+
 def build_summary(cameras: list[CalibratedCamera], solved: RigSolution, *,
                   board: Board, options: CalibrationOptions,
                   scenario: Scenario | None) -> records.CalibrationSummary:
@@ -186,4 +228,5 @@ def build_summary(cameras: list[CalibratedCamera], solved: RigSolution, *,
         cameras=[_camera(c, i, solved, truth) for i, c in enumerate(cameras)],
         ground_truth=scenario is not None,
         stereo=_stereo(cameras, stereo) if stereo is not None else None,
+        rig=_rig(cameras, solved) if stereo is None and len(cameras) > 1 else None,
     )

@@ -34,7 +34,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "resync": ("pair and re-stamp the images of two unsynchronised cameras", "resync"),
     "batch": ("run a pipeline (resync, calibrate, process, ...) over many logs in parallel",
               "batch"),
-    "calibrate": ("calibrate a mono camera or stereo pair from a log (or --check a "
+    "calibrate": ("calibrate a mono camera, a stereo pair or a rig from a log (or --check a "
                   "calibration)", "calibrate"),
     "view": ("show logs in rerun: write an .rrd or stream to a viewer, with a ready layout",
              "view"),

@@ -1,8 +1,10 @@
-"""``camlog calibrate``: intrinsic calibration of a mono camera or a stereo pair from a log."""
+"""``camlog calibrate``: calibration of a mono camera, a stereo pair or a rig of cameras from a
+log."""
 
 from __future__ import annotations
 
 import argparse
+import math
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -23,6 +25,7 @@ from .args import (
 if TYPE_CHECKING:
     from processors.calibration.board import Board
     from processors.calibration.solve import CalibrationOptions
+    from replay.records import RigSummary
 
 #: ROS distortion_model names (and OpenCV's "fisheye" for equidistant)
 MODELS = ("plumb_bob", "rational_polynomial", "equidistant", "fisheye")
@@ -36,6 +39,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "or within --approximate SEC. Writes OUTDIR/{ost.yaml | left.yaml, right.yaml}, ost.txt, "
         "calibration.mcap (the log plus detections, residuals, calibrated camera_info and "
         "rectified images), calibration.json, report.md and PNG figures. "
+        "Rig: --camera NS repeated, two cameras or more (or --rig NS,NS,...): every camera, "
+        "every camera's pose relative to the first and every board pose solved jointly; "
+        "writes one NS.yaml per camera (slashes as underscores), rig.yaml (each camera's "
+        "camera_from_reference with standard deviations), calibration.json, report.md, "
+        "figures and calibration.mcap. "
         "camera_calibration's spellings are accepted too: -s/--size, -q/--square, "
         "-p/--pattern, -c/--camera_name, -k/--k-coefficients, --fix-principal-point, "
         "--fix-aspect-ratio, --zero-tangent-dist, --max-chessboard-speed."
@@ -47,9 +55,13 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="square side in metres, e.g. 0.01")
     p.add_argument("-p", "--pattern", default="chessboard", choices=PATTERNS,
                    help="calibration target (default chessboard)")
-    p.add_argument("--camera", type=name, metavar="NS",
-                   help="mono camera namespace, e.g. /simple_camera, or its image topic, e.g. "
-                        "/simple_camera/image_raw (default: the log's only camera)")
+    p.add_argument("--camera", type=name, action="append", metavar="NS",
+                   help="camera namespace, e.g. /simple_camera, or its image topic, e.g. "
+                        "/simple_camera/image_raw (default: the log's only camera); repeated, "
+                        "the cameras of a rig, calibrated jointly")
+    p.add_argument("--rig", type=_namespaces, metavar="NS,NS,...",
+                   help="the cameras of a rig, comma-separated (the same as --camera "
+                        "repeated)")
     p.add_argument("--left", type=name, metavar="NS",
                    help="stereo left camera namespace (or its image topic)")
     p.add_argument("--right", type=name, metavar="NS",
@@ -99,19 +111,28 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     add_no_progress(p)
 
 
+def _namespaces(text: str) -> list[str]:
+    """argparse type: comma-separated camera namespaces (or image topics), two or more."""
+    spaces = [name(part.strip()) for part in text.split(",")]
+    if len(spaces) < 2:
+        raise argparse.ArgumentTypeError("a rig has two cameras or more: NS,NS,...")
+    return spaces
+
+
 def cameras_from(args: argparse.Namespace) -> list[str]:
     """The camera namespaces to calibrate, from the options or the log's only camera."""
     from camlog.processing.cameras import cameras_in
     from replay.formats import open_reader
 
+    named = [*(args.camera or []), *(args.rig or [])]
     if args.left or args.right:
         if not (args.left and args.right):
             raise UsageError("stereo needs both --left and --right")
-        if args.camera:
-            raise UsageError("give either --camera or --left/--right")
+        if named:
+            raise UsageError("give either --camera/--rig or --left/--right")
         return [args.left, args.right]
-    if args.camera:
-        return [args.camera]
+    if named:
+        return named
     with open_reader(args.log, recover=args.recover) as reader:
         cameras = cameras_in(reader)
     # a camera's raw images first: processed images (masks, edges) are cameras of their own
@@ -121,6 +142,29 @@ def cameras_from(args: argparse.Namespace) -> list[str]:
         raise UsageError(f"name the camera with --camera (or --left/--right); camera "
                          f"namespaces in {args.log}: {', '.join(spaces) or 'none'}")
     return spaces
+
+
+def is_rig(args: argparse.Namespace) -> bool:
+    """Whether the arguments name a rig: --rig, or --camera more than once."""
+    return bool(args.rig) or len(args.camera or []) > 1
+
+
+def rig_lines(rig: RigSummary) -> list[str]:
+    """A rig's poses and pairs, a line each, for the terminal."""
+    lines = [f"rig (camera_from_reference, reference {rig.reference}):"]
+    for camera in rig.cameras[1:]:
+        lines.append(
+            f"  {camera.namespace}: t [{', '.join(f'{v:.5f}' for v in camera.translation_m)}]"
+            f" ± [{', '.join(f'{v:.1g}' for v in camera.translation_std_m)}] m, rotation "
+            f"{camera.rotation_deg:.4f}° ± "
+            f"{max(camera.rotation_std_rad) * 180 / math.pi:.2g}°")
+    for pair in rig.pairs:
+        lines.append(
+            f"  {pair.first} → {pair.second}: baseline {pair.baseline_m:.5f} ± "
+            f"{pair.baseline_std_m:.1g} m, rotation {pair.rotation_deg:.4f} ± "
+            f"{pair.rotation_std_deg:.2g}°, {pair.joint_views} joint views, epipolar RMS "
+            f"{pair.epipolar_rms_px:.4f} px")
+    return lines
 
 
 def _truth_error(camera: Any) -> str:
@@ -162,6 +206,9 @@ def run(args: argparse.Namespace) -> int:
 
         if not args.calibration:
             raise UsageError("--check needs --calibration FILE (twice for stereo)")
+        if is_rig(args):
+            raise UsageError("--check measures one camera or a stereo pair (--left/--right), "
+                             "not a rig")
         result = check_log(args.log, board=board, cameras=cameras,
                            calibrations=args.calibration, approximate_s=args.approximate,
                            diameter_m=args.diameter, progress=progress, recover=args.recover)
@@ -175,7 +222,7 @@ def run(args: argparse.Namespace) -> int:
         approximate_s=args.approximate, camera_name=args.camera_name,
         max_speed_px=args.max_chessboard_speed, diameter_m=args.diameter,
         overwrite=args.overwrite, progress=progress, recover=args.recover,
-        report=not args.no_report)
+        report=not args.no_report, rig=is_rig(args))
     print_warnings(run_.warnings)
     if run_.solved.circles is not None:
         print(f"circle diameter {run_.solved.circles.describe()}")
@@ -200,6 +247,8 @@ def run(args: argparse.Namespace) -> int:
                   "where corners were seen, "
                   f"{camera.max_projection_difference_vs_truth_aligned_px:.3f} px over the "
                   "whole image (camera frames aligned by a rotation)")
+    if run_.summary.rig is not None:
+        print("\n".join(rig_lines(run_.summary.rig)))
     if run_.summary.stereo is not None:
         s = run_.summary.stereo
         print(f"stereo: baseline {s.baseline_m:.5f} m, epipolar RMS "

@@ -24,6 +24,7 @@ import numpy.typing as npt
 from replay.camera import CameraModel
 from replay.messages import F64
 
+from ..errors import ProcessorError
 from . import bundle, normal
 from .discs import centroid_shifts
 from .lens import intrinsics_of
@@ -269,7 +270,8 @@ def _camera_views(points_in_board: F64, views: list[BoardView], camera: int
 def _seed_state(points_in_board: F64, obs: bundle.Observations, models: list[CameraModel],
                 instant_count: int) -> bundle.RigState:
     """Board poses by PnP; each instant from the lowest-numbered camera that saw it; rig
-    transforms by consensus over the instants a camera shares with the reference."""
+    transforms by consensus over the instants a camera shares with the reference, or with a
+    camera already placed (:func:`_chained_rig`)."""
     poses: dict[tuple[int, int], F64] = {}
     for row in range(obs.view_count):
         ids = np.flatnonzero(obs.mask[row])
@@ -280,11 +282,7 @@ def _seed_state(points_in_board: F64, obs: bundle.Observations, models: list[Cam
         if pose is not None:
             poses[(int(obs.camera[row]), int(obs.instant[row]))] = pose
     cameras = len(models)
-    rig = [np.eye(4)]
-    for camera in range(1, cameras):
-        shared = [i for (c, i) in poses if c == camera and (0, i) in poses]
-        rig.append(rig_transform([poses[(camera, i)] for i in shared],
-                                 [poses[(0, i)] for i in shared]))
+    rig = _chained_rig(poses, cameras)
     board = np.tile(np.eye(4), (instant_count, 1, 1))
     for instant in range(instant_count):
         for camera in range(cameras):
@@ -294,3 +292,30 @@ def _seed_state(points_in_board: F64, obs: bundle.Observations, models: list[Cam
     return bundle.RigState([intrinsics_of(m) for m in models],
                            np.stack([r[:3, :3] for r in rig]), np.stack([r[:3, 3] for r in rig]),
                            board[:, :3, :3].copy(), board[:, :3, 3].copy())
+
+
+def _chained_rig(poses: dict[tuple[int, int], F64], cameras: int) -> list[F64]:
+    """Every camera's ``camera_from_reference`` ``(4, 4)`` from the board poses ``(camera,
+    instant) -> camera_from_board``: by consensus over the instants it shares with camera 0,
+    or else with the placed camera it shares most instants with (a chain of cameras)."""
+    rig: list[F64 | None] = [np.eye(4)] + [None] * (cameras - 1)
+
+    def shared(camera: int, other: int) -> list[int]:
+        return [i for (c, i) in poses if c == camera and (other, i) in poses]
+
+    while unplaced := [c for c in range(cameras) if rig[c] is None]:
+        direct = [c for c in unplaced if shared(c, 0)]
+        links = [(0, c, 0) for c in direct[:1]] or sorted(
+            (-len(shared(c, p)), c, p) for c in unplaced for p in range(cameras)
+             if rig[p] is not None and shared(c, p))
+        if not links:
+            raise ProcessorError("a camera never sees the board at the same time as the "
+                                 "first one, directly or through another camera")
+        _count, camera, placed = links[0]
+        instants = shared(camera, placed)
+        camera_from_placed = rig_transform([poses[(camera, i)] for i in instants],
+                                           [poses[(placed, i)] for i in instants])
+        placed_from_reference = rig[placed]
+        rig[camera] = camera_from_placed if placed_from_reference is None or placed == 0 \
+            else camera_from_placed @ placed_from_reference
+    return [r for r in rig if r is not None]

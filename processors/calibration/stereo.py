@@ -24,6 +24,7 @@ from replay.messages import F64
 from ..errors import ProcessorError
 from .holds import Seen
 from .joint import JointResult
+from .rig import relative_pose, rotation_std_deg, translation_std_m
 from .rotation import support
 from .seed import board_pose
 
@@ -132,14 +133,18 @@ def orient_right_views(points_in_board: F64, left: list[Seen], right: list[Seen]
 
 
 def stereo_result(joint: JointResult, pairs: list[tuple[int, int]], *,
-                  points_in_board: F64, square_m: float) -> StereoResult:
-    """Rectification and figures of merit of cameras 0 and 1 of a joint calibration.
+                  points_in_board: F64, square_m: float, cameras: tuple[int, int] = (0, 1),
+                  global_covariance: F64 | None = None) -> StereoResult:
+    """Rectification and figures of merit of two cameras (``cameras``: left, right; by
+    default 0 and 1) of a joint calibration.
 
     ``pairs[i]`` are the views (indices into the joint calibration's views) of the left and
     right camera at one instant. Only corners that are inliers in both views count.
+    ``global_covariance``: the joint problem's, when already computed (see
+    :func:`.rig.relative_pose`).
     """
-    left_model, right_model = joint.models[0], joint.models[1]
-    right_from_left = joint.camera_from_reference[1]
+    left_model, right_model = joint.models[cameras[0]], joint.models[cameras[1]]
+    right_from_left, covariance = relative_pose(joint, *cameras, global_covariance)
     r1, r2, p1, p2 = rectify(left_model, right_model, right_from_left)
     used, rejected, left, right, common = [], {}, [], [], []
     for index, (lv, rv) in enumerate(pairs):
@@ -162,7 +167,6 @@ def stereo_result(joint: JointResult, pairs: list[tuple[int, int]], *,
                                   r1=r1, p1=p1, r2=r2, p2=p2)
     translation = right_from_left[:3, 3]
     baseline = float(np.linalg.norm(translation))
-    covariance = joint.rig_covariance[1]
     direction = translation / baseline
     rms = math.sqrt(float(np.mean(np.square(view_errors)))) if view_errors else float("nan")
     rms_px = math.sqrt(np.mean([joint.view_rms_px(v) ** 2 for pair in
@@ -170,9 +174,8 @@ def stereo_result(joint: JointResult, pairs: list[tuple[int, int]], *,
     return StereoResult(
         right_from_left=right_from_left, rms_px=float(rms_px), r1=r1, r2=r2, p1=p1, p2=p2,
         epipolar_rms_px=rms, baseline_m=baseline,
-        baseline_std_m=math.sqrt(max(float(direction @ covariance[3:, 3:] @ direction), 0.0)),
-        rotation_std_deg=math.degrees(math.sqrt(max(float(np.linalg.eigvalsh(
-            covariance[:3, :3]).max()), 0.0))),
+        baseline_std_m=translation_std_m(covariance, direction),
+        rotation_std_deg=rotation_std_deg(covariance),
         square_m=square_size(left, right, common, left_model=left_model,
                              right_model=right_model, r1=r1, p1=p1, r2=r2, p2=p2,
                              points_in_board=points_in_board, square_m=square_m),

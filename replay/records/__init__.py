@@ -20,6 +20,7 @@ from .calibration import (
 )
 from .processed import ProcessedOutput, ProcessedOutputs, outputs_by_topic
 from .resync import OffsetStats, ResyncStats
+from .rig import RigCameraSummary, RigPairSummary, RigSummary
 from .scenario import RenderView, Scenario, ScenarioCamera, ScenarioTarget
 
 __all__ = [
@@ -39,6 +40,9 @@ __all__ = [
     "RejectedView",
     "RenderView",
     "ResyncStats",
+    "RigCameraSummary",
+    "RigPairSummary",
+    "RigSummary",
     "Scenario",
     "ScenarioCamera",
     "ScenarioTarget",

@@ -15,6 +15,7 @@ import numpy as np
 from ..errors import RecordError
 from ..messages import F64
 from .base import OMIT_NONE, JsonRecord, from_json, to_json
+from .rig import RigSummary
 
 __all__ = [
     "BoardSummary",
@@ -289,6 +290,7 @@ class CalibrationSummary(JsonRecord):
     cameras: list[CameraSummary]
     ground_truth: bool
     stereo: StereoSummary | None = field(default=None, metadata=OMIT_NONE)
+    rig: RigSummary | None = field(default=None, metadata=OMIT_NONE)
 
     def rejected_stamps(self) -> dict[str, dict[int, str]]:
         """Camera namespace -> stamp of every rejected frame -> why."""

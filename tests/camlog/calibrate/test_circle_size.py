@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from camlog.calibrate.solving import circle_size
+from camlog.calibrate.circles import circle_size
 from camlog.calibrate.views import CameraSource, CameraViews, Frame
 from camlog.errors import CalibrationError
 from processors.calibration.board import Board

@@ -71,3 +71,37 @@ def test_offset_video_of_a_moving_board_does_not_pair() -> None:
     with pytest.raises(CalibrationError, match="never see the board at the same instant "
                                                "with the board still"):
         rig_views([left, right], BOARD, approximate_s=0.02, stereo_note=True)
+
+
+def test_three_cameras_share_instants_through_a_chain() -> None:
+    # camera 0 and camera 2 never shoot at the same time; camera 1 shares with both
+    first = camera([GRID, GRID + 40.0, None, None], name="/a")
+    second = camera([GRID - 30.0, GRID + 10.0, GRID + 20.0, GRID + 60.0], name="/b")
+    third = camera([None, None, GRID - 20.0, GRID + 30.0], name="/c")
+    rig = rig_views([first, second, third], BOARD, approximate_s=None, stereo_note=True)
+    by_instant: dict[int, list[int]] = {}
+    for view in rig.views:
+        by_instant.setdefault(view.instant, []).append(view.camera)
+    assert sorted(by_instant.values()) == [[0, 1], [0, 1], [1, 2], [1, 2]]
+    assert rig.pairs == []  # stereo pairs belong to two cameras
+
+
+def test_a_camera_that_shares_no_instant_is_one_error() -> None:
+    first = camera([GRID, GRID + 40.0], name="/a")
+    second = camera([GRID - 30.0, GRID + 10.0], name="/b")
+    alone = camera([GRID, GRID + 5.0], name="/c", offset_ns=500)
+    with pytest.raises(CalibrationError, match=r"^/c/image_raw never sees the board at the "
+                                               r"same instant as /a, /b, directly or through"):
+        rig_views([first, second, alone], BOARD, approximate_s=None, stereo_note=True)
+
+
+def test_three_offset_snapshots_share_one_instant_within_the_slop() -> None:
+    # a photo a second from each of three cameras, 2 and 4 ms apart: one pose per second
+    poses = [GRID + 30.0 * i for i in range(4)]
+    cameras = [camera([p + 10.0 * c for p in poses], name=f"/c{c}", period_ns=1_000_000_000,
+                      offset_ns=2_000_000 * c) for c in range(3)]
+    rig = rig_views(cameras, BOARD, approximate_s=0.01, stereo_note=True)
+    by_instant: dict[int, list[int]] = {}
+    for view, frames in zip(rig.views, rig.frames_of, strict=True):
+        by_instant.setdefault(view.instant, []).append(frames[0])
+    assert sorted(by_instant.values()) == [[i, i, i] for i in range(4)]

@@ -131,6 +131,26 @@ def test_views_of_one_camera_alone_still_count() -> None:
     assert max(abs(v) for v in errors_in_sigma(result, 1, true_model()).values()) < 3.5
 
 
+def test_a_camera_placed_through_another() -> None:
+    """Camera 2 never shares an instant with camera 0: it is placed through camera 1."""
+    placements = [np.eye(4), RIGHT_FROM_LEFT, RIGHT_FROM_LEFT @ RIGHT_FROM_LEFT]
+    models = [true_model()] * 3
+    observed, _ = board_views(models, 30, seed=7, placements=placements)
+    chain = [v for v in observed if not (v.camera == 0 and v.instant >= 15)
+             and not (v.camera == 2 and v.instant < 15)]
+    result = calibrate_cameras(POINTS, chain, [(W, H)] * 3, CalibrationOptions())
+    for camera in (1, 2):
+        rig = result.camera_from_reference[camera]
+        truth = placements[camera]
+        error = np.concatenate([
+            rotation_vectors((rig[:3, :3] @ truth[:3, :3].T)[None])[0], rig[:3, 3] - truth[:3, 3]])
+        covariance = result.rig_covariance[camera]
+        assert float(error @ np.linalg.solve(covariance, error)) < 4.5 ** 2, camera
+    with pytest.raises(ProcessorError, match="directly or through another camera"):
+        calibrate_cameras(POINTS, [v for v in chain if v.camera != 1 or v.instant < 15],
+                          [(W, H)] * 3, CalibrationOptions())
+
+
 def test_fisheye_lens() -> None:
     fisheye = CameraModel(W, H, np.array([[230.0, 0, 322], [0, 231, 237], [0, 0, 1]]),
                           "equidistant", np.array([0.02, -0.008, 0.003, -0.0007]))
