@@ -98,7 +98,8 @@ def _candidates(views: CameraViews, board: Board, note: str) -> list[int]:
     candidates = [f.index for f in views.frames if f.candidate]
     if not candidates:
         reasons = sorted({f.reason or f.detection.reason for f in found if f.detection})
-        raise CalibrationError(f"{topic}: every board found was rejected "
+        raise CalibrationError(f"{topic}: every {board.cols}x{board.rows} board found was "
+                               "rejected "
                                f"({'; '.join(reasons)}){size_hint(views, board)}")
     return candidates
 

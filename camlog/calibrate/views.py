@@ -44,9 +44,13 @@ HINT_SAMPLES = 12
 #: photo in a folder, a triggered pair a second): no neighbouring frame shows its pose, so
 #: it is searched with every detector and its motion is not observable
 SNAPSHOT_GAP_S = 0.25
+#: a camera with at most this many frames (a folder of photos, whatever its stamps) has
+#: every frame searched with every detector: each may be a view no other frame replaces
+THOROUGH_FRAMES = 200
 
 __all__ = [
     "SNAPSHOT_GAP_S",
+    "THOROUGH_FRAMES",
     "CameraSource",
     "CameraViews",
     "Frame",
@@ -129,6 +133,7 @@ class _Seen:
 
     source: CameraSource
     hint_stride: int
+    thorough: bool = False  # every frame searched with every detector (few frames)
     stamps: list[int] = field(default_factory=list)
     duplicates: list[bool] = field(default_factory=list)
     detections: dict[int, Detection | None] = field(default_factory=dict)
@@ -149,7 +154,7 @@ class _Seen:
         after the previous one (the first frame does); remembers it as the previous one."""
         gap = self.last_distinct_ns
         self.last_distinct_ns = stamp_ns
-        return gap is None or abs(stamp_ns - gap) >= SNAPSHOT_GAP_S * 1e9
+        return self.thorough or gap is None or abs(stamp_ns - gap) >= SNAPSHOT_GAP_S * 1e9
 
     def add(self, gray: np.ndarray, stamp_ns: int, where: str) -> tuple[int, bool]:
         """Record a frame; its index and whether it repeats the previous one."""
@@ -230,7 +235,9 @@ def detect_views(reader: LogReader, sources: list[CameraSource], board: Board, *
                  models: dict[str, CameraModel] | None = None) -> LogViews:
     """Detect the board in every distinct frame of ``sources`` (one pass over the log);
     ``models`` (by namespace, from a first calibration) guide a ChArUco detection."""
-    seen = {s.namespace: _Seen(s, max(1, reader.topics[s.image_topic].count // HINT_SAMPLES))
+    counts = {s.namespace: reader.topics[s.image_topic].count for s in sources}
+    seen = {s.namespace: _Seen(s, max(1, counts[s.namespace] // HINT_SAMPLES),
+                               thorough=counts[s.namespace] <= THOROUGH_FRAMES)
             for s in sources}
     by_image = {s.image_topic: seen[s.namespace] for s in sources}
     by_info = {s.info_topic: seen[s.namespace] for s in sources if s.info_topic}

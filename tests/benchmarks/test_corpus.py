@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import pytest
@@ -14,6 +15,7 @@ from benchmarks.corpus.manifest import (
 )
 from benchmarks.corpus.reference import reference_calibration
 from benchmarks.corpus.run import camlog_args
+from camlog.cli import main
 
 SMALL = "boofcv_sony_chess"
 
@@ -59,3 +61,28 @@ def test_opencv_reference_on_a_small_dataset() -> None:
     assert dataset.reference is not None
     assert abs(camera.fx - dataset.reference.fx) / dataset.reference.fx < 0.02
     assert abs(camera.cx - dataset.reference.cx) < 5
+
+
+def cached(name: str) -> Path:
+    folder = default_cache() / name
+    if not folder.is_dir():
+        pytest.skip(f"corpus cache {folder} absent: run python -m benchmarks.corpus.fetch "
+                    "(--mirror-root /work/.mirror without network)")
+    return folder
+
+
+def test_fisheye_photos_calibrate_at_any_import_rate(tmp_path: Path) -> None:
+    # 15 hand-held photos through a fisheye: OpenCV's fast chessboard check finds the board
+    # in 4, the sector-based detector in 14; a folder of photos is searched with every
+    # detector whatever the rate it was imported at (10 Hz by default)
+    folder = cached("ocamcalib_fisheye1")
+    log = tmp_path / "fisheye.mcap"
+    assert main(["import", str(folder), "-o", str(log), "--camera", "/fisheye"]) == 0
+    out = tmp_path / "cal"
+    assert main(["calibrate", str(log), "--camera", "/fisheye", "--size", "8x6", "--square",
+                 "0.0325", "--model", "equidistant", "-o", str(out), "--no-progress",
+                 "--no-report"]) == 0
+    (camera,) = json.loads((out / "calibration.json").read_text())["cameras"]
+    assert camera["boards_found"] == 15
+    assert camera["used_views"] >= 14
+    assert camera["rms_px"] < 0.5
