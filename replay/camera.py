@@ -18,7 +18,8 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from .format_names import CAMERA_MODELS, FISHEYE_MODELS, MODEL_ALIASES
+from .format_names import CAMERA_MODELS
+from .lens_models import LensModel, canonical_name, lens_model
 from .messages import F64, CameraInfo
 
 _FISHEYE_NEWTON_STEPS = 30
@@ -33,8 +34,7 @@ def focal_from_hfov(width: int, hfov_rad: float) -> float:
 def canonical_model(name: str) -> str:
     """The ROS name of a distortion model (``fisheye`` -> ``equidistant``); an empty name is
     plumb_bob, as camera_info_manager reads it."""
-    name = (name or "plumb_bob").strip()
-    return MODEL_ALIASES.get(name, name)
+    return canonical_name(name)
 
 
 @dataclass(frozen=True)
@@ -97,8 +97,13 @@ class CameraModel:
 
     @property
     def is_fisheye(self) -> bool:
-        """True for the equidistant (``cv2.fisheye``) model."""
-        return self.distortion_model in FISHEYE_MODELS
+        """True for a model OpenCV handles with ``cv2.fisheye`` (equidistant)."""
+        return self.lens.fisheye
+
+    @property
+    def lens(self) -> LensModel:
+        """The lens model's entry in :data:`replay.lens_models.LENS_MODELS`."""
+        return lens_model(self.distortion_model)
 
     @property
     def is_ideal(self) -> bool:

@@ -4,6 +4,8 @@ and the first stamp of an import (``--format``, ``--compress``, ``--model`` choi
 
 from __future__ import annotations
 
+from .lens_models import LENS_MODELS, MODEL_ALIASES
+
 __all__ = ["CAMERA_MODELS", "DEFAULT_CRF", "DEFAULT_START_NS", "DISTORTION_MODELS",
            "FISHEYE_MODELS", "LOG_TIMES", "MODEL_ALIASES", "STILL_CODECS", "VIDEO_CODEC_NAMES",
            "WRITE_FORMATS"]
@@ -22,14 +24,12 @@ VIDEO_CODEC_NAMES = ("h264", "h265")
 #: log far more than tenfold (``benchmarks.video_size``)
 DEFAULT_CRF = 18
 
-#: distortion model -> number of coefficients OpenCV uses for it
-DISTORTION_MODELS = {"plumb_bob": 5, "rational_polynomial": 8}
+#: pinhole distortion model -> number of coefficients OpenCV uses for it (from the table)
+DISTORTION_MODELS = {m.name: len(m.coefficients) for m in LENS_MODELS.values() if not m.fisheye}
 #: fisheye model -> number of coefficients (``cv2.fisheye``'s k1..k4)
-FISHEYE_MODELS = {"equidistant": 4}
+FISHEYE_MODELS = {m.name: len(m.coefficients) for m in LENS_MODELS.values() if m.fisheye}
 #: every model :class:`~replay.camera.CameraModel` understands (ROS ``distortion_model`` names)
 CAMERA_MODELS = DISTORTION_MODELS | FISHEYE_MODELS
-#: other names of the models (OpenCV and Kalibr call the equidistant model "fisheye")
-MODEL_ALIASES = {"fisheye": "equidistant"}
 
 #: what ``camlog play`` writes as a message's log time: the replay's wall clock or the log's
 LOG_TIMES = ("replay", "original")

@@ -9,6 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from processors.calibration.patterns import DEFAULT_DICTIONARY, PATTERNS
+from replay.format_names import CAMERA_MODELS, MODEL_ALIASES
 
 from ..errors import UsageError
 from .args import (
@@ -28,7 +29,7 @@ if TYPE_CHECKING:
     from replay.records import RigSummary
 
 #: ROS distortion_model names (and OpenCV's "fisheye" for equidistant)
-MODELS = ("plumb_bob", "rational_polynomial", "equidistant", "fisheye")
+MODELS = (*CAMERA_MODELS, *MODEL_ALIASES)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

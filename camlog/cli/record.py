@@ -10,6 +10,7 @@ from typing import Any
 from recorder.builtin import DEFAULT_SCENARIO, MAX_FRAMES, builtin_names
 from replay.atomic import refuse_existing
 from replay.format_names import CAMERA_MODELS, WRITE_FORMATS
+from replay.lens_models import LENS_MODELS
 
 from .args import (
     add_no_progress,
@@ -25,7 +26,8 @@ from .args import (
 MAX_DURATION_S = 86_400.0
 MAX_SIDE = 8192
 #: distortion model -> number of coefficients
-DISTORTION_COEFFICIENTS = {"plumb_bob": 5, "rational_polynomial": 8, "equidistant": 4}
+#: MODEL:K1,K2,... for every lens model, as --distortion takes them
+DISTORTION_FORMS = [f"{m.name}:{','.join(m.coefficients)}" for m in LENS_MODELS.values()]
 
 
 def _floats(text: str) -> list[float]:
@@ -62,15 +64,14 @@ def _resolution(text: str) -> tuple[int, int]:
 
 def _distortion(text: str) -> tuple[str, list[float]]:
     model, _, coeffs = text.partition(":")
-    if model not in CAMERA_MODELS or model not in DISTORTION_COEFFICIENTS or not coeffs:
+    if model not in CAMERA_MODELS or not coeffs:
         raise argparse.ArgumentTypeError(
-            f"expected plumb_bob:k1,k2,p1,p2,k3, rational_polynomial:k1,k2,p1,p2,k3,k4,k5,k6 or "
-            f"equidistant:k1,k2,k3,k4, got {text!r}"
-        )
+            f"expected {', '.join(DISTORTION_FORMS[:-1])} or {DISTORTION_FORMS[-1]}, "
+            f"got {text!r}")
     values = _floats(coeffs)
-    if len(values) != DISTORTION_COEFFICIENTS[model]:
+    if len(values) != CAMERA_MODELS[model]:
         raise argparse.ArgumentTypeError(
-            f"{model} has {DISTORTION_COEFFICIENTS[model]} coefficients, got {len(values)}")
+            f"{model} has {CAMERA_MODELS[model]} coefficients, got {len(values)}")
     return model, values
 
 
@@ -98,9 +99,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--intrinsics", type=_intrinsics, metavar="FX,FY,CX,CY",
                    help="pinhole intrinsics in pixels (overrides --hfov)")
     p.add_argument("--distortion", type=_distortion, metavar="MODEL:K1,K2,...",
-                   help="lens distortion, e.g. plumb_bob:-0.2,0.05,0,0,0, "
-                        "rational_polynomial:k1,k2,p1,p2,k3,k4,k5,k6 or equidistant:k1,k2,k3,k4 "
-                        "(a fisheye, rendered as several views)")
+                   help="lens distortion, e.g. plumb_bob:-0.2,0.05,0,0,0; "
+                        f"{', '.join(DISTORTION_FORMS)} (a fisheye model is rendered as "
+                        "several views)")
     p.add_argument("--noise", type=non_negative, metavar="SIGMA",
                    help="Gaussian sensor noise, standard deviation in 8-bit levels")
     p.add_argument("--supersample", type=int, choices=(1, 2, 3, 4),

@@ -31,6 +31,7 @@ import numpy as np
 import numpy.typing as npt
 
 from replay.camera import CameraModel
+from replay.lens_models import LENS_MODELS
 from replay.messages import F64
 
 from .board import Board
@@ -43,7 +44,7 @@ __all__ = ["MAX_WINDOW", "OVERSAMPLE", "REMEASURED_MODELS", "cross_corners", "ed
 #: the radius, and the board plane's within 0.01 px; on the pinhole and plumb_bob cameras of
 #: the calibration scenarios cornerSubPix's bias is below 0.003 px and measuring again did
 #: not make the calibration more accurate
-REMEASURED_MODELS = frozenset({"equidistant"})
+REMEASURED_MODELS = frozenset(name for name, m in LENS_MODELS.items() if m.fisheye)
 
 #: largest half-window of the corner search (image pixels, as cornerSubPix's in detect)
 MAX_WINDOW = 11

@@ -12,14 +12,12 @@ from __future__ import annotations
 import numpy as np
 
 from replay.camera import CameraModel
+from replay.lens_models import LENS_MODELS, lens_model
 from replay.messages import F64
 
+#: every lens model's intrinsic vector (:data:`replay.lens_models.LENS_MODELS`)
 INTRINSIC_NAMES: dict[str, tuple[str, ...]] = {
-    "plumb_bob": ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"),
-    "rational_polynomial": ("fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "k5",
-                            "k6"),
-    "equidistant": ("fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"),
-}
+    name: model.intrinsic_names for name, model in LENS_MODELS.items()}
 #: points nearer the optical axis than this (relative to their depth) use its limit
 _AXIS_EPS = 1e-9
 
@@ -39,11 +37,12 @@ def model_of(distortion_model: str, intrinsics: F64, size: tuple[int, int]) -> C
 def project(distortion_model: str, intrinsics: F64, points: F64) -> tuple[F64, F64, F64]:
     """Pixels ``(M, 2)`` of points ``(M, 3)`` in the camera frame, with the derivatives
     d pixel / d point ``(M, 2, 3)`` and d pixel / d intrinsics ``(M, 2, K)``."""
-    if distortion_model == "equidistant":
+    lens = lens_model(distortion_model)
+    if lens.fisheye:
         normalized, d_point, d_dist = _equidistant(intrinsics[4:], points)
     else:
         normalized, d_point, d_dist = _pinhole(intrinsics[4:], points,
-                                               rational=distortion_model == "rational_polynomial")
+                                               rational=len(lens.coefficients) > 5)
     focal = intrinsics[:2]
     uv = normalized * focal + intrinsics[2:4]
     m = len(points)

@@ -21,15 +21,16 @@ import math
 from dataclasses import dataclass
 
 from replay.camera import canonical_model
+from replay.lens_models import LENS_MODELS, lens_model
 
 from ..errors import ProcessorError
 from .lens import INTRINSIC_NAMES
 
 TANGENTIAL_MODES = ("auto", "estimate", "zero")
 MODELS = tuple(INTRINSIC_NAMES)
-#: radial coefficients estimated when -k is not given
-DEFAULT_K = {"plumb_bob": 2, "rational_polynomial": 6, "equidistant": 4}
-MAX_K = {"plumb_bob": 3, "rational_polynomial": 6, "equidistant": 4}
+#: radial coefficients estimated when -k is not given, and at most (the lens-model table)
+DEFAULT_K = {name: m.default_radial for name, m in LENS_MODELS.items()}
+MAX_K = {name: m.max_radial for name, m in LENS_MODELS.items()}
 #: "auto" keeps p1, p2 when holding them at zero raises the residual more than noise would
 #: with this probability (the residual is not quite independent noise: views share small
 #: biases, so the test is strict)
@@ -92,7 +93,7 @@ class CalibrationOptions:
     @property
     def has_tangential(self) -> bool:
         """Whether the model has p1, p2 at all."""
-        return self.distortion_model != "equidistant"
+        return lens_model(self.distortion_model).tangential
 
     @property
     def free(self) -> tuple[str, ...]:

@@ -17,6 +17,7 @@ import numpy as np
 import numpy.typing as npt
 
 from replay.camera import CameraModel
+from replay.lens_models import lens_model
 from replay.messages import F64
 
 from ..errors import ProcessorError
@@ -47,8 +48,9 @@ def _pinhole_flags(options: CalibrationOptions) -> int:
         flags |= cv2.CALIB_FIX_ASPECT_RATIO
     if options.tangential == "zero":
         flags |= cv2.CALIB_ZERO_TANGENT_DIST
-    if options.distortion_model == "rational_polynomial":
-        flags |= cv2.CALIB_RATIONAL_MODEL
+    selects = lens_model(options.distortion_model).opencv_flag
+    if selects:
+        flags |= int(getattr(cv2, selects))
     for n, flag in enumerate((cv2.CALIB_FIX_K1, cv2.CALIB_FIX_K2, cv2.CALIB_FIX_K3,
                               cv2.CALIB_FIX_K4, cv2.CALIB_FIX_K5, cv2.CALIB_FIX_K6), 1):
         if options.radial_count < n:
@@ -157,26 +159,26 @@ def _opencv_calibration(points: list[F64], corners: list[F64], size: tuple[int, 
     images = [c.astype(np.float64).reshape(1, -1, 2) for c in corners]
     width, height = size
     model = options.distortion_model
+    lens = lens_model(model)
     try:
         with one_opencv_thread():
-            if model == "equidistant":
+            if lens.fisheye:
                 k0 = np.array([[max(size) / math.pi, 0, (width - 1) / 2],
                                [0, max(size) / math.pi, (height - 1) / 2], [0, 0, 1]])
                 _rms, k, d, _r, _t = cv2.fisheye.calibrate(
                     objects, images, size, k0, np.zeros(4), flags=_fisheye_flags(options),
                     criteria=CRITERIA)
             else:
-                n_d = 8 if model == "rational_polynomial" else 5
                 _rms, k, d, _r, _t = cv2.calibrateCamera(
                     [o.astype(np.float32) for o in objects],
-                    [i.astype(np.float32) for i in images], size, np.eye(3), np.zeros(n_d),
+                    [i.astype(np.float32) for i in images], size, np.eye(3),
+                    np.zeros(len(lens.coefficients)),
                     flags=_pinhole_flags(options), criteria=CRITERIA)
     except cv2.error as err:
         raise ProcessorError(f"calibration failed: {str(err).strip().splitlines()[-1]}") from None
     d = np.asarray(d, dtype=np.float64).reshape(-1)
     return CameraModel(width, height, np.asarray(k, dtype=np.float64), model,
-                       d[: 8 if model == "rational_polynomial" else 4 if model == "equidistant"
-                         else 5])
+                       d[: len(lens.coefficients)])
 
 
 def board_pose(points: F64, corners: F64, model: CameraModel) -> F64 | None:

@@ -21,6 +21,7 @@ import cv2
 import numpy as np
 
 from replay.camera import CameraModel
+from replay.lens_models import LENS_MODELS
 
 from ..errors import ProcessorError
 from .board import Board
@@ -30,7 +31,7 @@ from .moments import disc_moments
 #: fewest ChArUco corners worth a view (a board pose has 6 unknowns)
 MIN_CHARUCO_CORNERS = 6
 #: lens models OpenCV's ChArUco detector can project through (its pinhole distortion)
-GUIDING_MODELS = ("plumb_bob", "rational_polynomial")
+GUIDING_MODELS = tuple(name for name, m in LENS_MODELS.items() if not m.fisheye)
 _LOCAL = threading.local()
 
 

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 
 from ..camera import CameraModel
-from ..format_names import FISHEYE_MODELS
+from ..lens_models import lens_model
 from ..messages import F64
 from .base import OMIT_NONE, JsonRecord
 
@@ -62,8 +62,7 @@ class ScenarioCamera:
 
     def parameters(self) -> dict[str, float]:
         """True fx, fy, cx, cy and distortion coefficients by OpenCV name (k1, k2, p1, ...)."""
-        names = (("k1", "k2", "k3", "k4") if self.distortion_model in FISHEYE_MODELS
-                 else ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"))
+        names = lens_model(self.distortion_model).coefficients
         values = {"fx": float(self.k[0, 0]), "fy": float(self.k[1, 1]),
                   "cx": float(self.k[0, 2]), "cy": float(self.k[1, 2])}
         coefficients = [*np.asarray(self.d, dtype=np.float64).reshape(-1).tolist(), *[0.0] * 8]
