@@ -71,10 +71,18 @@ def _given(calibration: Path) -> tuple[list[CameraInfo], float]:
         std = 0.0
         summary = calibration / "calibration.json"
         if len(files) == 2 and summary.is_file():
-            stereo = json.loads(summary.read_text()).get("stereo") or {}
-            std = float(stereo.get("rotation_std_deg") or 0.0)
+            std = _rotation_std_deg(summary)
         return [load_calibration(f).camera_info for f in files], std
     return [load_calibration(calibration).camera_info], 0.0
+
+
+def _rotation_std_deg(summary: Path) -> float:
+    """The stereo rotation's standard deviation (degrees) a ``calibration.json`` gives."""
+    try:
+        stereo = json.loads(summary.read_text()).get("stereo") or {}
+        return float(stereo.get("rotation_std_deg") or 0.0)
+    except (ValueError, TypeError, AttributeError):
+        raise InputError(f"{summary}: not a camlog calibration summary") from None
 
 
 def _is_right(info: CameraInfo) -> bool:

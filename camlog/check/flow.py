@@ -38,6 +38,8 @@ __all__ = ["NOISE_SIGMAS", "CheckOptions", "LogCheck", "Series", "check_log"]
 
 #: a window is flagged this many noise sigmas beyond a calibrated window's value
 NOISE_SIGMAS = 5.0
+#: windows with a value needed to measure the noise (fewer: no limit without --threshold)
+MIN_WINDOWS = 3
 
 
 @dataclass(frozen=True)
@@ -99,6 +101,10 @@ class LogCheck:
             drifted.append(f"{s.camera} from {self.span(first)[0]:g} s, {how}")
         if not drifted:
             names = ", ".join(s.camera for s in self.series)
+            if any(math.isinf(s.limit) for s in self.series):
+                return (f"{self.log}: not judged ({names}: fewer than {MIN_WINDOWS} windows "
+                        f"of {self.window_s:g} s to measure the noise; give --threshold or a "
+                        "shorter --window)")
             return f"{self.log}: clean ({names}; {self.windows} windows of {self.window_s:g} s)"
         return f"{self.log}: drifted: " + "; ".join(drifted)
 
@@ -163,6 +169,11 @@ def _board_view(window: _Window, gray: np.ndarray, check: Checkable, board: Boar
         window.reprojection_px.append(fit.rms_px)
 
 
+def _unmeasured(values: list[float]) -> float:
+    """Infinity (no limit) when too few windows have a value to measure the noise, else 0."""
+    return math.inf if sum(math.isfinite(v) for v in values) < MIN_WINDOWS else 0.0
+
+
 def _series(check: Checkable, windows: list[_Window], options: CheckOptions) -> Series:
     if check.kind == "stereo":
         return _stereo_series(check, windows, options)
@@ -174,10 +185,10 @@ def _series(check: Checkable, windows: list[_Window], options: CheckOptions) -> 
     finite = [v for v in values if math.isfinite(v)]
     centre = float(np.median(finite)) if finite else 0.0
     limit = options.threshold if options.threshold is not None \
-        else centre + NOISE_SIGMAS * sigma
+        else _unmeasured(values) or centre + NOISE_SIGMAS * sigma
     return Series(check.name, "board", {"reprojection_px": values,
                                         "views": [float(len(w.reprojection_px)) for w in windows]},
-                  "reprojection_px", limit, [math.isfinite(v) and v > limit for v in values])
+                  "reprojection_px", limit, [bool(math.isfinite(v) and v > limit) for v in values])
 
 
 def _stereo_series(check: Checkable, windows: list[_Window], options: CheckOptions) -> Series:
@@ -204,6 +215,7 @@ def _stereo_series(check: Checkable, windows: list[_Window], options: CheckOptio
     centre = float(np.median(clean)) if clean else 0.0
     calibration_px = math.radians(check.rotation_std_deg) * float(right.p[1, 1])
     limit = options.threshold if options.threshold is not None \
-        else centre + NOISE_SIGMAS * math.hypot(window_noise(errors), calibration_px)
+        else _unmeasured(metrics["vertical_error_px"]) \
+        or centre + NOISE_SIGMAS * math.hypot(window_noise(errors), calibration_px)
     return Series(check.name, "stereo", metrics, "vertical_error_px", limit,
-                  [math.isfinite(v) and v > limit for v in errors])
+                  [bool(math.isfinite(v) and v > limit) for v in errors])

@@ -56,7 +56,8 @@ def _panel(check: LogCheck, series: Series) -> np.ndarray:
     img = np.full((HEIGHT + 2 * MARGIN, WIDTH + 2 * MARGIN, 3), 255, np.uint8)
     values = series.values[series.metric]
     finite = [v for v in values if math.isfinite(v)]
-    top = max([*finite, series.limit, 1e-9]) * 1.2
+    limited = math.isfinite(series.limit)
+    top = max([*finite, series.limit if limited else 0.0, 1e-9]) * 1.2
     span_s = check.windows * check.window_s
 
     def x(t_s: float) -> int:
@@ -66,7 +67,7 @@ def _panel(check: LogCheck, series: Series) -> np.ndarray:
         if flagged:
             start, end = check.span(index)
             cv2.rectangle(img, (x(start), MARGIN), (x(end), MARGIN + HEIGHT), SHADE, -1)
-    for dash in range(MARGIN, MARGIN + WIDTH, 12):
+    for dash in range(MARGIN, MARGIN + WIDTH, 12) if limited else ():
         cv2.line(img, (dash, _y(series.limit, top)), (min(dash + 6, MARGIN + WIDTH),
                                                       _y(series.limit, top)), RED, 1)
     points = [(x(sum(check.span(i)) / 2), _y(v, top)) for i, v in enumerate(values)
@@ -82,9 +83,10 @@ def _panel(check: LogCheck, series: Series) -> np.ndarray:
                         cv2.LINE_AA)
     cv2.putText(img, "s", (MARGIN + WIDTH + 8, MARGIN + HEIGHT + 16), FONT, 0.4, BLACK, 1)
     cv2.putText(img, f"{top:.3g}", (4, MARGIN + 4), FONT, 0.4, GREY, 1, cv2.LINE_AA)
-    cv2.putText(img, f"limit {series.limit:.3g}", (MARGIN + WIDTH - 110,
-                                                   _y(series.limit, top) - 6), FONT, 0.4, RED, 1,
-                cv2.LINE_AA)
+    if limited:
+        cv2.putText(img, f"limit {series.limit:.3g}",
+                    (MARGIN + WIDTH - 110, _y(series.limit, top) - 6), FONT, 0.4, RED, 1,
+                    cv2.LINE_AA)
     title = f"{series.camera}: {series.metric} per {check.window_s:g} s window"
     cv2.putText(img, title, (MARGIN, 30), FONT, 0.55, BLACK, 1, cv2.LINE_AA)
     return img

@@ -101,7 +101,7 @@ def test_a_mono_camera_without_a_board_is_not_checkable(logs: dict[str, Path]) -
 
 def test_a_camera_that_sees_the_board_is_checked_by_its_reprojection(
         logs: dict[str, Path]) -> None:
-    checked = check_log(logs["mono"], CheckOptions(window_s=1.0,
+    checked = check_log(logs["mono"], CheckOptions(window_s=0.5,
                                                    board=make_board("7x6", 0.01)))
     (series,) = checked.series
     assert series.metric == "reprojection_px"
@@ -128,3 +128,28 @@ def test_errors_are_one_line(logs: dict[str, Path], capsys: pytest.CaptureFixtur
     assert code == 1
     assert len(err.splitlines()) == 1 and err.startswith("camlog check: error: ")
     assert needle in err
+
+
+def test_a_batch_pipeline_checks_every_log(logs: dict[str, Path], tmp_path: Path,
+                                           capsys: pytest.CaptureFixture[str]) -> None:
+    pipeline = tmp_path / "check.toml"
+    pipeline.write_text('[[steps]]\nrun = "check"\nwindow = 1.0\n')
+    out = tmp_path / "batch"
+    assert main(["batch", str(pipeline), str(logs["drifted"]), str(logs["clean"]), "-j", "1",
+                 "-o", str(out), "--no-progress"]) == 0
+    table = capsys.readouterr().out
+    assert "flagged_windows" in table or "drifted_from_s" in table
+    found = {}
+    for path in out.rglob("check.csv"):
+        with path.open() as f:
+            rows = [r for r in csv.DictReader(f) if r["metric"] == "vertical_error_px"]
+        found[Path(rows[0]["log"]).name] = [float(r["start_s"]) for r in rows
+                                            if r["flagged"] == "1"]
+    assert found == {"drifted.mcap": [3.0, 4.0, 5.0], "clean.mcap": []}
+
+
+def test_too_few_windows_to_measure_the_noise_are_not_judged(logs: dict[str, Path]) -> None:
+    checked = check_log(logs["drifted"], CheckOptions(window_s=3.0))
+    assert checked.windows == 2
+    assert not any(checked.series[0].flagged)
+    assert "not judged" in checked.summary()
