@@ -26,6 +26,7 @@ BENCHMARKS: dict[str, tuple[list[str], list[str]]] = {
     "batch_ray": ([], ["--frames", "90"]),
     "demo_time": ([], ["--duration", "2"]),
     "peers": (["--growth", "4,40,400"], ["--runs", "1", "--duration", "1"]),
+    "check_speed": ([], ["--duration", "2", "--repeats", "1"]),
 }
 
 

@@ -20,6 +20,7 @@ from replay.messages import F64
 
 from .cameras import CameraSpec
 from .clock import Shot
+from .drift import DriftSpec, world_from_camera_at
 from .render import SceneRenderer
 from .target_spec import TargetSpec
 from .targets import outline_in_target
@@ -79,15 +80,23 @@ def render_exposure(renderer: SceneRenderer, camera_index: int, camera: CameraSp
 
 def rendered_shots(
     renderer: SceneRenderer, cameras: Sequence[CameraSpec], targets: Sequence[TargetSpec],
-    trajectories: Sequence[PoseSource], shots: Iterable[Shot],
+    trajectories: Sequence[PoseSource], shots: Iterable[Shot], *,
+    drifts: Sequence[DriftSpec] = (),
 ) -> Iterator[tuple[Shot, np.ndarray, list[F64]]]:
     """Each shot with its ideal render and the targets' ``world_from_target`` at its stamp
-    (mid-exposure); cameras at one instant share one pose update."""
+    (mid-exposure); cameras at one instant share one pose update. A camera with ``drifts``
+    is turned as they say at the shot's stamp (for its whole exposure)."""
     outlines = [outline_in_target(t) for t in targets]
     last_t: float | None = None
     poses: list[F64] = []
+    started = [0] * len(cameras)  # drifts each camera is turned by
     for shot in shots:
         camera = cameras[shot.camera_index]
+        now = sum(d.camera == camera.name and shot.t_s >= d.start_s for d in drifts)
+        if now != started[shot.camera_index]:
+            renderer.turn_camera(shot.camera_index,
+                                 world_from_camera_at(camera, drifts, shot.t_s))
+            started[shot.camera_index] = now
         if camera.exposure_s > 0:
             rendered = render_exposure(renderer, shot.camera_index, camera,
                                        trajectories=trajectories, outlines=outlines,

@@ -22,11 +22,12 @@ from replay._version import VERSION
 from replay.formats import LogWriter
 from replay.formats.background import BackgroundWriter
 from replay.geometry import invert, quat_xyzw_from_rotation
-from replay.records import RenderView, ScenarioCamera
+from replay.records import RenderView, ScenarioCamera, ScenarioDrift
 from replay.records import Scenario as ScenarioRecord
 from replay.topics import SCENARIO, CameraTopics
 
 from .clock import Shot, schedule
+from .drift import world_from_camera_at
 from .errors import RecorderError
 from .exposure import rendered_shots
 from .motion import plan_trajectory
@@ -95,11 +96,16 @@ def scenario_record(
         for index, camera in enumerate(scenario.cameras)
     ]
     targets = [target_record(target) for target in scenario.targets]
+    namespaces = {c.name: c.namespace for c in scenario.cameras}
+    drifts = [ScenarioDrift(camera=d.camera, namespace=namespaces[d.camera], axis=d.axis,
+                            degrees=d.degrees, start_s=d.start_s,
+                            start_stamp_ns=scenario.start_stamp_ns + round(d.start_s * 1e9))
+              for d in scenario.drifts]
     return ScenarioRecord(
         scenario=scenario.name, source=scenario.source, seed=scenario.seed,
         camlog_version=VERSION, mujoco_version=mujoco.__version__,
         renderer=f"mujoco/{gl_backend()}", spec=scenario.spec, cameras=cameras,
-        targets=targets)
+        targets=targets, drifts=drifts or None)
 
 
 class _Pipeline:
@@ -195,7 +201,6 @@ def record(
             raise
         return writer
 
-    camera_from_world = [invert(c.world_from_camera) for c in scenario.cameras]
     frames = dict.fromkeys((c.name for c in scenario.cameras), 0)
     try:
         loop_started = time.perf_counter()
@@ -208,8 +213,10 @@ def record(
             try:
                 for shot, rendered, poses in rendered_shots(renderer, scenario.cameras,
                                                             scenario.targets, trajectories,
-                                                            shots):
-                    truth = [camera_from_world[shot.camera_index] @ p for p in poses]
+                                                            shots, drifts=scenario.drifts):
+                    camera_from_world = invert(world_from_camera_at(
+                        scenario.cameras[shot.camera_index], scenario.drifts, shot.t_s))
+                    truth = [camera_from_world @ p for p in poses]
                     pipeline.put((shot, rendered, truth))
                     frames[scenario.cameras[shot.camera_index].name] += 1
                     bar.update()

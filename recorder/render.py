@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from replay.geometry import quat_xyzw_from_rotation
+from replay.geometry import OPTICAL_FROM_MJCAMERA, quat_xyzw_from_rotation
 from replay.messages import F64
 
 from .errors import RenderError
@@ -15,6 +15,12 @@ from .multiview import CameraOptics
 from .optics import Optics
 from .scenario import Scenario
 from .scene import build_mjcf, camera_light_name, view_camera_name
+
+
+def _mj_quat(rotation: F64) -> list[float]:
+    """MuJoCo's quaternion (w, x, y, z) of a rotation (3, 3)."""
+    q = quat_xyzw_from_rotation(rotation)
+    return [float(q[3]), float(q[0]), float(q[1]), float(q[2])]
 
 
 def _import_mujoco() -> Any:
@@ -90,10 +96,26 @@ class SceneRenderer:
     def set_poses(self, world_from_targets: list[F64]) -> None:
         """Move every target (mocap body) and update kinematics."""
         for mocap, pose in zip(self._mocap, world_from_targets, strict=True):
-            q = quat_xyzw_from_rotation(pose[:3, :3])
             self.data.mocap_pos[mocap] = pose[:3, 3]
-            self.data.mocap_quat[mocap] = [q[3], q[0], q[1], q[2]]
+            self.data.mocap_quat[mocap] = _mj_quat(pose[:3, :3])
         self.mujoco.mj_kinematics(self.model, self.data)
+
+    def turn_camera(self, camera_index: int, world_from_camera: F64) -> None:
+        """Turn a camera (its pinhole view, or every view and the light of a multi-view
+        camera) to the optical frame ``world_from_camera`` (4, 4) (its position unchanged)."""
+        name = self.camera_names[camera_index]
+        o = self.optics[camera_index]
+        world_from_optical = world_from_camera[:3, :3]
+        if isinstance(o, Optics):
+            turned = {name: world_from_optical @ OPTICAL_FROM_MJCAMERA}
+        else:
+            turned = {view_camera_name(name, i): world_from_optical @ view.camera_from_view
+                      @ OPTICAL_FROM_MJCAMERA for i, view in enumerate(o.views)}
+            self.model.light_dir[self.model.light(camera_light_name(name)).id] = \
+                world_from_optical[:, 2]
+        for camera, world_from_mjcam in turned.items():
+            self.model.cam_quat[self.model.camera(camera).id] = _mj_quat(world_from_mjcam)
+        self.mujoco.mj_camlight(self.model, self.data)
 
     def render(self, camera_index: int) -> np.ndarray:
         """Ideal render ``(Hr, Wr, 3)`` uint8 of one camera at the current poses: its one

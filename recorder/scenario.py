@@ -17,6 +17,7 @@ from replay.bounded import read_text, toml_loads
 
 from .builtin import DEFAULT_SCENARIO, MAX_FRAMES, builtin_dir, builtin_names
 from .cameras import CameraSpec, parse_camera
+from .drift import DriftSpec, parse_drift
 from .errors import ScenarioError
 from .spec_table import SpecTable
 from .target_spec import TargetSpec, parse_target
@@ -37,6 +38,7 @@ class Scenario:
     targets: tuple[TargetSpec, ...]
     spec: dict[str, Any]  # the resolved raw data
     source: str
+    drifts: tuple[DriftSpec, ...] = ()  # cameras turned away from their calibration
 
     @property
     def rate_hz(self) -> float:
@@ -113,6 +115,8 @@ def apply_overrides(raw: dict[str, Any], overrides: dict[str, Any]) -> dict[str,
         elif key == "duration_s":
             out["duration_s"] = value
             out.pop("frames", None)
+        elif key == "drifts":  # added to the spec's own
+            out["drifts"] = [*out.get("drifts", []), *value]
         else:
             out[key] = value
     return out
@@ -151,9 +155,14 @@ def parse_scenario(raw: dict[str, Any], source: str) -> Scenario:
     names = [t.name for t in targets]
     if len(set(names)) != len(names):
         raise ScenarioError(f"{source}: targets: names must be unique, got {names}")
+    drifts_raw = top.get("drifts", [])
+    if not isinstance(drifts_raw, list):
+        raise ScenarioError(f"{source}: drifts: expected [[drifts]] tables")
+    drifts = tuple(parse_drift(d, f"drifts[{i}].", source, cameras)
+                   for i, d in enumerate(drifts_raw))
     top.check_unknown()
     scenario = Scenario(name, description, seed, duration_s, frames, start_stamp_ns,
-                        tuple(cameras), targets, raw, source)
+                        tuple(cameras), targets, raw, source, drifts)
     if max(scenario.frame_counts) > MAX_FRAMES:
         raise ScenarioError(f"{source}: {max(scenario.frame_counts)} frames per camera is more "
                             f"than camlog records at once ({MAX_FRAMES}); shorten it")

@@ -17,6 +17,11 @@ input = "log"                        # "log" (the batch input), "previous", or a
 topic = "/unsynced/left/image_raw"
 red_pixels = true
 edges = {low = 50, high = 150}
+
+[[steps]]
+run = "check"                        # camlog check: window/rate/threshold/calibration/...
+input = "log"
+window = 2.0
 ```
 
 The ``process`` step's keys are generated from :mod:`processors.registry`: a processor with
@@ -229,6 +234,34 @@ def _info(log: Location, out: Path, o: dict[str, Any], workers: int) -> StepOutc
     return StepOutcome(None, {}, [path])
 
 
+def _check(log: Location, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
+    from processors.calibration.board import make_board
+
+    from ..check.flow import CheckOptions, check_log
+    from ..check.report import write_report
+
+    if ("size" in o) != ("square" in o):
+        raise PipelineError("check: a board needs both size and square")
+    cameras = o.get("camera", [])
+    options = CheckOptions(
+        window_s=float(o.get("window", 2.0)), rate_hz=float(o.get("rate", 5.0)),
+        board=make_board(str(o["size"]), float(o["square"]), str(o.get("pattern", "chessboard")))
+        if "size" in o else None,
+        calibration=Path(o["calibration"]) if "calibration" in o else None,
+        cameras=[cameras] if isinstance(cameras, str) else list(cameras),
+        threshold=float(o["threshold"]) if "threshold" in o else None)
+    if not (options.window_s > 0 and options.rate_hz > 0):
+        raise PipelineError("check: window and rate must be > 0")
+    checked = check_log(log, options)
+    flagged = [s for s in checked.series if any(s.flagged)]
+    figures: dict[str, Any] = {
+        "flagged_windows": int(sum(sum(s.flagged) for s in checked.series))}
+    if flagged:
+        figures["drifted_from_s"] = float(min(checked.span(s.flagged.index(True))[0]
+                                              for s in flagged))
+    return StepOutcome(None, figures, write_report([checked], out))
+
+
 Runner = Callable[[Location, Path, dict[str, Any], int], StepOutcome]
 
 #: step kind -> (allowed option keys, runner)
@@ -244,6 +277,8 @@ STEPS: dict[str, tuple[frozenset[str], Runner]] = {
     "throttle": (frozenset({"topic", *(o.name for o in spec_of("throttle").options)}),
                  _throttle),
     "info": (frozenset(), _info),
+    "check": (frozenset({"window", "rate", "threshold", "calibration", "camera", "size",
+                         "square", "pattern"}), _check),
 }
 
 

@@ -36,6 +36,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
               "batch"),
     "calibrate": ("calibrate a mono camera, a stereo pair or a rig from a log (or --check a "
                   "calibration)", "calibrate"),
+    "check": ("is every log still calibrated? drift of stereo pairs and board cameras, window "
+              "by window", "check"),
     "view": ("show logs in rerun: write an .rrd or stream to a viewer, with a ready layout",
              "view"),
     "play": ("replay a log in (scaled) real time to a viewer, an .rrd or a new log", "play"),

@@ -28,6 +28,8 @@ MAX_SIDE = 8192
 #: distortion model -> number of coefficients
 #: MODEL:K1,K2,... for every lens model, as --distortion takes them
 DISTORTION_FORMS = [f"{m.name}:{','.join(m.coefficients)}" for m in LENS_MODELS.values()]
+#: the axes a camera may drift about (recorder.drift.AXES, without loading the recorder)
+DRIFT_AXES = ("roll", "pitch", "yaw")
 
 
 def _floats(text: str) -> list[float]:
@@ -75,6 +77,22 @@ def _distortion(text: str) -> tuple[str, list[float]]:
     return model, values
 
 
+def _drift(text: str) -> dict[str, Any]:
+    """``CAMERA:AXIS:DEGREES@SECONDS`` as a scenario's ``[[drifts]]`` table."""
+    where, _, start = text.rpartition("@")
+    camera, _, rest = where.partition(":")
+    axis, _, degrees = rest.partition(":")
+    try:
+        numbers = (float(degrees), float(start))
+    except ValueError:
+        numbers = (math.nan, math.nan)
+    if not camera or axis not in DRIFT_AXES or not all(math.isfinite(v) for v in numbers):
+        raise argparse.ArgumentTypeError(
+            f"expected CAMERA:AXIS:DEGREES@SECONDS with AXIS one of {', '.join(DRIFT_AXES)}, "
+            f"e.g. right:pitch:0.1@2.5, got {text!r}")
+    return {"camera": camera, "axis": axis, "degrees": numbers[0], "start_s": numbers[1]}
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Register the ``record`` arguments."""
     p.add_argument("scenario", nargs="?", default=DEFAULT_SCENARIO,
@@ -111,6 +129,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="compression: MCAP chunks zstd (default), lz4 or none; rosbag2 "
                         "zstd (MCAP chunks, default; sqlite3: per message) or none "
                         "(sqlite3 default); ROS1 chunks lz4 (default), bz2 or none")
+    p.add_argument("--drift", type=_drift, action="append", metavar="CAMERA:AXIS:DEGREES@S",
+                   help="turn a camera (its name, e.g. left or right, or namespace) by DEGREES "
+                        "about an axis of its optical frame (roll: z, pitch: x, yaw: y) from S "
+                        "seconds after the start on, its camera_info unchanged; repeatable")
     add_no_progress(p)
 
 
@@ -124,6 +146,7 @@ def overrides_from(args: argparse.Namespace) -> dict[str, Any]:
         "noise_std": args.noise,
         "supersample": args.supersample,
         "encoding": args.encoding,
+        "drifts": args.drift,
     }
     if args.resolution:
         out["width"], out["height"] = args.resolution
@@ -155,5 +178,7 @@ def run(args: argparse.Namespace) -> int:
     dropped = f", dropped {drops}" if drops else ""
     print(f"recorded {scenario.name} (seed {scenario.seed}): {frames} frames{dropped} "
           f"in {result.wall_s:.1f} s ({result.fps:.0f} frames/s)")
+    for drift in scenario.drifts:
+        print(f"drift: {drift.camera} {drift.axis} {drift.degrees:+g}° from {drift.start_s:g} s")
     print(f"wrote {result.path} ({result.storage})")
     return 0

@@ -21,7 +21,7 @@ from .calibration import (
 from .processed import ProcessedOutput, ProcessedOutputs, outputs_by_topic
 from .resync import OffsetStats, ResyncStats
 from .rig import RigCameraSummary, RigPairSummary, RigSummary
-from .scenario import RenderView, Scenario, ScenarioCamera, ScenarioTarget
+from .scenario import RenderView, Scenario, ScenarioCamera, ScenarioDrift, ScenarioTarget
 
 __all__ = [
     "BoardSummary",
@@ -45,6 +45,7 @@ __all__ = [
     "RigSummary",
     "Scenario",
     "ScenarioCamera",
+    "ScenarioDrift",
     "ScenarioTarget",
     "StereoSummary",
     "StereoTruth",

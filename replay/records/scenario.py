@@ -18,7 +18,7 @@ from ..lens_models import lens_model
 from ..messages import F64
 from .base import OMIT_NONE, JsonRecord
 
-__all__ = ["RenderView", "Scenario", "ScenarioCamera", "ScenarioTarget"]
+__all__ = ["RenderView", "Scenario", "ScenarioCamera", "ScenarioDrift", "ScenarioTarget"]
 
 
 @dataclass(frozen=True)
@@ -122,6 +122,22 @@ class ScenarioTarget:
 
 
 @dataclass(frozen=True)
+class ScenarioDrift:
+    """A camera turned away from its calibration during the recording: by ``degrees``
+    about ``axis`` of its optical frame (``roll`` about z, ``pitch`` about x, ``yaw`` about
+    y, right-handed) from ``start_s`` after the recording's start (``start_stamp_ns``) on.
+    Its camera_info keeps the calibration it started with; its ground-truth poses follow it.
+    """
+
+    camera: str
+    namespace: str
+    axis: str
+    degrees: float
+    start_s: float
+    start_stamp_ns: int
+
+
+@dataclass(frozen=True)
 class Scenario(JsonRecord):
     """Everything that shaped a recording (``/camlog/scenario``, JSON)."""
 
@@ -136,6 +152,7 @@ class Scenario(JsonRecord):
     spec: dict[str, Any]
     cameras: list[ScenarioCamera]
     targets: list[ScenarioTarget]
+    drifts: list[ScenarioDrift] | None = field(default=None, metadata=OMIT_NONE)
 
     def camera_for(self, namespace: str, frame_id: str | None = None) -> ScenarioCamera | None:
         """The camera of a namespace, or else the one camera with ``frame_id`` (topics

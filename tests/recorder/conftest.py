@@ -30,4 +30,6 @@ def recording(tmp_path_factory: pytest.TempPathFactory) -> Callable[..., Log]:
 
 
 def _hashable(value: Any) -> Any:
-    return tuple(value) if isinstance(value, list) else value
+    if isinstance(value, dict):
+        return tuple(sorted((k, _hashable(v)) for k, v in value.items()))
+    return tuple(_hashable(v) for v in value) if isinstance(value, list) else value

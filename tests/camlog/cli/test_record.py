@@ -247,6 +247,9 @@ def test_unwritable_output(tmp_path: Path, capsys: pytest.CaptureFixture[str], w
     (["--hfov", "0"], "--hfov: expected a number > 0"),
     (["--distortion", "plumb_bob:-5,0,0,0,0"], "not invertible"),
     (["--intrinsics=-500,500,32,24"], "fx"),
+    (["--drift", "right:tilt:0.1@1"], "AXIS one of roll, pitch, yaw"),
+    (["--drift", "right:pitch:0.1"], "CAMERA:AXIS:DEGREES@SECONDS"),
+    (["--drift", "middle:pitch:0.1@1"], "no camera 'middle'"),
 ])
 def test_bad_values(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], args: list[str], needle: str
