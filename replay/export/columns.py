@@ -149,8 +149,9 @@ class _Batch:
 
 class ColumnBatcher:
     """Gathers rows per entity and sends each entity's batch with ``send_columns`` when it
-    is full (:data:`MAX_ROWS`), when pixels held pass :data:`MAX_BATCH_BYTES`, when the
-    entity gets a row of another kind or timelines, and on :meth:`flush`."""
+    is full (:data:`MAX_ROWS`), when it is the largest one while the bytes held pass
+    :data:`MAX_BATCH_BYTES`, when the entity gets a row of another kind or timelines, and
+    on :meth:`flush`."""
 
     def __init__(self, rec: rr.RecordingStream, *, max_rows: int = MAX_ROWS,
                  max_bytes: int = MAX_BATCH_BYTES) -> None:
@@ -174,8 +175,8 @@ class ColumnBatcher:
         self._held += row.nbytes
         if len(batch.rows) >= self._max_rows:
             self.flush_entity(entity)
-        elif self._held > self._max_bytes:
-            self.flush()
+        while self._held > self._max_bytes:  # the largest batches go: small ones fill up
+            self.flush_entity(max(self._batches, key=lambda name: self._batches[name].nbytes))
 
     def flush_entity(self, entity: str) -> None:
         """Send ``entity``'s queued rows (before anything else is logged to it)."""

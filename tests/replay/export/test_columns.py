@@ -110,6 +110,24 @@ def test_a_batch_is_sent_when_the_pixels_held_pass_the_limit(tmp_path: Path) -> 
     assert sent == [("a", 3), ("a", 1), ("a", 1)]
 
 
+def test_only_the_largest_batches_go_when_the_bytes_pass_the_limit() -> None:
+    sent: list[tuple[str, int]] = []
+
+    class Recording:
+        def send_columns(self, entity: str, *, indexes: Any, columns: Any) -> None:
+            sent.append((entity, len(indexes[0].as_arrow_array())))
+
+    batcher = ColumnBatcher(Recording(), max_rows=100, max_bytes=1000)  # type: ignore[arg-type]
+    image, points = np.zeros((20, 20), np.uint8), np.zeros((4, 2), np.float32)  # 400, 32 bytes
+    for i in range(3):
+        batcher.add("image", (i, i, None), ImageRow(image, "L"))
+        batcher.add("corners", (i, i, None), PointsRow(points))
+    # the image batch went; the points keep filling their batch (fewer, larger chunks)
+    assert sent == [("image", 3)]
+    batcher.flush()
+    assert sent == [("image", 3), ("corners", 3)]
+
+
 def test_a_calibration_log_views_the_same_in_columns(mono_calibration_log: Path,
                                                      tmp_path: Path) -> None:
     """Held poses, overlays cleared by the next image, ground truth: the whole export."""
