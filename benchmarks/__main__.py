@@ -25,7 +25,8 @@ BENCHMARKS: dict[str, tuple[list[str], list[str]]] = {
     "batch_speedup": ([], ["--frames", "90"]),
     "batch_ray": ([], ["--frames", "90"]),
     "demo_time": ([], ["--duration", "2"]),
-    "peers": (["--growth", "4,40,400"], ["--runs", "1", "--duration", "1"]),
+    "peers": (["--growth", "4,40,400", "--memory"],
+              ["--runs", "1", "--duration", "1", "--view-duration", "2"]),
     "check_speed": ([], ["--duration", "2", "--repeats", "1"]),
 }
 

@@ -10,7 +10,9 @@ drifting load hits both; figures are medians, ratios the median of the pairs' ra
 * convert: ROS1 bag -> rosbag2 and rosbag2 (MCAP storage) -> ROS1 against
   ``rosbags-convert`` writing the same storage with the same compression as camlog's default
   (zstd MCAP chunks, lz4 ROS1 chunks; targets: <= 1.0x the time, <= 1.5x the memory);
-* view: ``camlog view -o OUT.rrd`` against ``rerun mcap convert`` (target <= 1.2x);
+* view: ``camlog view -o OUT.rrd`` against ``rerun mcap convert`` on the stereo log (target
+  <= 2.0x, start-up included) and on a ``--view-duration`` log (30 s, 1800 images; target
+  <= 1.3x, throughput);
 * calibrate: the real 12-pair wide-angle stereo sample (``shared/realdata/ros_wide_stereo``,
   imported with ``camlog import --stereo``) against ``benchmarks/opencv_stereo.py``, a plain
   OpenCV script (target <= 1.5x with the full report; also ``--no-report``).
@@ -24,7 +26,11 @@ camlog's own modules are compiled to bytecode first, as installing its wheel doe
 checkout compiles them on first use, or never where ``PYTHONDONTWRITEBYTECODE`` is set, which
 would add that compilation to every start-up measured).
 
-    python -m benchmarks.peers [--duration S] [--runs N] [--growth 4,40,400] [--keep DIR]
+``--memory`` adds the peak memory of ``view`` on 1- and 10-minute logs and of ``camlog demo``
+(:mod:`benchmarks.view_memory`).
+
+    python -m benchmarks.peers [--duration S] [--view-duration S] [--runs N] [--memory]
+                               [--growth 4,40,400] [--keep DIR]
 """
 
 from __future__ import annotations
@@ -159,12 +165,17 @@ def measure(case: Case, runs: int) -> Result:
     return Result(case, median_run(mine), median_run(theirs), time_ratio, memory_ratio)
 
 
-def make_inputs(tmp: Path, duration_s: float) -> dict[str, Path]:
-    """The stereo log as MCAP, ROS1 bag and rosbag2, and the real stereo sample as MCAP."""
+def make_inputs(tmp: Path, duration_s: float, view_s: float = 0) -> dict[str, Path]:
+    """The stereo log as MCAP, ROS1 bag and rosbag2, a ``view_s`` stereo log for view's
+    throughput (none for 0), and the real stereo sample as MCAP."""
     camlog = tool("camlog")
     paths = {"mcap": tmp / "stereo.mcap", "ros1": tmp / "stereo.bag", "rosbag2": tmp / "stereo_r2"}
     run_once([*camlog, "record", "stereo_checkerboard", "--duration", str(duration_s),
               "-o", str(paths["mcap"]), "--no-progress", "--overwrite"])
+    if view_s > 0:
+        paths["long"] = tmp / "stereo_long.mcap"
+        run_once([*camlog, "record", "stereo_checkerboard", "--duration", str(view_s),
+                  "-o", str(paths["long"]), "--no-progress", "--overwrite"])
     for fmt in ("ros1", "rosbag2"):
         run_once([*camlog, "convert", str(paths["mcap"]), str(paths[fmt]), "--no-progress",
                   "--overwrite"])
@@ -205,8 +216,14 @@ def cases(inputs: dict[str, Path], tmp: Path) -> list[Case]:
         Case("view: MCAP -> .rrd",
              [*camlog, "view", str(inputs["mcap"]), "-o", str(out_rrd), "--no-progress"],
              "rerun mcap convert", [*rerun, "mcap", "convert", str(inputs["mcap"]), "-o",
-                                    str(out_rrd)], [out_rrd], "<= 1.2x"),
+                                    str(out_rrd)], [out_rrd], "<= 2.0x"),
     ]
+    if "long" in inputs:
+        found.append(Case(
+            "view: a longer stereo log (throughput)",
+            [*camlog, "view", str(inputs["long"]), "-o", str(out_rrd), "--no-progress"],
+            "rerun mcap convert", [*rerun, "mcap", "convert", str(inputs["long"]), "-o",
+                                   str(out_rrd)], [out_rrd], "<= 1.3x"))
     if "wide" in inputs:
         opencv = [sys.executable, str(REPO / "benchmarks" / "opencv_stereo.py"),
                   str(inputs["wide_folder"]), "8x6", "0.108"]
@@ -271,10 +288,10 @@ def print_results(results: list[Result]) -> None:
         for r in results) + ")")
 
 
-def compare_peers(tmp: Path, duration_s: float, runs: int) -> None:
+def compare_peers(tmp: Path, duration_s: float, runs: int, view_s: float) -> None:
     """camlog and each peer on the same inputs, side by side."""
     started = time.perf_counter()
-    inputs = make_inputs(tmp, duration_s)
+    inputs = make_inputs(tmp, duration_s, view_s)
     floor = run_once(["true"]).peak_mb
     print(f"inputs made in {time.perf_counter() - started:.0f} s; {os.cpu_count()} cores, "
           f"load average {os.getloadavg()[0]:.1f}; peak memory reads no lower than "
@@ -298,6 +315,10 @@ def main() -> None:
     parser.add_argument("--growth", default="", metavar="S,S,...",
                         help="also measure cost growth on logs of these lengths in s")
     parser.add_argument("--growth-runs", type=int, default=3, help="runs per growth command")
+    parser.add_argument("--view-duration", type=float, default=30.0, metavar="S",
+                        help="length of the log for view's throughput row in s (30; 0: none)")
+    parser.add_argument("--memory", action="store_true",
+                        help="also measure peak memory: view on 1- and 10-minute logs, demo")
     parser.add_argument("--keep", type=Path, help="work in this folder and keep the inputs")
     args = parser.parse_args()
     for package in ("camlog", "replay", "processors", "recorder"):
@@ -306,7 +327,11 @@ def main() -> None:
         tmp = args.keep or Path(tmp_name)
         tmp.mkdir(parents=True, exist_ok=True)
         if args.runs > 0:
-            compare_peers(tmp, args.duration, args.runs)
+            compare_peers(tmp, args.duration, args.runs, args.view_duration)
+        if args.memory:
+            from .view_memory import measure_memory
+
+            measure_memory(tmp)
         if args.growth:
             print_growth(tmp, [int(s) for s in args.growth.split(",")], args.growth_runs)
 

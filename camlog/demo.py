@@ -4,7 +4,8 @@
    resync the unsynchronised pair and calibrate it (intrinsics, baseline, rectification);
 2. meanwhile, in a second process, record ``red_block`` (the rig over a red block) and run
    red pixels and Canny edges on its left camera;
-3. view everything in one rerun recording.
+3. view everything in one rerun recording (in a fresh process, so that the largest process
+   holds what one step needs, not the sum of the steps).
 
 The two chains share nothing until the view, so they run concurrently. Every output goes
 under one folder, which the demo owns: re-running replaces its files.
@@ -27,6 +28,7 @@ from recorder.scenario import load_scenario
 from replay.export import view_logs
 
 from .calibrate.flow import calibrate_log
+from .cli.lean import pandas_hidden, without_pandas
 from .processing.process_log import process_log
 from .processing.resync_log import resync_log
 
@@ -58,6 +60,16 @@ def red_block_chain(out_dir: Path, seed: int) -> list[tuple[str, Path, str]]:
     return [("record", red, f"{sum(rec.frames.values())} frames, {rec.wall_s:.1f} s"),
             ("process", processed, f"red pixels + edges on {proc.frames_processed} frames, "
                                    f"{proc.wall_s:.1f} s")]
+
+
+def view_chain(logs: list[Path], rrd: Path, progress: bool | None, *,
+               hide_pandas: bool) -> int:
+    """View the demo's logs into ``rrd``; returns the number of recordings. Run in a fresh
+    process: what the stereo chain's process holds by then (MuJoCo, the calibration's
+    buffers kept for reuse) would otherwise add to the view's own memory."""
+    if hide_pandas:  # as the camlog program that started the demo does
+        without_pandas()
+    return view_logs(logs, output=rrd, overwrite=True, progress=progress).recordings
 
 
 def _stereo_chain(out_dir: Path, duration_s: float, seed: int, progress: bool | None,
@@ -112,9 +124,10 @@ def run_demo(out_dir: Path, *, duration_s: float = 8.0, seed: int = 0,
     processed = red_steps[-1][1]
 
     rrd = out_dir / "demo.rrd"
-    viewed = view_logs([calibration / "calibration.mcap", processed], output=rrd,
-                       overwrite=True, progress=progress)
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("spawn")) as pool:
+        recordings = pool.submit(view_chain, [calibration / "calibration.mcap", processed],
+                                 rrd, progress, hide_pandas=pandas_hidden()).result()
     # the stereo calibration and the red block are unrelated: a recording each
-    done("view", rrd, f"{viewed.recordings} recordings; open with: rerun {rrd}")
+    done("view", rrd, f"{recordings} recordings; open with: rerun {rrd}")
     result.wall_s = time.perf_counter() - started
     return result

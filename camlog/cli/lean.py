@@ -16,7 +16,7 @@ from collections.abc import Sequence
 from importlib.machinery import ModuleSpec
 from types import ModuleType
 
-__all__ = ["without_pandas"]
+__all__ = ["pandas_hidden", "without_pandas"]
 
 
 class _Hidden:
@@ -34,6 +34,11 @@ class _Hidden:
 
 def without_pandas() -> None:
     """Make ``import pandas`` fail in this process unless pandas is already loaded."""
-    if "pandas" in sys.modules or any(isinstance(f, _Hidden) for f in sys.meta_path):
+    if "pandas" in sys.modules or pandas_hidden():
         return
     sys.meta_path.insert(0, _Hidden("pandas"))
+
+
+def pandas_hidden() -> bool:
+    """Whether :func:`without_pandas` hides pandas in this process."""
+    return any(isinstance(f, _Hidden) for f in sys.meta_path)

@@ -20,12 +20,15 @@ from .blueprint import LOG_TIME, REPLAY_TIME, STAMP_TIME
 from .columns import ClearRow, ColumnBatcher, ImageRow, PointsRow, Times
 from .sink import FLUSH_INTERVAL_S, flush_recording
 
-__all__ = ["FLUSH_EVERY", "MAX_PENDING", "Emitter", "Flush"]
+__all__ = ["FLUSH_BYTES", "FLUSH_EVERY", "MAX_PENDING", "Emitter", "Flush"]
 
 #: log calls held back behind an image still being encoded (bounds memory)
 MAX_PENDING = 16
 #: log calls between blocking flushes of the recording (bounds rerun's write queue)
 FLUSH_EVERY = 400
+#: bytes of rows (pixels) between blocking flushes: 400 calls of 640x480 colour images
+#: would queue 120 MB (uncompressed) for rerun's writer
+FLUSH_BYTES = 48 << 20
 
 #: a blocking flush of the recording (default: :func:`flush_recording`)
 Flush = Callable[[], None] | None
@@ -38,8 +41,8 @@ class Emitter:
     which runs on ``encoders`` worker threads), or a row (:mod:`replay.export.columns`),
     sent in a batch of its entity's rows with ``columns`` and as its archetype otherwise (a
     live replay shows every frame when it comes). Counts rows per entity. ``flush`` waits
-    for rerun's writer every :data:`FLUSH_EVERY` calls, and at least every
-    :data:`~.sink.FLUSH_INTERVAL_S` while calls come."""
+    for rerun's writer every :data:`FLUSH_EVERY` calls or :data:`FLUSH_BYTES` of rows,
+    and at least every :data:`~.sink.FLUSH_INTERVAL_S` while calls come."""
 
     def __init__(self, rec: rr.RecordingStream, *, encoders: int = 0,
                  flush: Flush = None, columns: bool = False) -> None:
@@ -54,6 +57,7 @@ class Emitter:
         self._applied: Times | None = None  # times last set on the stream
         self._pending: deque[tuple[Times, str, Any]] = deque()
         self._logged = 0
+        self._unflushed_bytes = 0  # of rows (pixels) sent since the last flush
         self._flushed_at = time.monotonic()
 
     def at(self, log_time_ns: int, stamp_ns: int | None, replay_ns: int | None) -> None:
@@ -78,7 +82,9 @@ class Emitter:
             self._pending.popleft()
             self._send(times, entity, archetype)
             self._logged += 1
-            if self._logged % FLUSH_EVERY == 0 or \
+            if isinstance(archetype, ROWS):
+                self._unflushed_bytes += archetype.nbytes
+            if self._logged % FLUSH_EVERY == 0 or self._unflushed_bytes >= FLUSH_BYTES or \
                     time.monotonic() - self._flushed_at >= FLUSH_INTERVAL_S:
                 # rerun writes on its own thread; without back-pressure its queue grows with
                 # the log's length whenever logging outpaces writing
@@ -86,6 +92,7 @@ class Emitter:
                     self._columns.flush()
                 self._flush()
                 self._flushed_at = time.monotonic()
+                self._unflushed_bytes = 0
 
     def _send(self, times: Times, entity: str, archetype: Any) -> None:
         if self._columns is not None:

@@ -10,9 +10,14 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass, field
 
+import numpy as np
+
 __all__ = ["RECENT", "CameraFrames"]
 
 RECENT = 256  # stamps remembered per camera: far more than outputs ever lag their frame
+
+#: an image's content: bytes, or a view of the log's own buffer (not copied)
+Buffer = bytes | memoryview
 
 
 @dataclass
@@ -25,7 +30,7 @@ class CameraFrames:
     dropped: deque[int] = field(default_factory=lambda: deque(maxlen=RECENT))
     live: dict[str, int] = field(default_factory=dict)  # overlay entity -> its frame stamp
     keyframed: bool = False  # the camera's video stream has had a keyframe
-    image_key: bytes | None = None  # the last image's content (bytes without the stamp)
+    image_key: Buffer | None = None  # the last image's content (bytes without the stamp)
 
     def take(self, stamp_ns: int) -> bool:
         """Count an image; True when it is kept.
@@ -60,7 +65,7 @@ class CameraFrames:
             if shown == stamp_ns:
                 self.live[entity] = max(shown, until_ns)
 
-    def stale(self, stamp_ns: int, image_key: bytes | None = None) -> list[str]:
+    def stale(self, stamp_ns: int, image_key: Buffer | None = None) -> list[str]:
         """Overlays of frames older than ``stamp_ns``; forgotten once returned. An image
         whose ``image_key`` (content) repeats the last one's is the same view (a held pose):
         the overlays drawn on it stay.
@@ -74,11 +79,17 @@ class CameraFrames:
         >>> frames.stale(50, b"board"), frames.stale(60, b"moved")
         ([], ['corners'])
         """
-        repeated = image_key is not None and image_key == self.image_key
-        self.image_key = image_key
-        if repeated:
-            return []
+        previous, self.image_key = self.image_key, image_key
         old = [entity for entity, shown in self.live.items() if shown < stamp_ns]
+        if not old or _same(previous, image_key):  # compared only when it matters
+            return []
         for entity in old:
             del self.live[entity]
         return old
+
+
+def _same(a: Buffer | None, b: Buffer | None) -> bool:
+    """Whether two contents are equal byte for byte (numpy compares views as fast as bytes)."""
+    if a is None or b is None or len(a) != len(b):
+        return False
+    return bool(np.array_equal(np.frombuffer(a, np.uint8), np.frombuffer(b, np.uint8)))

@@ -41,6 +41,7 @@ from .overlays import (
     mask_classes,
     project_target,
     stamp_free_key,
+    stamp_free_view,
 )
 from .scene import CameraPlan, ScenePlan, image_entity, series_entity, text_entity
 from .topics import Kind, Route
@@ -203,7 +204,7 @@ class SceneLogger:
         if not cam.frames.take(stamp):
             return
         self._times(raw, stamp)
-        for entity in cam.frames.stale(stamp, stamp_free_key(raw.data)):
+        for entity in cam.frames.stale(stamp, stamp_free_view(raw.data)):
             self._emit(entity, ClearRow(), count=False)
         if isinstance(message, Image):
             cam.size = (message.width, message.height)

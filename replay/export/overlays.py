@@ -24,6 +24,7 @@ __all__ = [
     "mask_classes",
     "project_target",
     "stamp_free_key",
+    "stamp_free_view",
 ]
 
 U8 = npt.NDArray[np.uint8]
@@ -98,6 +99,11 @@ def stamp_free_key(data: bytes | memoryview) -> bytes:
     """Serialized message minus its header stamp (CDR or ROS1, header first): two
     camera_info messages with equal keys differ only in their stamp."""
     return bytes(data[_STAMP_END:])
+
+
+def stamp_free_view(data: bytes | memoryview) -> memoryview:
+    """:func:`stamp_free_key` without copying (an image's: compared only now and then)."""
+    return memoryview(data)[_STAMP_END:]
 
 
 def header_stamp_ns(data: bytes | memoryview, serialization: str) -> int | None:

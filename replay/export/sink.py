@@ -8,8 +8,6 @@ name.
 from __future__ import annotations
 
 import shutil
-import subprocess
-import sys
 import threading
 import uuid
 from collections.abc import Iterable
@@ -21,6 +19,7 @@ import rerun as rr
 
 from ..atomic import AtomicOutput
 from ..errors import ViewerError
+from .combine import combine_recordings
 from .viewer import DEFAULT_PORT, LOCALHOST, grpc_url, require_viewer, spawn_viewer
 
 __all__ = ["Destination", "RecordingSink", "flush_recording"]
@@ -215,8 +214,9 @@ class Destination:
     :meth:`sink` per recording. One recording goes where :class:`RecordingSink` sends it.
     Several (unrelated logs) share the application id, each with its own recording id: to
     a viewer one after the other (the first started with ``spawn``), or into one ``.rrd``
-    that holds them all, combined from one file per recording by ``rerun rrd merge`` (which
-    keeps recordings apart). The layout goes with the first recording."""
+    that holds them all, combined as a stream from one file per recording
+    (:mod:`~.combine`, which keeps recordings apart). The layout goes with the first
+    recording."""
 
     def __init__(self, *, count: int, blueprint: Any, output: Path | None = None,
                  connect: str | None = None, spawn: bool = False, overwrite: bool = False,
@@ -246,8 +246,8 @@ class Destination:
         """The sink of the next recording (enter it to send)."""
         index, self._made = self._made, self._made + 1
         blueprint = self._blueprint if index == 0 else None  # one per application id
-        # ids that sort in order (rrd merge orders recordings by id; the viewer opens the
-        # first, which the layout's first tab shows)
+        # ids that sort in order (the viewer opens the first, which the layout's first tab
+        # shows)
         recording_id = f"{self._base}-{index:03d}" if self._count > 1 else None
         if self._atomic is not None:
             part = self._atomic.temp / f"{index}.rrd"
@@ -272,13 +272,9 @@ class Destination:
             self._atomic.discard()
             return
         combined = self._atomic.temp / "combined.rrd"
-        merge = subprocess.run(
-            [sys.executable, "-m", "rerun", "rrd", "merge", *map(str, self._parts),
-             "-o", str(combined)], capture_output=True, text=True, check=False)
-        if merge.returncode != 0 or not combined.is_file():
+        try:
+            combine_recordings(self._parts, combined)
+        except ViewerError as err:
             self._atomic.discard()
-            lines = [line for line in merge.stderr.splitlines() if line.strip()]
-            reason = next((line for line in lines if "error" in line.lower()),
-                          lines[-1] if lines else "no output")
-            raise ViewerError(f"cannot write {self._output}: rerun rrd merge failed: {reason}")
+            raise ViewerError(f"cannot write {self._output}: {err}") from None
         self._atomic.commit(combined)

@@ -5,6 +5,8 @@ its messages in log-time order are then each chunk's messages, stably sorted by 
 one chunk after the other: the order the ``mcap`` library's reader gives with
 ``log_time_order=True`` (it breaks ties by file position), without its priority queue and a
 Python object per record. Each chunk is checked as that reader does (CRC, declared size).
+The next chunk is decompressed and checked on a worker thread while the messages of the
+current one are used.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import io
 import struct
 import zlib
 from collections.abc import Callable, Iterator
+from concurrent.futures import Future, ThreadPoolExecutor
 from itertools import pairwise
 from typing import IO, Any
 
@@ -65,24 +68,52 @@ def chunk_messages(
               and (end_ns is None or c.message_start_time < end_ns)]
     if not wanted:
         return
-    load = _loader(file)
-    for index in wanted:
-        yield from _messages(load(index), channels, start_ns, end_ns)
+    read, unpack = _read_chunk(file), _unpacker()
+    with ThreadPoolExecutor(1, thread_name_prefix="camlog-mcap-chunk") as pool:
+
+        def ahead(index: ChunkIndex) -> Future[memoryview]:
+            """The chunk's records, being unpacked; its damage is raised when they are
+            wanted, after the messages before it."""
+            try:
+                return pool.submit(unpack, read(index))
+            except Exception as err:
+                failed: Future[memoryview] = Future()
+                failed.set_exception(err)
+                return failed
+
+        pending = ahead(wanted[0])
+        try:
+            for following in [*wanted[1:], None]:
+                records = pending.result()
+                if following is not None:  # unpacked while these messages are used
+                    pending = ahead(following)
+                yield from _messages(records, channels, start_ns, end_ns)
+        finally:
+            pending.cancel()
 
 
-def _loader(file: IO[bytes]) -> Callable[[ChunkIndex], memoryview]:
-    """A function reading one chunk's records."""
-    import zstandard
-
-    decompressor = zstandard.ZstdDecompressor()
-
-    def load(index: ChunkIndex) -> memoryview:
+def _read_chunk(file: IO[bytes]) -> Callable[[ChunkIndex], Chunk]:
+    """A function reading one chunk record (its data still compressed)."""
+    def read(index: ChunkIndex) -> Chunk:
         file.seek(index.chunk_start_offset)
         opcode, length = _RECORD.unpack(file.read(_RECORD.size))
         if opcode != _OP_CHUNK or length + 9 != index.chunk_length:
             raise McapError(f"no chunk record at byte {index.chunk_start_offset}")
-        chunk = Chunk.read(ReadDataStream(io.BytesIO(file.read(length))))
+        chunk: Chunk = Chunk.read(ReadDataStream(io.BytesIO(file.read(length))))
         check_chunk_size(chunk)
+        return chunk
+
+    return read
+
+
+def _unpacker() -> Callable[[Chunk], memoryview]:
+    """A function decompressing a chunk's records and checking them against its CRC (zstd,
+    lz4 and the CRC release the GIL: a worker thread does this beside the caller)."""
+    import zstandard
+
+    decompressor = zstandard.ZstdDecompressor()
+
+    def unpack(chunk: Chunk) -> memoryview:
         if chunk.compression == "zstd":
             data = decompressor.decompress(chunk.data, max_output_size=chunk.uncompressed_size)
         elif chunk.compression == "lz4":
@@ -100,7 +131,7 @@ def _loader(file: IO[bytes]) -> Callable[[ChunkIndex], memoryview]:
             raise CRCValidationError(expected=chunk.uncompressed_crc, actual=crc, record=chunk)
         return memoryview(data)
 
-    return load
+    return unpack
 
 
 def _messages(records: memoryview, channels: set[int] | None, start_ns: int | None,

@@ -15,7 +15,7 @@ import rerun as rr
 from rerun.chunk import ChunkStore, RrdReader
 
 from replay.export import emitter as emitter_module
-from replay.export.columns import ClearRow, ColumnBatcher, ImageRow, PointsRow
+from replay.export.columns import BUFFER_TYPE, ClearRow, ColumnBatcher, ImageRow, PointsRow
 from replay.export.emitter import Emitter
 from replay.export.logger import LoggerOptions, SceneLogger
 from replay.export.sink import RecordingSink
@@ -56,8 +56,9 @@ def record(path: Path, feed: Callable[[Emitter], None], *, columns: bool) -> Non
 
 
 def feed_rows(out: Emitter) -> None:
-    """Images changing size midway, points (one frame with none), clears and points on one
-    entity at one time, a frame without a stamp, and a box log call between rows."""
+    """Images changing size midway, 16-bit ones (some not contiguous), points (one frame
+    with none), clears and points on one entity at one time, a frame without a stamp, and a
+    box log call between rows."""
     rng = np.random.default_rng(3)
     t0 = 1_700_000_000_000_000_000
     for i in range(11):
@@ -67,6 +68,8 @@ def feed_rows(out: Emitter) -> None:
         out.emit("cam/image", ImageRow(rng.integers(0, 255, size, dtype=np.uint8), "L"))
         out.emit("cam/rgb", ImageRow(rng.integers(0, 255, (3, 4, 3), dtype=np.uint8), "BGR",
                                      draw_order=-7.0))
+        deep = rng.integers(0, 65535, (4, 6), dtype=np.uint16)
+        out.emit("cam/mono16", ImageRow(deep[:, ::2] if i % 2 else deep, "L"))  # strided too
         if i % 3 == 0:
             out.emit("cam/corners", ClearRow(), count=False)
         out.emit("cam/corners", PointsRow(rng.random((0 if i == 5 else 4, 2))))
@@ -107,6 +110,24 @@ def test_a_batch_is_sent_when_the_pixels_held_pass_the_limit(tmp_path: Path) -> 
     assert sent == [("a", 3), ("a", 1), ("a", 1)]
 
 
+def test_only_the_largest_batches_go_when_the_bytes_pass_the_limit() -> None:
+    sent: list[tuple[str, int]] = []
+
+    class Recording:
+        def send_columns(self, entity: str, *, indexes: Any, columns: Any) -> None:
+            sent.append((entity, len(indexes[0].as_arrow_array())))
+
+    batcher = ColumnBatcher(Recording(), max_rows=100, max_bytes=1000)  # type: ignore[arg-type]
+    image, points = np.zeros((20, 20), np.uint8), np.zeros((4, 2), np.float32)  # 400, 32 bytes
+    for i in range(3):
+        batcher.add("image", (i, i, None), ImageRow(image, "L"))
+        batcher.add("corners", (i, i, None), PointsRow(points))
+    # the image batch went; the points keep filling their batch (fewer, larger chunks)
+    assert sent == [("image", 3)]
+    batcher.flush()
+    assert sent == [("image", 3), ("corners", 3)]
+
+
 def test_a_calibration_log_views_the_same_in_columns(mono_calibration_log: Path,
                                                      tmp_path: Path) -> None:
     """Held poses, overlays cleared by the next image, ground truth: the whole export."""
@@ -127,3 +148,8 @@ def test_a_calibration_log_views_the_same_in_columns(mono_calibration_log: Path,
     corners = "/world/simple_camera/calibration/corners:Points2D:positions"
     assert sum(row.get(corners) is not None for row in expected["header_stamp"]) >= 30
     assert tables(outputs[True]) == expected
+
+
+def test_the_image_buffer_column_has_reruns_own_type() -> None:
+    # a column of another type would go through rerun's slow per-image conversion
+    assert BUFFER_TYPE == rr.components.ImageBufferBatch._ARROW_DATATYPE
