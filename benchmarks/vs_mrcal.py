@@ -103,7 +103,8 @@ def recording(case: Case, seed: int, cache: Path, duration_s: float | None) -> P
     rate = f"_{overrides['rate_hz']:g}hz" if "rate_hz" in overrides else ""
     path = cache / f"{case.scenario}_{seed}_{overrides['duration_s']:g}s{rate}.mcap"
     if not path.exists():
-        partial = path.with_suffix(".partial.mcap")
+        partial = path.with_suffix(".partial.mcap")  # an interrupted run's is rendered again
+        partial.unlink(missing_ok=True)
         record(load_scenario(case.scenario, overrides), partial, progress=False)
         partial.rename(path)
     return path
