@@ -44,7 +44,7 @@ import cv2
 import numpy as np
 
 from camlog.calibrate.flow import CalibrationRun, MeasureAgain, calibrate_log
-from camlog.cli.calibrate import add_arguments, board_and_options
+from camlog.cli.calibrate import add_arguments, board_and_options, cameras_from
 from recorder.record import record
 from recorder.scenario import load_scenario
 from replay import open_reader
@@ -106,9 +106,8 @@ def calibrate(path: Path, flags: str, out: Path, *, report: bool,
     as :func:`~camlog.calibrate.flow.calibrate_log` takes it."""
     args = parse_flags(path, flags)
     board, options = board_and_options(args)
-    cameras = [args.left, args.right] if args.left else [args.camera]
-    return calibrate_log(path, board=board, cameras=cameras, output_dir=out, options=options,
-                         approximate_s=args.approximate, diameter_m=args.diameter,
+    return calibrate_log(path, board=board, cameras=cameras_from(args), output_dir=out,
+                         options=options, approximate_s=args.approximate, diameter_m=args.diameter,
                          overwrite=True, progress=False, report=report,
                          measure_again=measure_again)
 
@@ -273,7 +272,7 @@ def speed(duration: float, tmp: Path) -> None:
         record(load_scenario(scenario, {"duration_s": duration, "seed": 0}), path,
                progress=False)
         args = parse_flags(path, case.flags)
-        cameras = [args.left, args.right] if args.left else [args.camera]
+        cameras = cameras_from(args)
         decode = decode_only_s(path, [f"{c}/image_raw" for c in cameras])
         started = time.perf_counter()
         calibrate(path, case.flags, tmp / "speed_out", report=True)

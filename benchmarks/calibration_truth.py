@@ -17,6 +17,8 @@ import cv2
 import numpy as np
 
 from camlog.calibrate.flow import CalibrationRun
+from camlog.calibrate.solving import CalibratedCamera
+from camlog.calibrate.views import Frame
 from processors.calibration.board import Board
 from processors.calibration.validation import projection_difference
 from replay.camera import CameraModel
@@ -38,6 +40,9 @@ class Accuracy:
     max_difference_px: list[float]
     rotation_deg: float | None = None
     baseline_percent: float | None = None
+    fx_percent: float | None = None  # signed, the largest |fx| error over the cameras
+    fy_percent: float | None = None
+    principal_px: float | None = None  # the largest principal point distance
 
 
 def compared_pixels(truth: CameraModel) -> F64:
@@ -68,9 +73,11 @@ def accuracy(models: list[CameraModel], truths: list[CameraModel],
              right_from_left: F64 | None = None, true_right_from_left: F64 | None = None
              ) -> Accuracy:
     """The errors of ``models`` against ``truths`` (and of a stereo rig, with both given)."""
-    focal = max((100 * (m.k[i, i] - t.k[i, i]) / t.k[i, i] for m, t in zip(models, truths,
-                                                                           strict=True)
-                 for i in (0, 1)), key=abs)
+    pairs = list(zip(models, truths, strict=True))
+    fx, fy = (max((100 * (m.k[i, i] - t.k[i, i]) / t.k[i, i] for m, t in pairs), key=abs)
+              for i in (0, 1))
+    focal = max(fx, fy, key=abs)
+    principal = max(math.hypot(m.k[0, 2] - t.k[0, 2], m.k[1, 2] - t.k[1, 2]) for m, t in pairs)
     cx = max((m.k[0, 2] - t.k[0, 2] for m, t in zip(models, truths, strict=True)), key=abs)
     cy = max((m.k[1, 2] - t.k[1, 2] for m, t in zip(models, truths, strict=True)), key=abs)
     rotation = baseline = None
@@ -80,7 +87,7 @@ def accuracy(models: list[CameraModel], truths: list[CameraModel],
         baseline = 100 * (float(np.linalg.norm(right_from_left[:3, 3])) - true_b) / true_b
     return Accuracy(float(focal), float(cx), float(cy),
                     [max_difference_px(m, t) for m, t in zip(models, truths, strict=True)],
-                    rotation, baseline)
+                    rotation, baseline, float(fx), float(fy), principal)
 
 
 def true_models(run: CalibrationRun) -> list[CameraModel]:
@@ -109,6 +116,12 @@ def camlog_accuracy(run: CalibrationRun) -> Accuracy:
                     true_right_from_left(run))
 
 
+def detected(camera: CalibratedCamera) -> list[Frame]:
+    """The frames a plain script calibrates from: every distinct frame whose board passed
+    detection."""
+    return [f for f in camera.views.frames if f.candidate and f.detection is not None]
+
+
 def _calibrate_one(objects: list[F64], images: list[F64], size: tuple[int, int],
                    truth: CameraModel) -> CameraModel:
     """``cv2.calibrateCamera`` (``cv2.fisheye.calibrate`` for a fisheye) with default flags
@@ -130,20 +143,26 @@ def _calibrate_one(objects: list[F64], images: list[F64], size: tuple[int, int],
 
 
 def opencv_reference(run: CalibrationRun, board: Board) -> Accuracy:
+    """A plain OpenCV script on the same detections (:func:`opencv_models`) against the
+    truth."""
+    models, right_from_left = opencv_models(run, board)
+    return accuracy(models, true_models(run), right_from_left, true_right_from_left(run))
+
+
+def opencv_models(run: CalibrationRun, board: Board) -> tuple[list[CameraModel], F64 | None]:
     """A plain OpenCV script on the same detections: each camera calibrated from every
-    detected frame (every distinct frame whose board passed detection), then for a pair
-    ``cv2.stereoCalibrate`` with its default flags (intrinsics fixed) on the pairs camlog
-    paired."""
+    :func:`detected` frame, then for a pair ``cv2.stereoCalibrate`` with its default flags
+    (intrinsics fixed) on the pairs camlog paired; the models and ``right_from_left``
+    (4, 4) (None: mono)."""
     points = board.points_in_board()
     truths = true_models(run)
     models = []
     for camera, truth in zip(run.cameras, truths, strict=True):
-        views = camera.views
-        found = [f.detection for f in views.frames if f.candidate and f.detection is not None]
+        found = [f.detection for f in detected(camera) if f.detection is not None]
         models.append(_calibrate_one([points[d.ids] for d in found],
-                                     [d.corners_px for d in found], views.size, truth))
+                                     [d.corners_px for d in found], camera.views.size, truth))
     if len(models) == 1:
-        return accuracy(models, truths)
+        return models, None
     rig = run.solved.rig
     objects, lefts, rights = [], [], []
     for lv, rv in rig.pairs:
@@ -159,4 +178,4 @@ def opencv_reference(run: CalibrationRun, board: Board) -> Accuracy:
         (left_m.width, left_m.height))
     right_from_left = np.eye(4)
     right_from_left[:3, :3], right_from_left[:3, 3] = rotation, np.ravel(translation)
-    return accuracy(models, truths, right_from_left, true_right_from_left(run))
+    return models, right_from_left

@@ -1,0 +1,235 @@
+"""camlog, mrcal and a plain OpenCV script on the same recordings, over many seeds.
+
+Each case records its scenario for every seed (kept in ``--cache`` and reused), calibrates it
+with ``camlog calibrate``, then gives camlog's detections (every distinct frame whose board
+passed detection) to a plain OpenCV script (``cv2.calibrateCamera`` with default flags,
+``cv2.stereoCalibrate`` for a pair; ``cv2.fisheye.calibrate`` for the fisheye) and to mrcal 2.5
+(``mrcal-calibrate-cameras`` with its defaults: outlier rejection, regularisation and the
+board's flatness estimated; seeded with the true fx to the nearest 100 px). All three fit the
+scenario's true lens model: plumb_bob as k1 k2 p1 p2 k3 (camlog ``-k 3 --tangent-dist``, mrcal
+LENSMODEL_OPENCV5), rational_polynomial as its eight coefficients (camlog ``--tangent-dist``,
+mrcal LENSMODEL_OPENCV8). mrcal's fisheye models are not OpenCV's, so the fisheye case
+compares camlog with ``cv2.fisheye`` only. A fourth column, ``camlog default``, is camlog
+with the flags a user gives it (its default lens model: k1 k2 of plumb_bob, k1..k6 of the
+rational model, and p1 p2 only when a likelihood-ratio test finds them in the views).
+
+Against the simulator's truth it prints, per case, figure and tool, the median and the 80th
+percentile over the seeds of |error|: fx and fy (%), principal point distance (px), the max
+projection difference over the image (px; 16 px margin, camera frames aligned by the best
+rotation, as mrcal's implied transform; the fisheye within 80° of its axis) and for a stereo
+pair the rotation between the cameras (°) and the baseline (%); figures of a pair are the
+worse camera's.
+
+mrcal runs under its own Python (its wheels need ≥ 3.12): ``--mrcal-python`` (default
+``~/.cache/camlog/mrcal-venv/bin/python``); without one, mrcal is skipped with one line.
+Seeds run in turn over every case, so ``--minutes`` (stop starting seeds after that long)
+leaves every case with about as many seeds.
+
+    python -m benchmarks.vs_mrcal [--seeds 40] [--cases heldout,stereo,...] [--cache DIR]
+        [--mrcal-python PATH] [--minutes M]
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import tempfile
+import time
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import cv2
+
+from camlog.errors import CalibrationError
+from recorder.record import record
+from recorder.scenario import load_scenario
+
+from .calibrate_speed import Case, calibrate, parse_flags, run_board
+from .calibration_truth import (
+    Accuracy,
+    accuracy,
+    camlog_accuracy,
+    opencv_models,
+    true_models,
+    true_right_from_left,
+)
+from .mrcal_run import DEFAULT_VENV, MrcalError, mrcal_available, run_mrcal
+from .spread import TOOLS, Results, table
+
+#: 10 s of each scenario (half its default: 20-40 held poses) at its 30 Hz; the fisheye, which
+#: renders up to 26 views a frame, as benchmarks.calibrate_speed records it: 30 s at 4 Hz
+CASES = [
+    Case("heldout", "mono_heldout",
+         "--camera /heldout_camera -s 7x6 -q 0.01 -k 3 --tangent-dist", {"duration_s": 10.0}),
+    Case("stereo", "stereo_heldout",
+         "--left /heldout/left --right /heldout/right -s 7x6 -q 0.01 --approximate 0.02 "
+         "-k 3 --tangent-dist", {"duration_s": 10.0}),
+    Case("charuco", "mono_charuco",
+         "--camera /charuco_camera -s 8x6 -q 0.011 -p charuco --marker 0.008 "
+         "--dictionary DICT_5X5_100 --model rational_polynomial --tangent-dist",
+         {"duration_s": 10.0}),
+    Case("moving_blur", "mono_moving_blur",
+         "--camera /simple_camera -s 7x6 -q 0.01 -k 3 --tangent-dist", {"duration_s": 10.0}),
+    Case("fisheye", "mono_fisheye", "--camera /fisheye_camera -s 7x6 -q 0.015 --model fisheye",
+         {"duration_s": 30.0, "rate_hz": 4.0}),
+]
+CASE_NAMES = [c.name for c in CASES]
+DEFAULT_CACHE = Path.home() / ".cache" / "camlog" / "vs_mrcal"
+
+
+@dataclass
+class Progress:
+    """Every tool's accuracy per case, and the seeds each tool failed on."""
+
+    results: Results = field(default_factory=dict)
+    failures: dict[tuple[str, str], list[str]] = field(default_factory=dict)
+
+    def add(self, case: str, tool: str, a: Accuracy) -> None:
+        """Keep one result."""
+        self.results.setdefault(case, {}).setdefault(tool, []).append(a)
+
+    def fail(self, case: str, tool: str, seed: int, why: str) -> None:
+        """Note a failure (printed at once, counted in the table)."""
+        self.failures.setdefault((case, tool), []).append(f"seed {seed}: {why}")
+        print(f"  {case} seed {seed}: {tool} failed: {why}", flush=True)
+
+
+def recording(case: Case, seed: int, cache: Path, duration_s: float | None) -> Path:
+    """The case's recording for ``seed``, rendered into ``cache`` unless already there."""
+    overrides = {**case.overrides, "seed": seed}
+    if duration_s is not None:
+        overrides["duration_s"] = duration_s
+    rate = f"_{overrides['rate_hz']:g}hz" if "rate_hz" in overrides else ""
+    path = cache / f"{case.scenario}_{seed}_{overrides['duration_s']:g}s{rate}.mcap"
+    if not path.exists():
+        partial = path.with_suffix(".partial.mcap")  # an interrupted run's is rendered again
+        partial.unlink(missing_ok=True)
+        record(load_scenario(case.scenario, overrides), partial, progress=False)
+        partial.rename(path)
+    return path
+
+
+def default_flags(flags: str) -> str:
+    """A case's flags without those that make camlog fit the whole true lens model: the lens
+    model camlog picks by default (k1 k2, k1..k6 rational; p1 p2 when the views show them)."""
+    return " ".join(f for f in flags.replace("-k 3", "").split() if f != "--tangent-dist")
+
+
+def one_seed(case: Case, seed: int, path: Path, *, mrcal_python: Path | None, tmp: Path,
+             progress: Progress) -> None:
+    """Calibrate one recording with the three tools; keep and print their accuracy."""
+    try:
+        run = calibrate(path, case.flags, tmp / "out", report=False)
+    except CalibrationError as err:
+        progress.fail(case.name, "camlog", seed, str(err))
+        return
+    got = {"camlog": camlog_accuracy(run)}
+    if (defaults := default_flags(case.flags)) != case.flags:
+        try:
+            got["camlog default"] = camlog_accuracy(calibrate(path, defaults, tmp / "default",
+                                                              report=False))
+        except CalibrationError as err:
+            progress.fail(case.name, "camlog default", seed, str(err))
+    board = run_board(case, path)
+    truths, true_rfl = true_models(run), true_right_from_left(run)
+    try:
+        models, rfl = opencv_models(run, board)
+        got["OpenCV"] = accuracy(models, truths, rfl, true_rfl)
+    except cv2.error as err:
+        progress.fail(case.name, "OpenCV", seed, str(err).strip().splitlines()[-1])
+    if mrcal_python is not None and not truths[0].is_fisheye:
+        try:
+            solved = run_mrcal(mrcal_python, run, board,
+                               approximate_s=parse_flags(path, case.flags).approximate)
+            got["mrcal"] = accuracy(solved.models, truths, solved.right_from_left, true_rfl)
+        except MrcalError as err:
+            progress.fail(case.name, "mrcal", seed, str(err))
+    for tool, a in got.items():
+        progress.add(case.name, tool, a)
+    print(f"  {case.name} seed {seed}: max projection difference px "
+          + ", ".join(f"{t} {max(a.max_difference_px):.3f}" for t, a in got.items()),
+          flush=True)
+
+
+def models_line(case: Case, mrcal: bool) -> str:
+    """Which lens model each tool fitted in a case."""
+    if "--model fisheye" in case.flags:
+        return (f"{case.name}: equidistant k1..k4: camlog --model fisheye, cv2.fisheye.calibrate"
+                " (mrcal: not compared, its fisheye models differ)")
+    rational = "rational_polynomial" in case.flags
+    model = "rational_polynomial k1 k2 p1 p2 k3 k4 k5 k6" if rational else \
+        "plumb_bob k1 k2 p1 p2 k3"
+    flags = "--model rational_polynomial --tangent-dist" if rational else "-k 3 --tangent-dist"
+    opencv = "CALIB_RATIONAL_MODEL" if rational else "default flags"
+    lens = "LENSMODEL_OPENCV8" if rational else "LENSMODEL_OPENCV5"
+    return (f"{case.name}: {model}: camlog {flags}, OpenCV {opencv}"
+            + (f", mrcal {lens} + board warp" if mrcal else ", mrcal skipped"))
+
+
+def compare(cases: list[Case], seeds: range, *, cache: Path, duration_s: float | None,
+            mrcal_python: Path | None, minutes: float | None) -> Progress:
+    """Record, calibrate and compare every case over the seeds (seed by seed); stop starting
+    seeds after ``minutes``."""
+    progress = Progress()
+    started = time.monotonic()
+    with tempfile.TemporaryDirectory() as tmp_name:
+        for seed in seeds:
+            if minutes is not None and time.monotonic() - started > minutes * 60:
+                print(f"stopped before seed {seed}: over {minutes:g} minutes", flush=True)
+                break
+            for case in cases:
+                path = recording(case, seed, cache, duration_s)
+                one_seed(case, seed, path, mrcal_python=mrcal_python, tmp=Path(tmp_name),
+                         progress=progress)
+    return progress
+
+
+def parse_arguments(argv: Sequence[str] | None) -> argparse.Namespace:
+    """The command line (usage errors exit 2 with one line)."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=40, help="seeds per case (default 40)")
+    parser.add_argument("--cases", default=",".join(CASE_NAMES),
+                        help=f"comma-separated, from {', '.join(CASE_NAMES)} (default: all)")
+    parser.add_argument("--cache", type=Path, default=DEFAULT_CACHE,
+                        help=f"recordings are kept and reused here (default {DEFAULT_CACHE})")
+    parser.add_argument("--duration", type=float, default=None,
+                        help="seconds per recording (default: 10, the fisheye 30 at 4 Hz)")
+    parser.add_argument("--mrcal-python", type=Path, default=DEFAULT_VENV / "bin" / "python",
+                        help="a Python (>= 3.12) that imports mrcal (default: "
+                             f"{DEFAULT_VENV}/bin/python)")
+    parser.add_argument("--minutes", type=float, default=None,
+                        help="start no seed after this many minutes (default: run them all)")
+    args = parser.parse_args(argv)
+    unknown = sorted(set(args.cases.split(",")) - set(CASE_NAMES))
+    if unknown:
+        parser.error(f"unknown cases {', '.join(unknown)} (known: {', '.join(CASE_NAMES)})")
+    if args.seeds < 1:
+        parser.error(f"--seeds must be at least 1, not {args.seeds}")
+    if args.duration is not None and args.duration <= 0:
+        parser.error(f"--duration must be positive, not {args.duration:g}")
+    return args
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    args = parse_arguments(argv)
+    chosen = args.cases.split(",")
+    cases = [c for c in CASES if c.name in chosen]
+    why_not = mrcal_available(args.mrcal_python)
+    if why_not is not None:
+        print(f"mrcal skipped: {why_not}", flush=True)
+    mrcal_python = None if why_not is not None else args.mrcal_python
+    args.cache.mkdir(parents=True, exist_ok=True)
+    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores", flush=True)
+    for case in cases:
+        print(models_line(case, mrcal_python is not None), flush=True)
+    progress = compare(cases, range(args.seeds), cache=args.cache, duration_s=args.duration,
+                       mrcal_python=mrcal_python, minutes=args.minutes)
+    print(f"load average {os.getloadavg()[0]:.1f} at the end", flush=True)
+    failed = {key: len(v) for key, v in progress.failures.items()}
+    tools = [t for t in TOOLS if mrcal_python is not None or t != "mrcal"]
+    print("\n".join(table(progress.results, tools, failed)))
+
+
+if __name__ == "__main__":
+    main()
