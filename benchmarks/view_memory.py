@@ -18,7 +18,7 @@ import sys
 import tempfile
 from pathlib import Path
 
-from .peers import Run, clear, run_once, tool
+from .processes import Run, clear, run_once, tool
 from .report import emit
 
 #: log lengths compared, in repetitions of the 30 s recording

@@ -152,9 +152,10 @@ class _Seen:
     def snapshot(self, stamp_ns: int) -> bool:
         """Whether a distinct frame at ``stamp_ns`` comes :data:`SNAPSHOT_GAP_S` or more
         after the previous one (the first frame does); remembers it as the previous one."""
-        gap = self.last_distinct_ns
+        previous_ns = self.last_distinct_ns
         self.last_distinct_ns = stamp_ns
-        return self.thorough or gap is None or abs(stamp_ns - gap) >= SNAPSHOT_GAP_S * 1e9
+        return self.thorough or previous_ns is None \
+            or abs(stamp_ns - previous_ns) >= SNAPSHOT_GAP_S * 1e9
 
     def add(self, gray: np.ndarray, stamp_ns: int, where: str) -> tuple[int, bool]:
         """Record a frame; its index and whether it repeats the previous one."""

@@ -20,6 +20,14 @@ from camlog.cli import main
 SMALL = "boofcv_sony_chess"
 
 
+def cached(name: str) -> Path:
+    folder = default_cache() / name
+    if not folder.is_dir():
+        pytest.skip(f"corpus cache {folder} absent: run python -m benchmarks.corpus.fetch "
+                    "(--mirror-root DIR: local clones, without network)")
+    return folder
+
+
 def test_every_entry_has_provenance_licence_and_board() -> None:
     datasets = load_manifest()
     assert len(datasets) >= 8
@@ -50,10 +58,7 @@ def test_camlog_options_follow_the_board() -> None:
 
 def test_opencv_reference_on_a_small_dataset() -> None:
     dataset = next(d for d in load_manifest() if d.name == SMALL)
-    folder = default_cache() / SMALL
-    if not folder.is_dir():
-        pytest.skip(f"corpus cache {folder} absent: run python -m benchmarks.corpus.fetch "
-                    "(--mirror-root /work/.mirror without network)")
+    folder = cached(SMALL)
     result = reference_calibration(dataset, folder)
     (camera,) = result.cameras
     assert camera.views == 13
@@ -61,14 +66,6 @@ def test_opencv_reference_on_a_small_dataset() -> None:
     assert dataset.reference is not None
     assert abs(camera.fx - dataset.reference.fx) / dataset.reference.fx < 0.02
     assert abs(camera.cx - dataset.reference.cx) < 5
-
-
-def cached(name: str) -> Path:
-    folder = default_cache() / name
-    if not folder.is_dir():
-        pytest.skip(f"corpus cache {folder} absent: run python -m benchmarks.corpus.fetch "
-                    "(--mirror-root /work/.mirror without network)")
-    return folder
 
 
 def test_fisheye_photos_calibrate_at_any_import_rate(tmp_path: Path) -> None:
