@@ -24,6 +24,9 @@ from .jobs import Job, run_job
 #: oversubscribe the cores (read when a worker process starts)
 THREAD_ENV = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 PARENT_POLL_S = 0.5
+#: how often the batch looks at which logs started and finished: the live counts beside the
+#: progress bar follow a log that takes half a second
+POLL_S = 0.1
 
 #: in a worker: "started", the queue that tells the batch which log it started
 _WORKER: dict[str, Any] = {}
@@ -93,7 +96,7 @@ def _collect(futures: dict[Future[dict[str, Any]], Job], started: Any, *,
     again: list[Job] = []
     pending = set(futures)
     while pending:
-        finished, pending = wait(pending, timeout=0.5, return_when=FIRST_COMPLETED)
+        finished, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)
         while not started.empty():
             running.add(started.get())
         for future in finished:
