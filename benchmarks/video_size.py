@@ -18,7 +18,7 @@ import time
 from pathlib import Path
 
 from camlog.cli import main as camlog
-from replay.convert import convert_log
+from camlog.logs.convert import convert_log
 from replay.frames.video import DEFAULT_CRF
 
 from .report import emit

@@ -27,8 +27,8 @@ import numpy as np
 import rerun as rr
 
 from replay import open_reader
-from replay.export import LoggerOptions, view_logs
-from replay.export.images import COLOR_MODELS
+from rerun_export import LoggerOptions, view_logs
+from rerun_export.images import COLOR_MODELS
 
 from .report import cli_peak_rss_mb, emit
 

@@ -25,7 +25,7 @@ from processors.calibration.solve import CalibrationOptions
 from processors.registry import configure
 from recorder.record import record
 from recorder.scenario import load_scenario
-from replay.export import view_logs
+from rerun_export import view_logs
 
 from .calibrate.flow import calibrate_log
 from .cli.lean import pandas_hidden, without_pandas

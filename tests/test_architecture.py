@@ -16,12 +16,14 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("replay", "recorder", "processors", "camlog")
-#: package -> the packages it must not import (recorder -> replay <- processors; camlog: all)
+PACKAGES = ("replay", "recorder", "processors", "rerun_export", "camlog")
+#: package -> the packages it must not import (recorder -> replay <- processors, replay <-
+#: rerun_export; camlog: all)
 FORBIDDEN = {
-    "replay": {"recorder", "processors", "camlog"},
-    "recorder": {"processors", "camlog"},
-    "processors": {"recorder", "camlog"},
+    "replay": {"recorder", "processors", "rerun_export", "camlog"},
+    "recorder": {"processors", "rerun_export", "camlog"},
+    "processors": {"recorder", "rerun_export", "camlog"},
+    "rerun_export": {"recorder", "processors", "camlog"},
     "camlog": set(),
 }
 MAX_LINES = 400

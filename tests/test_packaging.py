@@ -6,7 +6,7 @@ import tomllib
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-TOP_LEVEL = ("camlog", "processors", "recorder", "replay")
+TOP_LEVEL = ("camlog", "processors", "recorder", "replay", "rerun_export")
 
 
 def test_every_package_directory_is_listed_for_the_wheel() -> None:

@@ -223,8 +223,8 @@ def _throttle(log: Location, out: Path, o: dict[str, Any], workers: int) -> Step
 
 
 def _info(log: Location, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
+    from camlog.logs.info import format_summary, summarize
     from replay.formats import open_reader
-    from replay.info import format_summary, summarize
 
     with open_reader(log) as reader:
         text = format_summary(summarize(reader))

@@ -53,9 +53,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Call :func:`replay.convert.convert_log`."""
+    """Call :func:`camlog.logs.convert.convert_log`."""
     refuse_existing(args.output, overwrite=args.overwrite, inputs=[args.input])
-    from replay.convert import convert_log
+    from camlog.logs.convert import convert_log
 
     result = convert_log(
         args.input, args.output, fmt=args.format, topics=args.topics, start_s=args.start,

@@ -55,8 +55,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Call :func:`replay.importer.import_images`."""
-    from replay.importer import import_images
+    """Call :func:`camlog.logs.importer.import_images`."""
+    from camlog.logs.importer import import_images
 
     result = import_images(
         args.folder, args.output, camera=args.camera, rate_hz=args.rate, stereo=args.stereo,

@@ -30,9 +30,9 @@ def run(args: argparse.Namespace) -> int:
     """Print the summary of ``args.log`` on stdout and what is wrong with the log (damage,
     recovery, unfinished outputs beside it) on stderr; for a folder that is not a log, the
     unfinished outputs in it on stdout. Errors propagate as :class:`replay.ReplayError`."""
+    from camlog.logs.info import format_summary, summarize
     from replay.errors import LogFormatError
     from replay.formats import detect_format, open_reader
-    from replay.info import format_summary, summarize
     from replay.leftovers import describe_leftovers, format_leftovers, leftovers_in, leftovers_of
 
     from .args import print_warnings

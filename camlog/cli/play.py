@@ -45,8 +45,8 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Call :func:`replay.play.play_log` and report the pacing."""
-    from replay.play import play_log
+    """Call :func:`camlog.logs.play.play_log` and report the pacing."""
+    from camlog.logs.play import play_log
 
     result = play_log(
         args.logs, rate=args.rate, start_s=args.start, end_s=args.end, topics=args.topics,

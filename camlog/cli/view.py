@@ -50,14 +50,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Call :func:`replay.export.view_logs` and print what it logged."""
-    from replay.export.paths import refuse_output
+    """Call :func:`rerun_export.view_logs` and print what it logged."""
+    from rerun_export.paths import refuse_output
 
     refuse_output(args.logs, args.output, live=args.spawn or args.connect is not None,
                   overwrite=args.overwrite)
     if getattr(args, "as_program", False):
         without_pandas()
-    from replay.export import LoggerOptions, view_logs
+    from rerun_export import LoggerOptions, view_logs
 
     options = LoggerOptions(every=args.every, jpeg_quality=args.jpeg_quality,
                             residual_scale=args.residual_scale,

@@ -16,10 +16,10 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from camlog.logs.info import summarize
 from processors.registry import configure
 from processors.spec import Configured
 from replay.formats import open_reader
-from replay.info import summarize
 from replay.messages import Image, PointStamped
 from replay.records import CalibrationSummary, ResyncStats, to_json
 from replay.topics import ResyncTopics, read_record

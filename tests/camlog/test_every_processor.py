@@ -17,9 +17,9 @@ from processors.spec import OptionKind, OutputSpec, ProcessorSpec
 from replay import CameraInfo, Image, open_reader, open_writer
 from replay.calibration_yaml import save_calibration
 from replay.display import Display
-from replay.export import view_logs
 from replay.records import ProcessedOutputs
 from replay.topics import PROCESSED
+from rerun_export import view_logs
 from tests.rrd import load_rrd
 
 W, H, FRAMES = 48, 36, 3

@@ -31,10 +31,10 @@ from types import FrameType
 
 import numpy as np
 
+from camlog.logs.info import summarize
 from replay import CameraInfo, CompressedImage, Image, Text, open_reader, open_writer
 from replay.errors import ReplayError
 from replay.frames import decode_frame, encode_compressed
-from replay.info import summarize
 
 from .samples import T0_NS
 

@@ -22,7 +22,6 @@ from replay import (
     PointStamped,
     open_reader,
 )
-from replay.export.images import rerun_image
 from replay.frames import (
     DECODERS,
     ENCODERS,
@@ -33,6 +32,7 @@ from replay.frames import (
     encode_compressed,
     encode_image,
 )
+from rerun_export.images import rerun_image
 from tests.encodings import (
     COLS,
     RED_CENTROID,

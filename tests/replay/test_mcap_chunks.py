@@ -16,8 +16,8 @@ from mcap.writer import CompressionType, Writer
 from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_typestore
 
+from camlog.logs.convert import convert_log
 from replay import LogWriteError, open_reader
-from replay.convert import convert_log
 from replay.formats.chunk_worker import OrderedWorker
 from replay.formats.mcap_chunks import McapChunkWriter
 from replay.formats.mcap_writer import McapLogWriter

@@ -19,9 +19,9 @@ from rosbags.highlevel import AnyReader
 from camlog.cli import main
 from processors.registry import make_processor
 from replay import Image, open_reader
-from replay.export import view_logs
 from replay.frames import decode_frame
 from replay.topics import PROCESSED
+from rerun_export import view_logs
 from tests.rrd import load_rrd
 
 LEFT, RIGHT = "/stereo_camera/left", "/stereo_camera/right"

@@ -87,9 +87,9 @@ def test_real_t265_bag(realdata_dir: Path, tmp_path: Path,
 def test_view_suggests_jpeg_for_large_raw_images(red_log: Path, tmp_path: Path,
                                                  monkeypatch: pytest.MonkeyPatch,
                                                  capsys: pytest.CaptureFixture[str]) -> None:
-    import replay.export.view
+    import rerun_export.view
 
-    monkeypatch.setattr(replay.export.view, "LARGE_BYTES", 5_000_000)  # this log: 9.2 MB
+    monkeypatch.setattr(rerun_export.view, "LARGE_BYTES", 5_000_000)  # this log: 9.2 MB
     assert main(["view", str(red_log), "-o", str(tmp_path / "a.rrd"), "--no-progress"]) == 0
     first = capsys.readouterr().out.splitlines()[0]
     assert first == ("images to write: about 9 MB before compression; 9 MB of raw images: "
