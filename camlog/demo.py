@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from processors.calibration.board import make_board
-from processors.calibration.solve import CalibrationOptions
+from processors.calibration.options import CalibrationOptions
 from processors.registry import configure
 from recorder.record import record
 from recorder.scenario import load_scenario

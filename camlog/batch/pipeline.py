@@ -158,7 +158,7 @@ def _resync(log: Location, out: Path, o: dict[str, Any], workers: int) -> StepOu
 
 def _calibrate(log: Location, out: Path, o: dict[str, Any], workers: int) -> StepOutcome:
     from processors.calibration.board import make_board
-    from processors.calibration.solve import CalibrationOptions, tangential_mode
+    from processors.calibration.options import CalibrationOptions, tangential_mode
 
     from ..calibrate.flow import calibrate_log
 

@@ -9,9 +9,9 @@ from pathlib import Path
 import numpy as np
 
 from processors.calibration.board import Board
-from processors.calibration.check import ViewFit, fit_view, linearity_error
 from processors.calibration.holds import Seen
 from processors.calibration.stereo import epipolar_errors, orient_right_views
+from processors.calibration.view_fit import ViewFit, fit_view, linearity_error
 from replay.calibration_yaml import load_calibration
 from replay.camera import CameraModel
 from replay.formats import open_reader

@@ -16,8 +16,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from camlog.calibrate.figures import annotate_detection
 from processors.calibration.board import Board
-from processors.calibration.figures import annotate_detection
 from replay.camera import rectify_maps
 from replay.formats import LogReader, LogWriter
 from replay.formats.background import BackgroundWriter

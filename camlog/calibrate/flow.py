@@ -19,7 +19,7 @@ from pathlib import Path
 from processors.calibration.board import Board
 from processors.calibration.corners import remeasures
 from processors.calibration.joint import JointResult
-from processors.calibration.solve import CalibrationOptions
+from processors.calibration.options import CalibrationOptions
 from replay.atomic import AtomicFolder
 from replay.formats import LogReader, open_reader, open_writer
 from replay.formats.background import BackgroundWriter

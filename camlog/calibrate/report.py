@@ -7,7 +7,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from processors.calibration.figures import (
+from camlog.calibrate.figures import (
     coverage_figure,
     rectified_pair_figure,
     residual_figure,

@@ -21,10 +21,10 @@ import numpy as np
 from processors.calibration.board import Board
 from processors.calibration.holds import Seen
 from processors.calibration.joint import MIN_VIEWS, BoardView, JointResult, calibrate_cameras
+from processors.calibration.mono import MonoResult
 from processors.calibration.options import CalibrationOptions
 from processors.calibration.seed import seed_model
 from processors.calibration.selection import Coverage, coverage, view_parameters
-from processors.calibration.solve import MonoResult
 from processors.calibration.stereo import StereoResult, orient_right_views, stereo_result
 from processors.calibration.targets import guides_charuco
 from processors.calibration.uncertainty import UncertaintyMap
@@ -36,7 +36,7 @@ from replay.records import ScenarioCamera
 from ..errors import CalibrationError
 from .circles import CircleSize, circle_size
 from .instants import ViewsOfRig, rig_views
-from .rig import PairSolution, rig_pairs
+from .rig_pairs import PairSolution, rig_pairs
 from .statistics import CameraStatistics, camera_statistics
 from .views import CameraViews, Frame
 

@@ -9,13 +9,13 @@ from __future__ import annotations
 import numpy as np
 
 from processors.calibration.board import Board
-from processors.calibration.rig import angle_deg
-from processors.calibration.rotation import rotation_vectors
-from processors.calibration.solve import (
+from processors.calibration.mono import (
     CalibrationOptions,
     MonoResult,
     max_projection_difference,
 )
+from processors.calibration.rig import angle_deg
+from processors.calibration.rotation import rotation_vectors
 from processors.calibration.uncertainty import error_against
 from processors.calibration.validation import projection_difference
 from replay.geometry import invert
@@ -24,7 +24,7 @@ from replay.records import calibration as records
 from replay.records import rig as rig_records
 from replay.records.scenario import Scenario
 
-from .rig import PairSolution
+from .rig_pairs import PairSolution
 from .solving import CalibratedCamera, RigSolution, StereoSolution
 from .truth import TrueRig, true_rig
 

@@ -24,8 +24,8 @@ from pathlib import Path
 import numpy as np
 
 from processors.calibration.board import Board
-from processors.calibration.check import fit_view
 from processors.calibration.targets import find_board
+from processors.calibration.view_fit import fit_view
 from processors.drift import PairMatches, StereoMatcher, fit_rotation, window_noise
 from replay.camera import CameraModel
 from replay.formats import open_reader

@@ -12,7 +12,7 @@ from pathlib import Path
 import cv2
 import numpy as np
 
-from processors.calibration.figures import BLACK, BLUE, FONT, GREY, RED
+from camlog.calibrate.figures import BLACK, BLUE, FONT, GREY, RED
 from replay.atomic import write_bytes_atomic, write_text_atomic
 
 from .flow import LogCheck, Series

@@ -25,7 +25,7 @@ from .args import (
 
 if TYPE_CHECKING:
     from processors.calibration.board import Board
-    from processors.calibration.solve import CalibrationOptions
+    from processors.calibration.options import CalibrationOptions
     from replay.records import RigSummary
 
 #: ROS distortion_model names (and OpenCV's "fisheye" for equidistant)
@@ -179,7 +179,7 @@ def _truth_error(camera: Any) -> str:
 def board_and_options(args: argparse.Namespace) -> tuple[Board, CalibrationOptions]:
     """The target and the solver options the ``calibrate`` arguments ask for."""
     from processors.calibration.board import make_board
-    from processors.calibration.solve import CalibrationOptions, tangential_mode
+    from processors.calibration.options import CalibrationOptions, tangential_mode
 
     board = make_board(args.size, args.square, args.pattern, marker_m=args.marker,
                        dictionary=args.dictionary)

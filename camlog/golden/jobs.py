@@ -110,7 +110,7 @@ class Calibrate:
     def run(self, log: Path, folder: Path, workers: int) -> Artifacts:
         """Calibrate and keep the YAML files, the key numbers and the log summary."""
         from processors.calibration.board import make_board
-        from processors.calibration.solve import CalibrationOptions
+        from processors.calibration.options import CalibrationOptions
 
         from ..calibrate.flow import calibrate_log
 

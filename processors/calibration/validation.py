@@ -60,7 +60,7 @@ def projection_difference(a: CameraModel, b: CameraModel, pixels: F64, *,
                           align_rotation: bool = True) -> F64:
     """Distance ``(...)`` between where ``b`` images the rays ``a`` sees at ``pixels``
     ``(..., 2)`` and ``pixels``, after the rotation that best maps one onto the other."""
-    from .solve import best_rotation
+    from .mono import best_rotation
 
     flat = pixels.reshape(-1, 2)
     rays = a.pixel_rays(flat)

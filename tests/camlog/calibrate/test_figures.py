@@ -5,7 +5,7 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from processors.calibration.figures import uncertainty_figure
+from camlog.calibrate.figures import uncertainty_figure
 from processors.calibration.uncertainty import grid
 
 

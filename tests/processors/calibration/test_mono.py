@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from processors.calibration.joint import BoardView
-from processors.calibration.solve import (
+from processors.calibration.mono import (
     TANGENTIAL_P_VALUE,
     CalibrationOptions,
     MonoResult,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from processors.calibration.board import Board
-from processors.calibration.check import fit_view, linearity_error, reprojection_rms
+from processors.calibration.view_fit import fit_view, linearity_error, reprojection_rms
 
 from .synthetic import (
     BOARD,
