@@ -2,12 +2,8 @@
 distortion, and the equidistant fisheye (OpenCV's ``cv2.fisheye``, Kannala-Brandt).
 
 Optical frame: x right, y down, z forward. Pixel centres sit at integer coordinates, so an
-ideal W x H camera has its principal point at ((W - 1) / 2, (H - 1) / 2).
-
-The equidistant model maps a ray at angle ``theta`` from the optical axis to the distorted
-radius ``theta_d = theta (1 + k1 theta^2 + k2 theta^4 + k3 theta^6 + k4 theta^8)`` along the
-ray's direction in the image plane, then applies ``K``; it holds beyond 90 degrees, where
-pinhole coordinates ``X / Z`` do not exist.
+ideal W x H camera has its principal point at ((W - 1) / 2, (H - 1) / 2). Each model's
+projection is its entry in :data:`replay.projections.PROJECTIONS`.
 """
 
 from __future__ import annotations
@@ -21,9 +17,7 @@ import numpy as np
 from .format_names import CAMERA_MODELS
 from .lens_models import LensModel, canonical_name, lens_model
 from .messages import F64, CameraInfo
-
-_FISHEYE_NEWTON_STEPS = 30
-_UNDISTORT_CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-14)
+from .projections import PROJECTIONS, Projection
 
 
 def focal_from_hfov(width: int, hfov_rad: float) -> float:
@@ -106,6 +100,11 @@ class CameraModel:
         return lens_model(self.distortion_model)
 
     @property
+    def projection(self) -> Projection:
+        """How the model images rays (:data:`replay.projections.PROJECTIONS`)."""
+        return PROJECTIONS[self.distortion_model]
+
+    @property
     def is_ideal(self) -> bool:
         """True for a distortion-free pinhole with square pixels and centred principal point."""
         return (
@@ -134,45 +133,13 @@ class CameraModel:
         """Pixels ``(N, 2)`` of points ``(N, 3)`` in the optical frame (z > 0; a fisheye
         also projects points beside and behind it, at angles up to 180 degrees)."""
         pts = np.asarray(points_in_camera, dtype=np.float64).reshape(-1, 3)
-        if self.is_fisheye:
-            return self._project_fisheye(pts)
-        uv, _ = cv2.projectPoints(pts, np.zeros(3), np.zeros(3), self.k, self.d)
-        return np.asarray(uv, dtype=np.float64).reshape(-1, 2)
-
-    def _project_fisheye(self, pts: F64) -> F64:
-        # cv2.fisheye.projectPoints, with theta = atan2(r, z) so that it holds past 90 degrees
-        r = np.hypot(pts[:, 0], pts[:, 1])
-        theta = np.arctan2(r, pts[:, 2])
-        k1, k2, k3, k4 = self.d
-        t2 = theta * theta
-        theta_d = theta * (1 + t2 * (k1 + t2 * (k2 + t2 * (k3 + t2 * k4))))
-        scale = np.divide(theta_d, r, out=np.zeros_like(r), where=r > 0)
-        distorted = np.column_stack([pts[:, 0] * scale, pts[:, 1] * scale, np.ones(len(pts))])
-        return np.asarray(distorted @ self.k[:2].T, dtype=np.float64)
+        return self.projection.project(self.k, self.d, pts)
 
     def pixel_rays(self, uv: F64) -> F64:
         """Unit rays ``(N, 3)`` in the optical frame of observed pixels ``(N, 2)``; exact
         inverse of :meth:`project` where the model is invertible."""
         uv = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
-        if not self.is_fisheye:
-            rays = np.column_stack([self.undistort_pixels(uv), np.ones(len(uv))])
-            return np.asarray(rays / np.linalg.norm(rays, axis=1, keepdims=True))
-        homogeneous = np.column_stack([uv, np.ones(len(uv))])
-        distorted = (homogeneous @ np.linalg.inv(self.k).T)[:, :2]
-        theta_d = np.hypot(distorted[:, 0], distorted[:, 1])
-        k1, k2, k3, k4 = self.d
-        theta = theta_d.copy()
-        for _ in range(_FISHEYE_NEWTON_STEPS):  # theta (1 + k1 t^2 + ...) = theta_d
-            t2 = theta * theta
-            value = theta * (1 + t2 * (k1 + t2 * (k2 + t2 * (k3 + t2 * k4)))) - theta_d
-            slope = 1 + t2 * (3 * k1 + t2 * (5 * k2 + t2 * (7 * k3 + t2 * 9 * k4)))
-            step = value / slope
-            theta = theta - step
-            if not np.any(np.abs(step) > 1e-15):
-                break
-        direction = np.divide(distorted, theta_d[:, None], out=np.zeros_like(distorted),
-                              where=theta_d[:, None] > 0)
-        return np.column_stack([direction * np.sin(theta)[:, None], np.cos(theta)])
+        return self.projection.pixel_rays(self.k, self.d, uv)
 
     def distort_normalized(self, xy: F64) -> F64:
         """Pixels ``(N, 2)`` of ideal normalized coordinates ``(N, 2)`` (``x = X / Z``)."""
@@ -186,18 +153,7 @@ class CameraModel:
         ``uv`` within 1e-6 px for distortion that is invertible over the image. A fisheye's
         pixels whose rays are 90 degrees or more from the axis have no such coordinates (NaN).
         """
-        if self.is_fisheye:
-            rays = self.pixel_rays(uv)
-            ahead = rays[:, 2:] > 0
-            xy = np.divide(rays[:, :2], rays[:, 2:], out=np.full((len(rays), 2), np.nan),
-                           where=ahead)
-            return np.asarray(xy, dtype=np.float64)
-        uv = np.asarray(uv, dtype=np.float64).reshape(-1, 1, 2)
-        if not np.any(self.d):
-            xy = cv2.undistortPoints(uv, self.k, None)
-        else:
-            xy = cv2.undistortPoints(uv, self.k, self.d, criteria=_UNDISTORT_CRITERIA)
-        return np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+        return self.projection.undistort_pixels(self.k, self.d, uv)
 
     def rectify_points(self, uv: F64, r: F64, p: F64) -> F64:
         """Pixels ``(N, 2)`` in the rectified image of rotation ``r`` (3, 3) and projection
@@ -215,9 +171,7 @@ class CameraModel:
         size = (self.width, self.height)
         r = np.asarray(r, dtype=np.float64)
         new_k = np.asarray(new_k, dtype=np.float64)[:, :3]
-        init = cv2.fisheye.initUndistortRectifyMap if self.is_fisheye \
-            else cv2.initUndistortRectifyMap
-        map1, map2 = init(self.k, self.d, r, new_k, size, map_type)
+        map1, map2 = self.projection.rectify_map(self.k, self.d, r, new_k, size, map_type)
         return map1, map2
 
 

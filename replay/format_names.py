@@ -24,12 +24,13 @@ VIDEO_CODEC_NAMES = ("h264", "h265")
 #: log far more than tenfold (``benchmarks.video_size``)
 DEFAULT_CRF = 18
 
-#: pinhole distortion model -> number of coefficients OpenCV uses for it (from the table)
-DISTORTION_MODELS = {m.name: len(m.coefficients) for m in LENS_MODELS.values() if not m.fisheye}
-#: fisheye model -> number of coefficients (``cv2.fisheye``'s k1..k4)
-FISHEYE_MODELS = {m.name: len(m.coefficients) for m in LENS_MODELS.values() if m.fisheye}
-#: every model :class:`~replay.camera.CameraModel` understands (ROS ``distortion_model`` names)
-CAMERA_MODELS = DISTORTION_MODELS | FISHEYE_MODELS
+#: every model :class:`~replay.camera.CameraModel` understands (ROS ``distortion_model`` names,
+#: in the order of :data:`~replay.lens_models.LENS_MODELS`) -> its number of coefficients
+CAMERA_MODELS = {m.name: len(m.coefficients) for m in LENS_MODELS.values()}
+#: the pinhole models of :data:`CAMERA_MODELS`
+DISTORTION_MODELS = {name: n for name, n in CAMERA_MODELS.items() if not LENS_MODELS[name].fisheye}
+#: the fisheye models of :data:`CAMERA_MODELS` (their field of view may pass 180 degrees)
+FISHEYE_MODELS = {name: n for name, n in CAMERA_MODELS.items() if LENS_MODELS[name].fisheye}
 
 #: what ``camlog play`` writes as a message's log time: the replay's wall clock or the log's
 LOG_TIMES = ("replay", "original")

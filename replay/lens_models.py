@@ -1,11 +1,17 @@
 """The lens models camlog understands: one table, one entry per model.
 
-Each entry is what every part of camlog needs to know about a ROS ``distortion_model``: the
-names of its distortion coefficients in ``D``'s order, whether OpenCV handles it with its
-fisheye functions (``cv2.fisheye``) or its pinhole ones, how many radial coefficients a
-calibration estimates by default and at most, whether it has tangential terms, and the
-extra OpenCV calibration flag that selects it. A new lens model is one entry here plus its
-projection (``processors.calibration.lens``) and their tests.
+Each entry is what every part of camlog needs to know about a ROS ``distortion_model`` (the
+name calibration YAML files carry): the names of its distortion coefficients in ``D``'s
+order, whether it is a fisheye (its field of view may pass 180 degrees, beyond any pinhole
+image), how many radial coefficients a calibration estimates by default and at most,
+whether it has tangential terms, and the extra OpenCV calibration flag that selects it.
+
+Its functions stand in tables keyed by the same name, beside the code that needs them:
+:data:`replay.projections.PROJECTIONS` (projection, unprojection and rectification maps),
+``processors.calibration.lens.DISTORTIONS`` (the solver's distortion with derivatives) and
+``processors.calibration.opencv_lens.OPENCV_LENSES`` (OpenCV's calibration, stereo
+rectification and new camera matrix). A new lens model is one entry here, one in each of
+those tables, and ``tests/replay/test_lens_models.py`` holds every entry to them.
 
 >>> lens_model("fisheye").name, lens_model("plumb_bob").coefficients
 ('equidistant', ('k1', 'k2', 'p1', 'p2', 'k3'))
@@ -24,7 +30,7 @@ class LensModel:
 
     name: str  # the ROS distortion_model
     coefficients: tuple[str, ...]  # names of D, in order
-    fisheye: bool  # OpenCV's cv2.fisheye functions (else its pinhole ones)
+    fisheye: bool  # a fisheye lens: its field of view may pass 180 degrees
     default_radial: int  # radial coefficients a calibration estimates unless told
     max_radial: int
     tangential: bool  # has p1, p2

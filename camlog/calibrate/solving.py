@@ -15,20 +15,26 @@ from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass, field
 
-import cv2
 import numpy as np
 
 from processors.calibration.board import Board
 from processors.calibration.holds import Seen
-from processors.calibration.joint import MIN_VIEWS, BoardView, JointResult, calibrate_cameras
-from processors.calibration.mono import MonoResult
+from processors.calibration.joint import (
+    BoardView,
+    JointResult,
+    calibrate_cameras,
+    camera_views,
+    check_view_counts,
+)
+from processors.calibration.mono import MonoResult, mono_camera_info
 from processors.calibration.options import CalibrationOptions
-from processors.calibration.seed import seed_model
+from processors.calibration.robust import seed_camera
 from processors.calibration.selection import Coverage, coverage, view_parameters
 from processors.calibration.stereo import StereoResult, orient_right_views, stereo_result
 from processors.calibration.targets import guides_charuco
 from processors.calibration.uncertainty import UncertaintyMap
 from processors.calibration.validation import CrossValidation
+from processors.errors import ProcessorError
 from replay.camera import CameraModel
 from replay.messages import F64, CameraInfo
 from replay.records import ScenarioCamera
@@ -141,9 +147,8 @@ def measured_again_text(before: ViewsOfRig, after: ViewsOfRig, first: JointResul
                         final: JointResult, camera: int) -> str:
     """One camera's second measurement in words: how many of its used corners moved, by how
     much, and the corner noise before and after."""
-    shifts = [np.linalg.norm(b.corners_px - a.corners_px, axis=1)
-              for i, (b, a) in enumerate(zip(before.views, after.views, strict=True))
-              if b.camera == camera and i not in first.rejected]
+    shifts = [np.linalg.norm(before.views[i].corners_px - after.views[i].corners_px, axis=1)
+              for i in camera_views(before.views, camera) if i not in first.rejected]
     moved = np.concatenate(shifts) if shifts else np.zeros(0)
     changed = moved[moved > 0]
     median = f", by {np.median(changed):.3f} px (median)" if len(changed) else ""
@@ -154,7 +159,7 @@ def measured_again_text(before: ViewsOfRig, after: ViewsOfRig, first: JointResul
 
 def _mono_result(joint: JointResult, rig: ViewsOfRig, camera: int) -> MonoResult:
     """One camera's share of the joint result, its views named by their first frames."""
-    mine = [i for i, v in enumerate(rig.views) if v.camera == camera]
+    mine = camera_views(rig.views, camera)
     name = {i: rig.frames_of[i][0] for i in mine}
     used = [i for i in mine if i not in joint.rejected]
     camera_from_reference = joint.camera_from_reference[camera]
@@ -174,17 +179,12 @@ def _mono_result(joint: JointResult, rig: ViewsOfRig, camera: int) -> MonoResult
 
 def _seeds(rig: ViewsOfRig, board: Board, sizes: list[tuple[int, int]],
            options: CalibrationOptions) -> list[CameraModel]:
-    points = board.points_in_board()
-    seeds = []
-    for camera, size in enumerate(sizes):
-        mine = [v for v in rig.views if v.camera == camera]
-        if len(mine) < MIN_VIEWS:
-            raise CalibrationError(
-                f"too few good views to calibrate{'' if len(sizes) == 1 else f' camera {camera}'}"
-                f": {len(mine)} (need at least {MIN_VIEWS}); record more board poses")
-        seeds.append(seed_model([points[v.point_ids] for v in mine],
-                                [v.corners_px for v in mine], size, options))
-    return seeds
+    try:
+        check_view_counts(rig.views, len(sizes))
+    except ProcessorError as err:
+        raise CalibrationError(str(err)) from None
+    return [seed_camera(board.points_in_board(), rig.views, camera, size, options)
+            for camera, size in enumerate(sizes)]
 
 
 def _seen(view: BoardView) -> Seen:
@@ -285,7 +285,7 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
     solutions = []
     for index, views in enumerate(cameras):
         result = _mono_result(joint, rig, index)
-        mine = [i for i, v in enumerate(rig.views) if v.camera == index]
+        mine = camera_views(rig.views, index)
         view_of = {f: rig.frames_of[i][0] for i in mine for f in rig.frames_of[i]}
         used = [(rig.views[i].corners_px, rig.views[i].point_ids) for i in mine
                 if i not in joint.rejected]
@@ -320,20 +320,6 @@ class CalibratedCamera:
     def views(self) -> CameraViews:
         """The camera's views."""
         return self.solution.views
-
-
-def mono_camera_info(model: CameraModel, frame_id: str) -> CameraInfo:
-    """Calibrated CameraInfo; P is camera_calibration's (alpha 0: only valid pixels)."""
-    size = (model.width, model.height)
-    if model.is_fisheye:
-        new_k = cv2.fisheye.estimateNewCameraMatrixForUndistortRectify(
-            model.k, model.d, size, np.eye(3), balance=0.0)
-    else:
-        new_k, _roi = cv2.getOptimalNewCameraMatrix(model.k, model.d, size, 0.0)
-    p = np.zeros((3, 4))
-    p[:, :3] = new_k
-    return CameraInfo(0, frame_id, model.width, model.height, model.distortion_model,
-                      model.d, model.k, np.eye(3), p)
 
 
 def calibrated_cameras(solutions: list[CameraSolution], stereo: StereoSolution | None,

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from processors.calibration.board import Board
+from processors.calibration.joint import camera_views
 from processors.calibration.mono import (
     CalibrationOptions,
     MonoResult,
@@ -70,7 +71,7 @@ def _rejected(camera: CalibratedCamera) -> list[records.RejectedView]:
 def _evidence(camera: CalibratedCamera, index: int, solved: RigSolution) -> records.EvidenceSummary:
     solution, joint = camera.solution, solved.joint
     used = solution.result.view_ids
-    mine = [i for i, v in enumerate(solved.rig.views) if v.camera == index]
+    mine = camera_views(solved.rig.views, index)
     reasons = [joint.rejected[i] for i in mine if i in joint.rejected]
     return records.EvidenceSummary(
         frames_used=sum(solution.frames_in_view[name] for name in used),

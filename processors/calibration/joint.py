@@ -25,10 +25,18 @@ from . import bundle
 from .lens import INTRINSIC_NAMES, model_of
 from .motion import BlurModel
 from .options import TANGENTIAL_P_VALUE, CalibrationOptions, TangentialTest
-from .robust import BoardView, Evidence, Problem, robust_solve, threshold_sigma
+from .robust import (
+    BoardView,
+    BoardViews,
+    Evidence,
+    Problem,
+    camera_views,
+    robust_solve,
+    threshold_sigma,
+)
 
 __all__ = ["MIN_VIEWS", "BoardView", "JointResult", "Problem", "calibrate_cameras",
-           "threshold_sigma"]
+           "camera_views", "check_view_counts", "threshold_sigma"]
 
 B8 = npt.NDArray[np.bool_]
 MIN_VIEWS = 5
@@ -88,6 +96,17 @@ class JointResult:
         return sum(int((~m).sum()) for i, m in enumerate(self.inliers) if i not in self.rejected)
 
 
+def check_view_counts(views: list[BoardView], cameras: int) -> None:
+    """Every one of ``cameras`` has at least :data:`MIN_VIEWS` views (ProcessorError
+    otherwise)."""
+    for camera in range(cameras):
+        count = len(camera_views(views, camera))
+        if count < MIN_VIEWS:
+            raise ProcessorError(
+                f"too few good views to calibrate{'' if cameras == 1 else f' camera {camera}'}: "
+                f"{count} (need at least {MIN_VIEWS}); record more board poses")
+
+
 def calibrate_cameras(points_in_board: F64, views: list[BoardView],
                       sizes: list[tuple[int, int]],
                       options: CalibrationOptions | list[CalibrationOptions], *,
@@ -102,24 +121,18 @@ def calibrate_cameras(points_in_board: F64, views: list[BoardView],
     their images (see :mod:`.discs`)."""
     cameras = len(sizes)
     wanted = options if isinstance(options, list) else [options] * cameras
-    for camera in range(cameras):
-        count = sum(v.camera == camera for v in views)
-        if count < MIN_VIEWS:
-            raise ProcessorError(
-                f"too few good views to calibrate{'' if cameras == 1 else f' camera {camera}'}: "
-                f"{count} (need at least {MIN_VIEWS}); record more board poses")
+    check_view_counts(views, cameras)
+    data = BoardViews(points_in_board, views, sizes, disc_diameter_m)
     auto = [o.tangential == "auto" and o.has_tangential for o in wanted]
     final = [o.with_tangential("estimate") if a else o for o, a in zip(wanted, auto, strict=True)]
-    problem, evidence, rounds = robust_solve(points_in_board, views, sizes, final, seeds=seeds,
-                                             reject=reject_outliers,
-                                             disc_diameter_m=disc_diameter_m)
+    problem, evidence, rounds = robust_solve(data, final, seeds=seeds, reject=reject_outliers)
     tests: list[TangentialTest | None] = [None] * cameras
     for camera in (c for c in range(cameras) if auto[c]):
         trial = list(final)
         trial[camera] = wanted[camera].with_tangential("zero")
-        without, _e, _r = robust_solve(points_in_board, views, sizes, trial,
+        without, _e, _r = robust_solve(data, trial,
                                        state=_without_tangential(problem.state, camera),
-                                       evidence=evidence, disc_diameter_m=disc_diameter_m)
+                                       evidence=evidence)
         chi2 = (without.cost - problem.cost) / problem.sigma_px ** 2
         tests[camera] = TangentialTest(chi2, math.exp(-max(chi2, 0.0) / 2) < TANGENTIAL_P_VALUE)
     if any(t is not None and not t.estimated for t in tests):
@@ -128,8 +141,7 @@ def calibrate_cameras(points_in_board: F64, views: list[BoardView],
             if test is not None and not test.estimated:
                 final[camera] = wanted[camera].with_tangential("zero")
                 state = _without_tangential(state, camera)
-        problem, _e, more = robust_solve(points_in_board, views, sizes, final, state=state,
-                                         evidence=evidence, disc_diameter_m=disc_diameter_m)
+        problem, _e, more = robust_solve(data, final, state=state, evidence=evidence)
         rounds += more
     return _result(problem, views, evidence, options=final, tests=tests, rounds=rounds)
 

@@ -5,14 +5,18 @@ Every model has an intrinsic vector in a fixed order (:data:`INTRINSIC_NAMES`):
 radial factor is (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2 + k5 r^4 + k6 r^6)), and
 ``equidistant`` fx fy cx cy k1 k2 k3 k4 (OpenCV's fisheye model, ``theta`` from the optical
 axis). The values agree with :meth:`replay.camera.CameraModel.project`, which uses OpenCV.
+:data:`DISTORTIONS` holds each model's distortion, by name.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from functools import partial
+
 import numpy as np
 
 from replay.camera import CameraModel
-from replay.lens_models import LENS_MODELS, lens_model
+from replay.lens_models import LENS_MODELS, canonical_name
 from replay.messages import F64
 
 #: every lens model's intrinsic vector (:data:`replay.lens_models.LENS_MODELS`)
@@ -37,12 +41,8 @@ def model_of(distortion_model: str, intrinsics: F64, size: tuple[int, int]) -> C
 def project(distortion_model: str, intrinsics: F64, points: F64) -> tuple[F64, F64, F64]:
     """Pixels ``(M, 2)`` of points ``(M, 3)`` in the camera frame, with the derivatives
     d pixel / d point ``(M, 2, 3)`` and d pixel / d intrinsics ``(M, 2, K)``."""
-    lens = lens_model(distortion_model)
-    if lens.fisheye:
-        normalized, d_point, d_dist = _equidistant(intrinsics[4:], points)
-    else:
-        normalized, d_point, d_dist = _pinhole(intrinsics[4:], points,
-                                               rational=len(lens.coefficients) > 5)
+    distort = DISTORTIONS[canonical_name(distortion_model)]
+    normalized, d_point, d_dist = distort(intrinsics[4:], points)
     focal = intrinsics[:2]
     uv = normalized * focal + intrinsics[2:4]
     m = len(points)
@@ -56,7 +56,8 @@ def project(distortion_model: str, intrinsics: F64, points: F64) -> tuple[F64, F
 
 
 def _pinhole(d: F64, points: F64, *, rational: bool) -> tuple[F64, F64, F64]:
-    """Distorted normalized coordinates, d/d point and d/d distortion (plumb_bob order)."""
+    """Distorted normalized coordinates, d/d point and d/d distortion (plumb_bob order;
+    ``rational``: k4 k5 k6 of the denominator after them)."""
     z = points[:, 2]
     x, y = points[:, 0] / z, points[:, 1] / z
     k1, k2, p1, p2, k3 = d[:5]
@@ -137,3 +138,15 @@ def _equidistant(d: F64, points: F64) -> tuple[F64, F64, F64]:
         d_point[near_axis] = limit
         d_dist[near_axis] = 0.0
     return normalized, d_point, d_dist
+
+
+#: distorted normalized coordinates ``(M, 2)`` of points ``(M, 3)`` in the camera frame, with
+#: d / d point ``(M, 2, 3)`` and d / d distortion coefficients ``(M, 2, len(D))``, given D
+Distortion = Callable[[F64, F64], tuple[F64, F64, F64]]
+
+#: every lens model's distortion with derivatives, by its ROS ``distortion_model``
+DISTORTIONS: dict[str, Distortion] = {
+    "plumb_bob": partial(_pinhole, rational=False),
+    "rational_polynomial": partial(_pinhole, rational=True),
+    "equidistant": _equidistant,
+}

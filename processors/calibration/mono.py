@@ -3,7 +3,8 @@
 A thin layer over :func:`~.joint.calibrate_cameras` with one camera: outlier corners are
 left out one by one (views that are not the board whole), tangential distortion is
 estimated when the views show it (see :mod:`.options`), and every parameter comes with its
-standard deviation. Also projection differences between two models.
+standard deviation. Also the CameraInfo a mono calibration publishes and projection
+differences between two models.
 """
 
 from __future__ import annotations
@@ -14,11 +15,12 @@ import cv2
 import numpy as np
 
 from replay.camera import CameraModel
-from replay.messages import F64
+from replay.messages import F64, CameraInfo
 
 from .bundle import cross
 from .joint import MIN_VIEWS, BoardView, JointResult, calibrate_cameras
 from .lens import INTRINSIC_NAMES, intrinsics_of, project
+from .opencv_lens import opencv_lens
 from .options import (
     TANGENTIAL_P_VALUE,
     CalibrationOptions,
@@ -35,6 +37,7 @@ __all__ = [
     "TangentialTest",
     "calibrate_mono",
     "max_projection_difference",
+    "mono_camera_info",
     "tangential_mode",
 ]
 
@@ -93,6 +96,14 @@ def calibrate_mono(points_in_board: F64, corners: list[F64], size: tuple[int, in
         inliers={i: joint.inliers[i] for i in used},
         options=joint.options[0], tangential_test=joint.tangential_tests[0],
         sigma_px=joint.sigma_px, joint=joint)
+
+
+def mono_camera_info(model: CameraModel, frame_id: str) -> CameraInfo:
+    """Calibrated CameraInfo; P is camera_calibration's (alpha 0: only valid pixels)."""
+    p = np.zeros((3, 4))
+    p[:, :3] = opencv_lens(model.distortion_model).new_camera_matrix(model)
+    return CameraInfo(0, frame_id, model.width, model.height, model.distortion_model,
+                      model.d, model.k, np.eye(3), p)
 
 
 def max_projection_difference(a: CameraModel, b: CameraModel, step_px: int = 8,

@@ -21,13 +21,12 @@ import math
 from dataclasses import dataclass
 
 from replay.camera import canonical_model
-from replay.lens_models import LENS_MODELS, lens_model
+from replay.lens_models import LENS_MODELS, MODEL_ALIASES, lens_model
 
 from ..errors import ProcessorError
-from .lens import INTRINSIC_NAMES
 
 TANGENTIAL_MODES = ("auto", "estimate", "zero")
-MODELS = tuple(INTRINSIC_NAMES)
+MODELS = tuple(LENS_MODELS)
 #: radial coefficients estimated when -k is not given, and at most (the lens-model table)
 DEFAULT_K = {name: m.default_radial for name, m in LENS_MODELS.items()}
 MAX_K = {name: m.max_radial for name, m in LENS_MODELS.items()}
@@ -61,7 +60,7 @@ class CalibrationOptions:
             model = canonical_model(self.model)
             if model not in MODELS:
                 raise ProcessorError(f"unknown lens model {self.model!r} "
-                                     f"(use {', '.join(MODELS)} or fisheye)")
+                                     f"(use {', '.join([*MODELS, *MODEL_ALIASES])})")
             object.__setattr__(self, "model", model)
         k = self.k_coefficients
         if k is not None and not 0 <= k <= MAX_K[self.distortion_model]:
@@ -105,7 +104,7 @@ class CalibrationOptions:
         names += [f"k{i}" for i in range(1, self.radial_count + 1)]
         if self.has_tangential and self.tangential != "zero":
             names += ["p1", "p2"]
-        order = INTRINSIC_NAMES[self.distortion_model]
+        order = lens_model(self.distortion_model).intrinsic_names
         return tuple(n for n in order if n in names)
 
     @property

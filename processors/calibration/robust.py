@@ -139,24 +139,50 @@ def threshold_sigma(corners: int) -> float:
     return max(MIN_THRESHOLD_SIGMA, math.sqrt(2.0 * math.log(2.0 * max(corners, 1))))
 
 
-def robust_solve(points_in_board: F64, views: list[BoardView], sizes: list[tuple[int, int]],
-                 options: list[CalibrationOptions], *, seeds: list[CameraModel] | None = None,
-                 state: bundle.RigState | None = None, evidence: Evidence | None = None,
-                 reject: bool = True, disc_diameter_m: float | None = None
+@dataclass(frozen=True)
+class BoardViews:
+    """What a solve fits: views of the board points ``points_in_board`` ``(N, 3)`` by cameras
+    whose images are ``sizes`` (width, height) each. With ``disc_diameter_m`` the points are
+    centres of circles that diameter across, and the views show the centroids of their
+    images (a circle grid's detections)."""
+
+    points_in_board: F64
+    views: list[BoardView]
+    sizes: list[tuple[int, int]]
+    disc_diameter_m: float | None = None
+
+
+def camera_views(views: list[BoardView], camera: int) -> list[int]:
+    """Indices of the views of ``camera``, in order."""
+    return [i for i, v in enumerate(views) if v.camera == camera]
+
+
+def seed_camera(points_in_board: F64, views: list[BoardView], camera: int,
+                size: tuple[int, int], options: CalibrationOptions) -> CameraModel:
+    """OpenCV's calibration of one camera's views (:func:`~.seed.seed_model`)."""
+    mine = [views[i] for i in camera_views(views, camera)]
+    return seed_model([points_in_board[v.point_ids] for v in mine],
+                      [v.corners_px for v in mine], size, options)
+
+
+def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
+                 seeds: list[CameraModel] | None = None, state: bundle.RigState | None = None,
+                 evidence: Evidence | None = None, reject: bool = True
                  ) -> tuple[Problem, Evidence, int]:
-    """Seed (from ``seeds`` or OpenCV, or start at a previous solve's ``state``) and refine.
+    """Seed (from ``seeds`` or OpenCV, or start at a previous solve's ``state``) and refine
+    one camera's ``options`` each.
 
     Without ``evidence`` outliers and blur are decided here (unless ``reject`` is off); with
-    a previous solve's ``evidence`` its inliers and weights are kept. With
-    ``disc_diameter_m`` the points are centres of circles that diameter across, and the
-    views show the centroids of their images (a circle grid's detections).
+    a previous solve's ``evidence`` its inliers and weights are kept.
     """
+    points_in_board, views, sizes = data.points_in_board, data.views, data.sizes
+    disc_diameter_m = data.disc_diameter_m
     fresh = evidence is None
     evidence = evidence or Evidence.of(views, points_in_board)
     obs = evidence.observations
     if state is None:
-        models = seeds or [seed_model(*_camera_views(points_in_board, views, c), sizes[c],
-                                      options[c]) for c in range(len(sizes))]
+        models = seeds or [seed_camera(points_in_board, views, c, sizes[c], options[c])
+                           for c in range(len(sizes))]
         state = _seed_state(points_in_board, obs, models, len(evidence.instants))
     setups = [bundle.CameraSetup(o.distortion_model, s, o.free, o.fix_aspect_ratio)
               for o, s in zip(options, sizes, strict=True)]
@@ -259,12 +285,6 @@ def _residual_norms(state: bundle.RigState, layout: bundle.Layout, obs: bundle.O
     """Length ``(V, N)`` of every seen corner's unweighted residual (px)."""
     residual = bundle.linearize(state, layout, obs, points_in_board, jacobian=False).residuals
     return np.asarray(np.linalg.norm(residual, axis=2) / obs.weight[:, None])
-
-
-def _camera_views(points_in_board: F64, views: list[BoardView], camera: int
-                  ) -> tuple[list[F64], list[F64]]:
-    mine = [v for v in views if v.camera == camera]
-    return [points_in_board[v.point_ids] for v in mine], [v.corners_px for v in mine]
 
 
 def _seed_state(points_in_board: F64, obs: bundle.Observations, models: list[CameraModel],

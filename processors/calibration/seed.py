@@ -22,12 +22,12 @@ from replay.messages import F64
 
 from ..errors import ProcessorError
 from . import rotation
+from .opencv_lens import opencv_lens
 from .options import CalibrationOptions
 
 I64 = npt.NDArray[np.int64]
 #: views OpenCV's solver sees when seeding a camera
 SEED_VIEWS = 40
-CRITERIA = (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 100, 1e-10)
 #: rig transforms of two views agree when their rotations differ by less than this
 RIG_AGREEMENT_RAD = math.radians(2.0)
 #: a seed view whose RMS error exceeds max(factor x the median, floor) is left out of the seed
@@ -40,38 +40,6 @@ def spread(count: int, most: int) -> list[int]:
     if count <= most:
         return list(range(count))
     return sorted({round(i * (count - 1) / (most - 1)) for i in range(most)})
-
-
-def _pinhole_flags(options: CalibrationOptions) -> int:
-    flags = cv2.CALIB_FIX_PRINCIPAL_POINT if options.fix_principal_point else 0
-    if options.fix_aspect_ratio:
-        flags |= cv2.CALIB_FIX_ASPECT_RATIO
-    if options.tangential == "zero":
-        flags |= cv2.CALIB_ZERO_TANGENT_DIST
-    selects = lens_model(options.distortion_model).opencv_flag
-    if selects:
-        flags |= int(getattr(cv2, selects))
-    for n, flag in enumerate((cv2.CALIB_FIX_K1, cv2.CALIB_FIX_K2, cv2.CALIB_FIX_K3,
-                              cv2.CALIB_FIX_K4, cv2.CALIB_FIX_K5, cv2.CALIB_FIX_K6), 1):
-        if options.radial_count < n:
-            flags |= flag
-    return flags
-
-
-def _fisheye_flag(name: str) -> int:
-    """OpenCV 4's ``cv2.fisheye.CALIB_*`` flags are ``cv2.CALIB_*`` in OpenCV 5."""
-    flag = getattr(cv2.fisheye, f"CALIB_{name}", None)
-    return int(flag if flag is not None else getattr(cv2, f"CALIB_{name}"))
-
-
-def _fisheye_flags(options: CalibrationOptions) -> int:
-    flags = _fisheye_flag("RECOMPUTE_EXTRINSIC") | _fisheye_flag("FIX_SKEW") \
-        | _fisheye_flag("USE_INTRINSIC_GUESS")
-    if options.fix_principal_point:
-        flags |= _fisheye_flag("FIX_PRINCIPAL_POINT")
-    for n in range(options.radial_count + 1, 5):
-        flags |= _fisheye_flag(f"FIX_K{n}")
-    return flags
 
 
 def seed_model(points: list[F64], corners: list[F64], size: tuple[int, int],
@@ -154,31 +122,14 @@ def one_opencv_thread() -> Iterator[None]:
 
 def _opencv_calibration(points: list[F64], corners: list[F64], size: tuple[int, int],
                         options: CalibrationOptions) -> CameraModel:
-    # (1, M, 3) as the fisheye solver needs; the pinhole one takes them too
-    objects = [p.astype(np.float64).reshape(1, -1, 3) for p in points]
-    images = [c.astype(np.float64).reshape(1, -1, 2) for c in corners]
-    width, height = size
     model = options.distortion_model
-    lens = lens_model(model)
     try:
         with one_opencv_thread():
-            if lens.fisheye:
-                k0 = np.array([[max(size) / math.pi, 0, (width - 1) / 2],
-                               [0, max(size) / math.pi, (height - 1) / 2], [0, 0, 1]])
-                _rms, k, d, _r, _t = cv2.fisheye.calibrate(
-                    objects, images, size, k0, np.zeros(4), flags=_fisheye_flags(options),
-                    criteria=CRITERIA)
-            else:
-                _rms, k, d, _r, _t = cv2.calibrateCamera(
-                    [o.astype(np.float32) for o in objects],
-                    [i.astype(np.float32) for i in images], size, np.eye(3),
-                    np.zeros(len(lens.coefficients)),
-                    flags=_pinhole_flags(options), criteria=CRITERIA)
+            k, d = opencv_lens(model).calibrate(points, corners, size, options)
     except cv2.error as err:
         raise ProcessorError(f"calibration failed: {str(err).strip().splitlines()[-1]}") from None
-    d = np.asarray(d, dtype=np.float64).reshape(-1)
-    return CameraModel(width, height, np.asarray(k, dtype=np.float64), model,
-                       d[: len(lens.coefficients)])
+    coefficients = len(lens_model(model).coefficients)
+    return CameraModel(size[0], size[1], k, model, d.reshape(-1)[:coefficients])
 
 
 def board_pose(points: F64, corners: F64, model: CameraModel) -> F64 | None:

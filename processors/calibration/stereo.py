@@ -24,6 +24,7 @@ from replay.messages import F64
 from ..errors import ProcessorError
 from .holds import Seen
 from .joint import JointResult
+from .opencv_lens import opencv_lens
 from .rig import relative_pose, rotation_std_deg, translation_std_m
 from .rotation import support
 from .seed import board_pose
@@ -62,32 +63,48 @@ class StereoResult:
 def rectify(left: CameraModel, right: CameraModel, right_from_left: F64
             ) -> tuple[F64, F64, F64, F64]:
     """``R1, R2`` (3, 3) and ``P1, P2`` (3, 4) of the rectified pair (only valid pixels)."""
-    size = (left.width, left.height)
     rotation, translation = right_from_left[:3, :3], right_from_left[:3, 3].reshape(3, 1)
+    family, other = opencv_lens(left.distortion_model), opencv_lens(right.distortion_model)
+    if other is not family:
+        raise ProcessorError(f"rectifying a {family.name} camera with a {other.name} camera "
+                             "is not supported")
     try:
-        if left.is_fisheye or right.is_fisheye:
-            if not (left.is_fisheye and right.is_fisheye):
-                raise ProcessorError("rectifying a fisheye with a pinhole camera is not "
-                                     "supported")
-            r1, r2, p1, p2, _q = cv2.fisheye.stereoRectify(
-                left.k, left.d, right.k, right.d, size, rotation, translation,
-                flags=cv2.CALIB_ZERO_DISPARITY, balance=0.0)
-        else:
-            r1, r2, p1, p2, _q, _roi1, _roi2 = cv2.stereoRectify(
-                left.k, left.d, right.k, right.d, size, rotation, translation,
-                flags=cv2.CALIB_ZERO_DISPARITY, alpha=0.0)
+        return family.stereo_rectify(left, right, rotation, translation)
     except cv2.error as err:
         raise ProcessorError(f"stereo rectification failed: "
                              f"{str(err).strip().splitlines()[-1]}") from None
-    return tuple(np.asarray(m, dtype=np.float64) for m in (r1, r2, p1, p2))  # type: ignore[return-value]
+
+
+@dataclass(frozen=True)
+class RectifiedPair:
+    """Two cameras and their rectification (:func:`rectify`): rotations ``r1``, ``r2``
+    (3, 3) and projections ``p1``, ``p2`` (3, 4)."""
+
+    left_model: CameraModel
+    right_model: CameraModel
+    r1: F64
+    p1: F64
+    r2: F64
+    p2: F64
+
+    def rectified_px(self, left_px: F64, right_px: F64) -> tuple[F64, F64]:
+        """Where the rectified images show observed pixels ``(M, 2)`` of each camera."""
+        return (self.left_model.rectify_points(left_px, self.r1, self.p1),
+                self.right_model.rectify_points(right_px, self.r2, self.p2))
+
+    def epipolar_errors(self, left: list[F64], right: list[F64]) -> list[float]:
+        """Per joint view (pixels ``(M, 2)`` of the same points in each camera), RMS of the
+        row difference of the rectified points (px)."""
+        return [float(np.sqrt(np.mean((xl[:, 1] - xr[:, 1]) ** 2)))
+                for xl, xr in (self.rectified_px(cl, cr)
+                               for cl, cr in zip(left, right, strict=True))]
 
 
 def epipolar_errors(left: list[F64], right: list[F64], *, left_model: CameraModel,
                     right_model: CameraModel, r1: F64, p1: F64, r2: F64, p2: F64) -> list[float]:
     """Per joint view, RMS of the row difference of matching rectified corners (px)."""
-    return [float(np.sqrt(np.mean((left_model.rectify_points(cl, r1, p1)[:, 1]
-                                   - right_model.rectify_points(cr, r2, p2)[:, 1]) ** 2)))
-            for cl, cr in zip(left, right, strict=True)]
+    pair = RectifiedPair(left_model, right_model, r1, p1, r2, p2)
+    return pair.epipolar_errors(left, right)
 
 
 def _rotation_of(points: F64, seen: Seen, model: CameraModel) -> F64 | None:
@@ -163,8 +180,8 @@ def stereo_result(joint: JointResult, pairs: list[tuple[int, int]], *,
     if not used:
         raise ProcessorError("no joint stereo view: both cameras must see the board at the "
                              "same time")
-    view_errors = epipolar_errors(left, right, left_model=left_model, right_model=right_model,
-                                  r1=r1, p1=p1, r2=r2, p2=p2)
+    rectified = RectifiedPair(left_model, right_model, r1, p1, r2, p2)
+    view_errors = rectified.epipolar_errors(left, right)
     translation = right_from_left[:3, 3]
     baseline = float(np.linalg.norm(translation))
     direction = translation / baseline
@@ -176,16 +193,14 @@ def stereo_result(joint: JointResult, pairs: list[tuple[int, int]], *,
         epipolar_rms_px=rms, baseline_m=baseline,
         baseline_std_m=translation_std_m(covariance, direction),
         rotation_std_deg=rotation_std_deg(covariance),
-        square_m=square_size(left, right, common, left_model=left_model,
-                             right_model=right_model, r1=r1, p1=p1, r2=r2, p2=p2,
-                             points_in_board=points_in_board, square_m=square_m),
+        square_m=square_size(left, right, common, rectified, points_in_board=points_in_board,
+                             square_m=square_m),
         view_epipolar_px=view_errors, view_ids=used, rejected=rejected)
 
 
-def square_size(left: list[F64], right: list[F64], ids: list[np.ndarray], *,
-                left_model: CameraModel, right_model: CameraModel, r1: F64, p1: F64, r2: F64,
-                p2: F64, points_in_board: F64, square_m: float) -> float:
-    """The board's spacing from the rectified pair (views ``(M, 2)`` of the board points
+def square_size(left: list[F64], right: list[F64], ids: list[np.ndarray],
+                rectified: RectifiedPair, *, points_in_board: F64, square_m: float) -> float:
+    """The board's spacing from the ``rectified`` pair (views ``(M, 2)`` of the board points
     ``ids`` in each camera, per joint view): mean distance between triangulated
     nearest neighbours on the board, scaled from their distance to ``square_m`` (asymmetric
     circle grids have no neighbours one spacing apart)."""
@@ -193,9 +208,8 @@ def square_size(left: list[F64], right: list[F64], ids: list[np.ndarray], *,
     nearest = float(layout[layout > 0].min())
     distances = []
     for cl, cr, pid in zip(left, right, ids, strict=True):
-        xl = left_model.rectify_points(cl, r1, p1)
-        xr = right_model.rectify_points(cr, r2, p2)
-        homogeneous = cv2.triangulatePoints(p1, p2, xl.T, xr.T)
+        xl, xr = rectified.rectified_px(cl, cr)
+        homogeneous = cv2.triangulatePoints(rectified.p1, rectified.p2, xl.T, xr.T)
         xyz = (homogeneous[:3] / homogeneous[3]).T
         board = points_in_board[pid]
         gap = np.linalg.norm(board[:, None, :] - board[None, :, :], axis=2)

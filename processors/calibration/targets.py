@@ -21,17 +21,17 @@ import cv2
 import numpy as np
 
 from replay.camera import CameraModel
-from replay.lens_models import LENS_MODELS
 
 from ..errors import ProcessorError
 from .board import Board
 from .detect import BORDER_PX, Detection, canonical_order, find_chessboard, track_chessboard
 from .moments import disc_moments
+from .opencv_lens import OPENCV_LENSES, PINHOLE
 
 #: fewest ChArUco corners worth a view (a board pose has 6 unknowns)
 MIN_CHARUCO_CORNERS = 6
 #: lens models OpenCV's ChArUco detector can project through (its pinhole distortion)
-GUIDING_MODELS = tuple(name for name, m in LENS_MODELS.items() if not m.fisheye)
+GUIDING_MODELS = tuple(name for name, family in OPENCV_LENSES.items() if family is PINHOLE)
 _LOCAL = threading.local()
 
 

@@ -36,8 +36,28 @@ CHUNK = 64
 POSE_PIXELS = 8192
 
 
+class OverImage:
+    """A figure in pixels at every grid pixel of an image (:attr:`values_px`, NaN where it
+    has none), summarised by its worst and median values."""
+
+    @property
+    def values_px(self) -> F64:
+        """The figure ``(rows, cols)`` at the grid pixels."""
+        raise NotImplementedError
+
+    @property
+    def worst_px(self) -> float:
+        """Largest value over the image (px)."""
+        return float(np.nanmax(self.values_px))
+
+    @property
+    def median_px(self) -> float:
+        """Median value over the image (px)."""
+        return float(np.nanmedian(self.values_px))
+
+
 @dataclass(frozen=True)
-class UncertaintyMap:
+class UncertaintyMap(OverImage):
     """Projection uncertainty of one camera: ``sigma_px`` ``(rows, cols)`` is the standard
     deviation in the worst direction at the grid pixels ``pixels`` ``(rows, cols, 2)``;
     ``covariance`` ``(rows, cols, 2, 2)``."""
@@ -49,14 +69,9 @@ class UncertaintyMap:
     sigma_px: F64
 
     @property
-    def worst_px(self) -> float:
-        """Largest uncertainty over the image (px)."""
-        return float(np.nanmax(self.sigma_px))
-
-    @property
-    def median_px(self) -> float:
-        """Median uncertainty over the image (px)."""
-        return float(np.nanmedian(self.sigma_px))
+    def values_px(self) -> F64:
+        """The uncertainty ``sigma_px``."""
+        return self.sigma_px
 
 
 def grid(size: tuple[int, int], step_px: int = GRID_STEP_PX) -> F64:

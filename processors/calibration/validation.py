@@ -29,31 +29,27 @@ import numpy as np
 from replay.camera import CameraModel
 from replay.messages import F64
 
-from .joint import MIN_VIEWS, BoardView, JointResult, calibrate_cameras
+from .joint import MIN_VIEWS, BoardView, JointResult, calibrate_cameras, camera_views
 from .options import CalibrationOptions
 from .robust import MIN_VIEW_POINTS
-from .uncertainty import GRID_STEP_PX, error_against, grid
+from .uncertainty import GRID_STEP_PX, OverImage, error_against, grid
 
 
 @dataclass(frozen=True)
-class CrossValidation:
+class CrossValidation(OverImage):
     """``error_px`` ``(rows, cols)``: the full calibration's error expected at the grid pixels
     ``pixels`` ``(rows, cols, 2)`` of one camera, half the halves' difference there (RMS of
-    the two directions of comparison)."""
+    the two directions of comparison); its worst and median over the image are the full
+    calibration's expected worst and median errors."""
 
     camera: int
     pixels: F64
     error_px: F64
 
     @property
-    def worst_px(self) -> float:
-        """Expected worst error of the full calibration over the image (px)."""
-        return float(np.nanmax(self.error_px))
-
-    @property
-    def median_px(self) -> float:
-        """Expected median error of the full calibration over the image (px)."""
-        return float(np.nanmedian(self.error_px))
+    def values_px(self) -> F64:
+        """The expected error ``error_px``."""
+        return self.error_px
 
 
 def projection_difference(a: CameraModel, b: CameraModel, pixels: F64, *,
@@ -107,7 +103,7 @@ def cross_validate(points_in_board: F64, views: list[BoardView], sizes: list[tup
     parts = halves(views)
     for part in parts:
         for camera in range(len(sizes)):
-            if sum(v.camera == camera for v in part) < MIN_VIEWS:
+            if len(camera_views(part, camera)) < MIN_VIEWS:
                 return None
     a, b = (calibrate_cameras(points_in_board, part, sizes, options,
                               disc_diameter_m=disc_diameter_m) for part in parts)

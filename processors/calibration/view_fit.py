@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-import cv2
 import numpy as np
 
 from replay.camera import CameraModel
@@ -13,6 +12,7 @@ from replay.messages import F64
 
 from .board import Board
 from .discs import view_centroids
+from .opencv_lens import opencv_lens
 from .seed import board_pose
 
 #: pose fits of a circle grid's view, at most: the disc shift settles in a few
@@ -94,15 +94,9 @@ def fit_view(corners_px: F64, model: CameraModel, points_in_board: F64, *,
 
 def _pose(points: F64, corners_px: F64, model: CameraModel) -> F64 | None:
     pose = board_pose(points, corners_px, model)
-    if pose is None or model.is_fisheye:
-        return pose
-    cv_pose = cv2.solvePnP(points, corners_px, model.k, model.d, flags=cv2.SOLVEPNP_ITERATIVE,
-                           useExtrinsicGuess=True, rvec=cv2.Rodrigues(pose[:3, :3])[0],
-                           tvec=pose[:3, 3].copy())
-    if cv_pose[0]:
-        pose[:3, :3] = cv2.Rodrigues(cv_pose[1])[0]
-        pose[:3, 3] = np.asarray(cv_pose[2]).reshape(3)
-    return pose
+    if pose is None:
+        return None
+    return opencv_lens(model.distortion_model).refine_pose(points, corners_px, model, pose)
 
 
 def reprojection_rms(corners_px: F64, model: CameraModel, board: Board,

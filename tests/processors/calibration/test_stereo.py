@@ -13,6 +13,7 @@ from processors.calibration.holds import Seen
 from processors.calibration.joint import BoardView, JointResult, calibrate_cameras
 from processors.calibration.options import CalibrationOptions
 from processors.calibration.stereo import (
+    RectifiedPair,
     StereoResult,
     epipolar_errors,
     orient_right_views,
@@ -190,7 +191,7 @@ def test_a_circle_grid_is_measured_at_the_circles_centres() -> None:
            "p1": result.p1, "r2": result.r2, "p2": result.p2}
     as_centres = epipolar_errors(left, right, **rig)
     assert math.sqrt(np.mean(np.square(as_centres))) > 5e-3 and result.epipolar_rms_px < 1e-6
-    spacing = square_size(left, right, [every] * len(left), **rig, points_in_board=points,
-                          square_m=board.square_m)
+    spacing = square_size(left, right, [every] * len(left), RectifiedPair(**rig),
+                          points_in_board=points, square_m=board.square_m)
     assert abs(spacing / board.square_m - 1) > 1e-4
     assert abs(result.square_m / board.square_m - 1) < 1e-8
