@@ -120,8 +120,10 @@ def _rectify_pinhole(left: CameraModel, right: CameraModel, rotation: F64, trans
 
 def _rectify_fisheye(left: CameraModel, right: CameraModel, rotation: F64, translation: F64
                      ) -> tuple[F64, F64, F64, F64]:
+    # cv2.fisheye reshapes its inputs: a column of a pose matrix must be copied first
     r1, r2, p1, p2, _q = cv2.fisheye.stereoRectify(
-        left.k, left.d, right.k, right.d, (left.width, left.height), rotation, translation,
+        left.k, left.d, right.k, right.d, (left.width, left.height),
+        np.ascontiguousarray(rotation), np.ascontiguousarray(translation),
         flags=cv2.CALIB_ZERO_DISPARITY, balance=0.0)
     return _float64(r1, r2, p1, p2)
 
