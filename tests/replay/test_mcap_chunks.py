@@ -19,9 +19,9 @@ from rosbags.typesys import Stores, get_typestore
 from camlog.logs.convert import convert_log
 from replay import LogWriteError, open_reader
 from replay.formats.chunk_worker import OrderedWorker
-from replay.formats.mcap_chunks import McapChunkWriter
-from replay.formats.mcap_writer import McapLogWriter
-from replay.formats.rosbag2_storage import McapStorage
+from replay.formats.mcap.chunks import McapChunkWriter
+from replay.formats.mcap.writer import McapLogWriter
+from replay.formats.rosbag2.storage_plugins import McapStorage
 from tests.recordings import chunked_camera_log
 
 COMPRESSIONS = [(CompressionType.ZSTD, "zstd"), (CompressionType.LZ4, "lz4"),

@@ -33,7 +33,7 @@ from mcap.records import (
 )
 from mcap.stream_reader import MAGIC_SIZE
 
-from .chunk_worker import OrderedWorker
+from ..chunk_worker import OrderedWorker
 
 __all__ = ["CHUNK_COMPRESSIONS", "McapChunkWriter"]
 

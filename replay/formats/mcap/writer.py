@@ -1,9 +1,9 @@
 """Writing MCAP files with ROS 2 (CDR) messages (or Foxglove schemas).
 
 Chunks are zstd-compressed by default, carry CRCs and are finished on a worker thread
-(:mod:`.mcap_chunks`); a live writer completes a chunk at least
-every :data:`~.base.FLUSH_INTERVAL_S` so that a killed writer's file keeps all but its last
-moments.
+(:mod:`.chunks`); a live writer completes a chunk at least every
+:data:`~replay.formats.base.FLUSH_INTERVAL_S` so that a killed writer's file keeps all but
+its last moments.
 """
 
 from __future__ import annotations
@@ -11,11 +11,11 @@ from __future__ import annotations
 from collections.abc import Iterable
 from pathlib import Path
 
-from .._version import VERSION
-from ..errors import LogWriteError
-from ..wire import CDR, JSON, PROTOBUF, ros2_typestore
-from .base import LogWriter, RawMessage
-from .mcap_chunks import McapChunkWriter
+from ..._version import VERSION
+from ...errors import LogWriteError
+from ...wire import CDR, JSON, PROTOBUF, ros2_typestore
+from ..base import LogWriter, RawMessage
+from .chunks import McapChunkWriter
 
 __all__ = ["COMPRESSION", "McapLogWriter"]
 

@@ -1,28 +1,23 @@
-"""ROS1 bags (read and written) and rosbag2 directories (written), through ``rosbags``."""
+"""ROS1 bags read through ``rosbags``; a bag without index or with damage through a reindexed
+copy."""
 
 from __future__ import annotations
 
-import contextlib
 import tempfile
-from collections.abc import Iterable
 from pathlib import Path
-from typing import Any, BinaryIO, cast
+from typing import BinaryIO, cast
 
 from rosbags.rosbag1 import Reader as Reader1
-from rosbags.rosbag1 import Writer as Writer1
 from rosbags.rosbag1.reader import Header, ReaderError, RecordType
-from rosbags.rosbag2 import Writer as Writer2
-from rosbags.rosbag2.enums import CompressionFormat, CompressionMode, StoragePlugin
 
-from ..errors import LogReadError, LogWriteError
-from ..wire import CDR, ROS1, ros1_typestore, ros2_typestore
-from .base import LogWriter, RawMessage
-from .bounded import BoundedFile
-from .ros1_chunks import ThreadedRos1Writer
-from .ros1_layout import layout_problem
-from .ros1_reindex import Reindexed, reindexed_copy
-from .rosbag2_storage import McapStorage, Sqlite3Storage
-from .rosbags_reader import RosbagsReader, first_line
+from ...errors import LogReadError
+from ...wire import ROS1
+from ..bounded_file import BoundedFile
+from ..rosbags_reader import RosbagsReader, first_line
+from .layout import layout_problem
+from .reindex import Reindexed, reindexed_copy
+
+__all__ = ["Ros1LogReader"]
 
 
 class Ros1LogReader(RosbagsReader):
@@ -30,7 +25,7 @@ class Ros1LogReader(RosbagsReader):
 
     A bag without its index (the recording was killed) is read through an indexed copy in a
     temporary folder, made from its complete chunks, with a warning. Every record's lengths
-    and the index's offsets are checked first (:mod:`.ros1_layout`): a bag where they do not
+    and the index's offsets are checked first (:mod:`.layout`): a bag where they do not
     hold is refused, or with ``recover`` read like an unindexed one.
     """
 
@@ -115,140 +110,3 @@ def _unindexed_ros1(path: Path) -> bool:
                 .get_uint64("index_pos") == 0
     except (OSError, ReaderError, ValueError):  # ValueError: e.g. a field name not UTF-8
         return False  # the reader reports what is wrong
-
-
-class _RosbagsWriter(LogWriter):
-    """Shared writing through a rosbags writer: one connection per topic.
-
-    Errors of the storage below (OS errors, SQLite's "disk is full") become
-    :class:`LogWriteError` naming the output.
-    """
-
-    _writer: Any
-
-    def __init__(self, path: Path, *, overwrite: bool, inputs: Iterable[Path]) -> None:
-        super().__init__(path, overwrite=overwrite, inputs=inputs)
-        self._conns: dict[str, Any] = {}
-
-    def _open(self, writer: Any) -> None:
-        self._writer = writer
-        try:
-            writer.open()
-        except Exception as err:
-            raise LogWriteError(f"cannot write {self.path}: {first_line(err)}") from None
-
-    def _typestore(self) -> Any:
-        raise NotImplementedError
-
-    def _write(self, raw: RawMessage, msgdef: str) -> None:
-        try:
-            conn = self._conns.get(raw.topic)
-            if conn is None:
-                conn = self._writer.add_connection(raw.topic, raw.msgtype,
-                                                   typestore=self._typestore())
-                self._conns[raw.topic] = conn
-            self._writer.write(conn, raw.log_time_ns, raw.data)  # copied into its chunk
-        except (OSError, LogWriteError):
-            raise
-        except Exception as err:  # sqlite3.Error, rosbags' WriterError
-            raise LogWriteError(f"cannot write {self.path}: {first_line(err)}") from None
-
-    def _finish(self) -> None:
-        try:
-            self._writer.close()
-        except OSError:
-            raise
-        except Exception as err:
-            raise LogWriteError(f"cannot write {self.path}: {first_line(err)}") from None
-
-    def _abort(self) -> None:
-        with contextlib.suppress(Exception):  # the output is discarded anyway
-            self._writer.abort()
-
-
-#: rosbag2 storage name -> (rosbags plugin, storage class, compressions it supports)
-_STORAGES: dict[str, tuple[StoragePlugin, Any, tuple[str, ...]]] = {
-    "mcap": (StoragePlugin.MCAP, McapStorage, ("zstd", "none")),
-    "sqlite3": (StoragePlugin.SQLITE3, Sqlite3Storage, ("none", "zstd")),
-}
-
-
-class Rosbag2LogWriter(_RosbagsWriter):
-    """Writer for a rosbag2 directory; ``storage`` is ``mcap`` (default) or ``sqlite3``.
-
-    ``compression``: ``zstd`` compresses MCAP chunks (storage compression, as ``ros2 bag
-    record --storage-preset-profile`` does) or, with SQLite, each message (rosbag2's
-    message compression); default zstd for MCAP, none for SQLite.
-    """
-
-    format_name = "rosbag2"
-    serialization = CDR
-
-    def __init__(self, path: Path, *, overwrite: bool = False, inputs: Iterable[Path] = (),
-                 storage: str = "mcap", compression: str | None = None) -> None:
-        if storage not in _STORAGES:
-            raise LogWriteError(f"unknown rosbag2 storage {storage!r} (use mcap or sqlite3)")
-        plugin, storage_class, compressions = _STORAGES[storage]
-        compression = compressions[0] if compression is None else compression
-        if compression not in compressions:
-            raise LogWriteError(f"rosbag2 with {storage} storage cannot use {compression!r} "
-                                f"compression (use {' or '.join(compressions)})")
-        super().__init__(path, overwrite=overwrite, inputs=inputs)
-        self.format_name = f"rosbag2 ({storage})"
-        writer = Writer2(self.temp_path / path.name, version=9, storage_plugin=plugin)
-        writer.STORAGE_PLUGINS = {plugin: storage_class}
-        if compression == "zstd":
-            mode = CompressionMode.STORAGE if storage == "mcap" else CompressionMode.MESSAGE
-            writer.set_compression(mode, CompressionFormat.ZSTD)
-            self.compression = "zstd chunks" if storage == "mcap" else "zstd per message"
-        # rosbags names the storage file after its directory: write it one folder down in
-        # the temporary output, so that the final directory holds files named after itself
-        self.temp_path.mkdir()
-        self._open(writer)
-
-    def _typestore(self) -> Any:
-        return ros2_typestore()
-
-    def set_metadata(self, name: str, values: dict[str, str]) -> None:
-        for key, value in values.items():
-            self._writer.set_custom_data(f"{name}.{key}", value)
-
-    def _flush(self) -> None:
-        try:
-            self._writer.storage.flush()
-        except OSError:
-            raise
-        except Exception as err:  # sqlite3.Error
-            raise LogWriteError(f"cannot write {self.path}: {first_line(err)}") from None
-
-    def _commit(self) -> None:
-        self._atomic.commit(self.temp_path / self.path.name)
-
-
-class Ros1LogWriter(_RosbagsWriter):
-    """Writer for a ROS1 ``.bag`` file (lz4-compressed chunks by default, finished on a worker
-    thread: :mod:`.ros1_chunks`)."""
-
-    format_name = "ros1"
-    serialization = ROS1
-
-    def __init__(self, path: Path, *, overwrite: bool = False, inputs: Iterable[Path] = (),
-                 compression: str | None = None) -> None:
-        formats = {"lz4": Writer1.CompressionFormat.LZ4, "bz2": Writer1.CompressionFormat.BZ2,
-                   "none": None}
-        compression = "lz4" if compression is None else compression
-        if compression not in formats:
-            raise LogWriteError(f"ROS1 bags cannot use {compression!r} compression "
-                                f"(use {', '.join(formats)})")
-        super().__init__(path, overwrite=overwrite, inputs=inputs)
-        writer = ThreadedRos1Writer(self.temp_path)
-        if (chunk_format := formats[compression]) is not None:
-            writer.set_compression(chunk_format)
-        self.compression = f"{compression} chunks" if compression != "none" else "none"
-        self._open(writer)
-
-    def _typestore(self) -> Any:
-        return ros1_typestore()
-
-    def _flush(self) -> None:
-        self._writer.flush()
