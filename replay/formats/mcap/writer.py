@@ -55,7 +55,8 @@ class McapLogWriter(LogWriter):
             raise LogWriteError(f"cannot write {path}: {err.strerror}") from None
         try:  # every chunk carries the CRC of its content
             self._writer = McapChunkWriter(self._file, chunk_size=chunk_size,
-                                           compression=COMPRESSION[compression])
+                                           compression=COMPRESSION[compression],
+                                           close_file=True)
             self._writer.start(profile="ros2" if profile == "ros2" else "",
                                library=f"camlog {VERSION}")
         except BaseException:  # e.g. Ctrl-C: no temporary file stays behind
@@ -104,13 +105,7 @@ class McapLogWriter(LogWriter):
         self._writer.flush()  # chunk (with CRC) to the file
 
     def _finish(self) -> None:
-        try:
-            self._writer.finish()
-        finally:
-            self._file.close()
+        self._writer.finish()
 
     def _abort(self) -> None:
-        try:
-            self._writer.abort()
-        finally:
-            self._file.close()
+        self._writer.abort()

@@ -37,7 +37,7 @@ class McapStorage:
         self._file = self.path.open("xb")
         chunks = "zstd" if compression == CompressionMode.STORAGE else ""
         self._writer = McapChunkWriter(self._file, chunk_size=self.CHUNK_SIZE,
-                                       compression=chunks)
+                                       compression=chunks, close_file=True)
         self._writer.start(profile="ros2", library=f"camlog {VERSION}")
         self._schemas: dict[str, int] = {}
         self._channels: dict[int, int] = {}  # rosbags connection id -> MCAP channel id
@@ -70,18 +70,11 @@ class McapStorage:
     def close(self, version: int, metadata: str) -> None:
         """Write the summary (with the bag metadata, as rosbag2 does) and close the file."""
         del version
-        try:
-            self._writer.add_metadata("rosbag2", {"serialized_metadata": metadata})
-            self._writer.finish()
-        finally:
-            self._file.close()
+        self._writer.finish({"rosbag2": {"serialized_metadata": metadata}})
 
     def abort(self) -> None:
         """Close without a summary."""
-        try:
-            self._writer.abort()
-        finally:
-            self._file.close()
+        self._writer.abort()
 
 
 class Sqlite3Storage(Sqlite3Writer):
