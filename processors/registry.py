@@ -11,9 +11,10 @@ from __future__ import annotations
 from typing import Any
 
 from replay.display import Display
+from replay.msgtypes import IMAGE, POINT_STAMPED
 
 from .errors import ConfigError
-from .spec import IMAGE, POINT, Configured, Option, OptionKind, OutputSpec, ProcessorSpec
+from .spec import Configured, Option, OptionKind, OutputSpec, ProcessorSpec
 
 __all__ = ["PROCESSORS", "SPECS", "configure", "make_processor", "spec_of"]
 
@@ -32,10 +33,10 @@ SPECS: tuple[ProcessorSpec, ...] = (
         outputs=(
             OutputSpec("output_video", IMAGE, Display.MASK, "red pixels",
                        "rgb8 mask, blue square at the centroid", entity="red_pixels/mask"),
-            OutputSpec("red_centroid", POINT, Display.POINT_2D, "red centroid",
+            OutputSpec("red_centroid", POINT_STAMPED, Display.POINT_2D, "red centroid",
                        "x = u, y = v px; none when nothing is red",
                        entity="red_pixels/centroid"),
-            OutputSpec("red_count", POINT, Display.SCALAR, "red pixel count", "x = count",
+            OutputSpec("red_count", POINT_STAMPED, Display.SCALAR, "red pixel count", "x = count",
                        entity="red_pixel_count"),
         ),
         title="red pixels (the chapter's find_red_pixels)",

@@ -20,9 +20,6 @@ from .errors import OptionValueError
 
 __all__ = ["Configured", "Option", "OptionKind", "OutputSpec", "ProcessorSpec"]
 
-IMAGE = "sensor_msgs/msg/Image"
-POINT = "geometry_msgs/msg/PointStamped"
-
 
 class OptionKind(Enum):
     """The type of an option's value."""

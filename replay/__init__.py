@@ -1,4 +1,4 @@
-"""camlog's log layer: typed camera messages, MCAP / rosbag2 / ROS1 logs, replay, export.
+"""camlog's log layer: typed camera messages, MCAP / rosbag2 / ROS1 logs, replay.
 
 Names are loaded from their modules on first use, so that importing one light module of the
 package (``replay.errors``, ``replay.selection``) does not load numpy, OpenCV or rosbags.
@@ -20,7 +20,6 @@ from .errors import (
     ReplayError,
     TopicError,
     UnsupportedEncodingError,
-    ViewerError,
 )
 from .lazy import lazy_names
 
@@ -99,7 +98,6 @@ __all__ = [
     "TopicError",
     "TopicInfo",
     "UnsupportedEncodingError",
-    "ViewerError",
     "open_reader",
     "open_writer",
 ]

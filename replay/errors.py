@@ -47,9 +47,5 @@ class RecordError(ReplayError):
     """A well-known JSON record (scenario, calibration summary, residuals...) is malformed."""
 
 
-class ViewerError(ReplayError):
-    """A rerun recording could not be written or a viewer could not be reached."""
-
-
 class StorageError(ReplayError):
     """A log location (object storage, URI) cannot be reached, listed, read or written."""

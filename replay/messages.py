@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import numpy.typing as npt
 
+from . import msgtypes
 from .arrays import ArrayFields, Pixels, PixelShape
 from .errors import EncodingError, UnsupportedEncodingError
 
@@ -135,13 +136,14 @@ Message = (Image | CompressedImage | CompressedVideo | CameraInfo | PoseStamped 
 
 #: typed record -> ROS 2 type name
 MSGTYPES: dict[type, str] = {
-    Image: "sensor_msgs/msg/Image",
-    CompressedImage: "sensor_msgs/msg/CompressedImage",
-    CameraInfo: "sensor_msgs/msg/CameraInfo",
-    PoseStamped: "geometry_msgs/msg/PoseStamped",
-    PointStamped: "geometry_msgs/msg/PointStamped",
-    Text: "std_msgs/msg/String",
-    CompressedVideo: "foxglove.CompressedVideo",  # no ROS type: stored as Foxglove protobuf
+    Image: msgtypes.IMAGE,
+    CompressedImage: msgtypes.COMPRESSED_IMAGE,
+    CameraInfo: msgtypes.CAMERA_INFO,
+    PoseStamped: msgtypes.POSE_STAMPED,
+    PointStamped: msgtypes.POINT_STAMPED,
+    Text: msgtypes.STRING,
+    # no ROS type: stored as Foxglove protobuf
+    CompressedVideo: msgtypes.FOXGLOVE_COMPRESSED_VIDEO,
 }
 
 

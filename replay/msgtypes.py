@@ -6,14 +6,24 @@ to, by name: importable without numpy or rosbags, so that opening and summarisin
 from __future__ import annotations
 
 __all__ = [
+    "CAMERA_INFO",
     "CAMERA_INFO_TYPES",
     "CDR",
+    "COMPRESSED_IMAGE",
     "DECODABLE",
+    "FOXGLOVE_CAMERA_CALIBRATION",
+    "FOXGLOVE_COMPRESSED_IMAGE",
+    "FOXGLOVE_COMPRESSED_VIDEO",
+    "FOXGLOVE_RAW_IMAGE",
     "FRAME_TYPES",
+    "IMAGE",
     "JSON",
+    "POINT_STAMPED",
+    "POSE_STAMPED",
     "PROTOBUF",
     "RECORD_KINDS",
     "ROS1",
+    "STRING",
     "normalize_msgtype",
 ]
 
@@ -23,18 +33,31 @@ ROS1 = "ros1"
 PROTOBUF = "protobuf"
 JSON = "json"
 
+#: ROS 2 message types camlog has records for
+IMAGE = "sensor_msgs/msg/Image"
+COMPRESSED_IMAGE = "sensor_msgs/msg/CompressedImage"
+CAMERA_INFO = "sensor_msgs/msg/CameraInfo"
+POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
+POINT_STAMPED = "geometry_msgs/msg/PointStamped"
+STRING = "std_msgs/msg/String"
+#: Foxglove schemas camlog has records for
+FOXGLOVE_RAW_IMAGE = "foxglove.RawImage"
+FOXGLOVE_COMPRESSED_IMAGE = "foxglove.CompressedImage"
+FOXGLOVE_COMPRESSED_VIDEO = "foxglove.CompressedVideo"
+FOXGLOVE_CAMERA_CALIBRATION = "foxglove.CameraCalibration"
+
 #: type (schema) name -> the name of the :mod:`replay.messages` record its messages decode to
 RECORD_KINDS: dict[str, str] = {
-    "sensor_msgs/msg/Image": "Image",
-    "sensor_msgs/msg/CompressedImage": "CompressedImage",
-    "sensor_msgs/msg/CameraInfo": "CameraInfo",
-    "geometry_msgs/msg/PoseStamped": "PoseStamped",
-    "geometry_msgs/msg/PointStamped": "PointStamped",
-    "std_msgs/msg/String": "Text",
-    "foxglove.RawImage": "Image",
-    "foxglove.CompressedImage": "CompressedImage",
-    "foxglove.CompressedVideo": "CompressedVideo",
-    "foxglove.CameraCalibration": "CameraInfo",
+    IMAGE: "Image",
+    COMPRESSED_IMAGE: "CompressedImage",
+    CAMERA_INFO: "CameraInfo",
+    POSE_STAMPED: "PoseStamped",
+    POINT_STAMPED: "PointStamped",
+    STRING: "Text",
+    FOXGLOVE_RAW_IMAGE: "Image",
+    FOXGLOVE_COMPRESSED_IMAGE: "CompressedImage",
+    FOXGLOVE_COMPRESSED_VIDEO: "CompressedVideo",
+    FOXGLOVE_CAMERA_CALIBRATION: "CameraInfo",
 }
 #: type names whose messages decode to camera frames
 FRAME_TYPES = frozenset(name for name, kind in RECORD_KINDS.items()

@@ -10,12 +10,15 @@ endpoints come from each backend's usual configuration (for S3: ``AWS_*`` variab
 from __future__ import annotations
 
 import re
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, Any, TypeVar
 
 from .errors import StorageError
 
 Location = str | Path
+Result = TypeVar("Result")
 
 #: read-ahead of a remote file: a range request fetches at least this much, so that an
 #: MCAP reader's many small reads inside one chunk do not each become a request
@@ -77,36 +80,50 @@ def _failed(uri: str, what: str, err: Exception) -> StorageError:
     return StorageError(f"cannot {what} {uri}: {type(err).__name__}: {_one_line(err)}")
 
 
-def open_remote(uri: str) -> IO[bytes]:
-    """A seekable binary file on object storage, read with range requests."""
+@contextmanager
+def _remote(uri: str, what: str, *, must_exist: bool = False) -> Iterator[tuple[Any, str]]:
+    """The filesystem and path of ``uri``; what its backend raises inside becomes one
+    :class:`StorageError` line: that it cannot ``what`` the URI, or with ``must_exist``, for
+    a missing one, that it does not exist."""
     fs, path = _filesystem(uri)
     try:
-        file: IO[bytes] = fs.open(path, "rb", block_size=BLOCK_SIZE, cache_type="readahead")
-    except FileNotFoundError:
-        raise StorageError(f"{uri} does not exist") from None
+        yield fs, path
+    except FileNotFoundError as err:
+        raise (StorageError(f"{uri} does not exist") if must_exist
+               else _failed(uri, what, err)) from None
     except Exception as err:  # backends raise their own types (botocore, aiohttp, …)
-        raise _failed(uri, "open", err) from None
+        raise _failed(uri, what, err) from None
+
+
+def _local_or_remote(location: Location, what: str, local: Callable[[Path], Result],
+                     remote: Callable[[Any, str], Result], *, must_exist: bool = False) -> Result:
+    """``local(path)`` for a local location, else ``remote(filesystem, path)`` inside
+    :func:`_remote`."""
+    if not is_remote(location):
+        return local(local_path(location))
+    with _remote(str(location), what, must_exist=must_exist) as (fs, path):
+        result = remote(fs, path)
+    return result
+
+
+def open_remote(uri: str) -> IO[bytes]:
+    """A seekable binary file on object storage, read with range requests."""
+    with _remote(uri, "open", must_exist=True) as (fs, path):
+        file: IO[bytes] = fs.open(path, "rb", block_size=BLOCK_SIZE, cache_type="readahead")
     return file
 
 
 def is_dir(uri: str) -> bool:
     """True when a remote location is a folder (a prefix with objects below it)."""
-    fs, path = _filesystem(uri)
-    try:
-        return bool(fs.isdir(path))
-    except Exception as err:
-        raise _failed(uri, "look up", err) from None
+    with _remote(uri, "look up") as (fs, path):
+        found = bool(fs.isdir(path))
+    return found
 
 
 def exists(location: Location) -> bool:
     """True when a file or folder is at the location."""
-    if not is_remote(location):
-        return local_path(location).exists()
-    fs, path = _filesystem(str(location))
-    try:
-        return bool(fs.exists(path))
-    except Exception as err:
-        raise _failed(str(location), "look up", err) from None
+    return _local_or_remote(location, "look up", Path.exists,
+                            lambda fs, path: bool(fs.exists(path)))
 
 
 def identity(location: Location) -> dict[str, int | str]:
@@ -114,20 +131,19 @@ def identity(location: Location) -> dict[str, int | str]:
 
     A folder (rosbag2) counts every file below it.
     """
-    if not is_remote(location):
-        root = local_path(location)
-        files = [p for p in root.rglob("*") if p.is_file()] if root.is_dir() else [root]
-        stats = [p.stat() for p in files]
-        return {"bytes": sum(s.st_size for s in stats),
-                "mtime_ns": max((s.st_mtime_ns for s in stats), default=0)}
-    uri = str(location)
-    fs, path = _filesystem(uri)
-    try:
-        infos = list(fs.find(path, detail=True).values()) if fs.isdir(path) else [fs.info(path)]
-    except FileNotFoundError:
-        raise StorageError(f"{uri} does not exist") from None
-    except Exception as err:
-        raise _failed(uri, "look up", err) from None
+    return _local_or_remote(location, "look up", _local_identity, _remote_identity,
+                            must_exist=True)
+
+
+def _local_identity(root: Path) -> dict[str, int | str]:
+    files = [p for p in root.rglob("*") if p.is_file()] if root.is_dir() else [root]
+    stats = [p.stat() for p in files]
+    return {"bytes": sum(s.st_size for s in stats),
+            "mtime_ns": max((s.st_mtime_ns for s in stats), default=0)}
+
+
+def _remote_identity(fs: Any, path: str) -> dict[str, int | str]:
+    infos = list(fs.find(path, detail=True).values()) if fs.isdir(path) else [fs.info(path)]
     tags = sorted(str(i.get("ETag") or i.get("etag") or i.get("md5Hash") or i.get("mtime")
                       or i.get("LastModified") or "") for i in infos)
     return {"bytes": sum(int(i.get("size") or 0) for i in infos), "etag": ",".join(tags)}
@@ -140,45 +156,30 @@ def size(location: Location) -> int:
 
 def download(uri: str, folder: Path) -> Path:
     """Copy a remote file or folder into ``folder``; the local copy's path."""
-    fs, path = _filesystem(uri)
-    target = folder / (path.rstrip("/").rsplit("/", 1)[-1] or "log")
-    try:
+    with _remote(uri, "download", must_exist=True) as (fs, path):
+        target = folder / (path.rstrip("/").rsplit("/", 1)[-1] or "log")
         if fs.isdir(path):
             fs.get(path.rstrip("/") + "/", str(target) + "/", recursive=True)
         else:
             fs.get(path, str(target))
-    except FileNotFoundError:
-        raise StorageError(f"{uri} does not exist") from None
-    except Exception as err:
-        raise _failed(uri, "download", err) from None
     return target
 
 
 def upload(folder: Path, uri: str) -> list[str]:
     """Copy every file below a local folder to the same names below ``uri``; their URIs."""
-    fs, path = _filesystem(uri)
     done = []
-    try:
+    with _remote(uri, "upload to") as (fs, path):
         for file in sorted(p for p in folder.rglob("*") if p.is_file()):
             relative = file.relative_to(folder).as_posix()
             fs.put_file(str(file), f"{path.rstrip('/')}/{relative}")
             done.append(f"{uri.rstrip('/')}/{relative}")
-    except Exception as err:
-        raise _failed(uri, "upload to", err) from None
     return done
 
 
 def read_bytes(location: Location) -> bytes:
     """Whole content of a (small) file."""
-    if not is_remote(location):
-        return local_path(location).read_bytes()
-    fs, path = _filesystem(str(location))
-    try:
-        return bytes(fs.cat_file(path))
-    except FileNotFoundError:
-        raise StorageError(f"{location} does not exist") from None
-    except Exception as err:
-        raise _failed(str(location), "read", err) from None
+    return _local_or_remote(location, "read", Path.read_bytes,
+                            lambda fs, path: bytes(fs.cat_file(path)), must_exist=True)
 
 
 def write_bytes(location: Location, data: bytes) -> None:
@@ -186,42 +187,32 @@ def write_bytes(location: Location, data: bytes) -> None:
 
     Locally through :mod:`replay.atomic`; an object store's single PUT is atomic.
     """
-    if not is_remote(location):
+    def local(path: Path) -> None:
         from .atomic import write_bytes_atomic
 
-        path = local_path(location)
         path.parent.mkdir(parents=True, exist_ok=True)
         write_bytes_atomic(path, data)
-        return
-    fs, path_in_fs = _filesystem(str(location))
-    try:
-        fs.pipe_file(path_in_fs, data)
-    except Exception as err:
-        raise _failed(str(location), "write", err) from None
+
+    _local_or_remote(location, "write", local, lambda fs, path: fs.pipe_file(path, data))
 
 
 def remove(location: Location) -> None:
     """Delete a file if it exists."""
-    if not is_remote(location):
-        local_path(location).unlink(missing_ok=True)
-        return
-    fs, path = _filesystem(str(location))
-    try:
-        if fs.exists(path):
-            fs.rm_file(path)
-    except Exception as err:
-        raise _failed(str(location), "delete", err) from None
+    _local_or_remote(location, "delete", lambda path: path.unlink(missing_ok=True),
+                     _remove_remote)
+
+
+def _remove_remote(fs: Any, path: str) -> None:
+    if fs.exists(path):
+        fs.rm_file(path)
 
 
 def expand(pattern: str) -> list[str]:
     """The URIs a remote pattern with ``*``, ``?`` or ``[…]`` names (sorted); others as given."""
     if not is_remote(pattern) or not any(c in pattern for c in "*?["):
         return [pattern]
-    fs, path = _filesystem(pattern)
-    try:
+    with _remote(pattern, "list") as (fs, path):
         found = sorted(fs.glob(path))
-    except Exception as err:
-        raise _failed(pattern, "list", err) from None
     if not found:
         raise StorageError(f"{pattern} matches nothing")
     prefix = pattern[: pattern.index("://") + 3]

@@ -10,6 +10,8 @@ from typing import TYPE_CHECKING
 
 from replay.lazy import lazy_names
 
+from .errors import RerunExportError, ViewerError
+
 if TYPE_CHECKING:
     from .logger import LoggerOptions, SceneLogger
     from .paths import default_output
@@ -34,9 +36,11 @@ __getattr__ = lazy_names(__name__, _MODULES, globals())
 __all__ = [
     "LoggerOptions",
     "RecordingSink",
+    "RerunExportError",
     "SceneLogger",
     "ScenePlan",
     "ViewResult",
+    "ViewerError",
     "default_output",
     "plan_scene",
     "view_logs",

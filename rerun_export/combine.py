@@ -22,7 +22,7 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from replay.errors import ViewerError
+from .errors import ViewerError
 
 __all__ = ["BLOCK_BYTES", "IN_FLIGHT_BYTES", "MAX_RESIDENT_BYTES", "combine_recordings"]
 
@@ -41,7 +41,7 @@ _PAGE_BYTES = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
 
 def combine_recordings(parts: Sequence[Path], output: Path) -> None:
     """Write the recordings of ``parts`` (``.rrd`` files, in order) to ``output``; raises
-    :class:`~replay.errors.ViewerError` with rerun's reason when that fails."""
+    :class:`~rerun_export.errors.ViewerError` with rerun's reason when that fails."""
     command = [*_rerun(), "rrd", "filter", "-o", str(output)]
     with tempfile.TemporaryFile() as errors:
         proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.DEVNULL,

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 import rerun as rr
@@ -55,6 +55,8 @@ from .scene import CameraPlan, ScenePlan, image_entity, series_entity, text_enti
 from .topics import Kind, Route
 
 __all__ = ["LoggerOptions", "SceneLogger"]
+
+Decoded = TypeVar("Decoded")
 
 #: draw orders: overlays above the image, the annotated calibration image between
 ORDER_DETECTIONS, ORDER_MASK, ORDER_EDGES = -9.0, -8.0, -7.0
@@ -160,6 +162,18 @@ class SceneLogger:
             self._warned.add(key)
             self.warnings.append(text)
 
+    def _decoded(self, raw: RawMessage, record: type[Decoded]) -> Decoded:
+        """The message as the record its route was chosen for (by its type)."""
+        message = self._decode(raw)
+        assert isinstance(message, record)
+        return message
+
+    def _still_image(self, raw: RawMessage) -> Image | CompressedImage:
+        """The message of an image route that video never takes."""
+        message = self._decode(raw)
+        assert isinstance(message, Image | CompressedImage)
+        return message
+
     def _emit(self, entity: str, archetype: Any, *, count: bool = True) -> None:
         self._out.emit(entity, archetype, count=count)
 
@@ -230,8 +244,7 @@ class SceneLogger:
         if key == cam.info_key:
             return
         cam.info_key = key
-        info = self._decode(raw)
-        assert isinstance(info, CameraInfo)
+        info = self._decoded(raw, CameraInfo)
         if info.k[0, 0] <= 0 or info.k[1, 1] <= 0 or info.width <= 0 or info.height <= 0:
             self._warn(raw.topic, f"{raw.topic}: camera_info has no intrinsics; no Pinhole")
             return
@@ -248,8 +261,7 @@ class SceneLogger:
 
     def _rectified(self, raw: RawMessage, route: Route) -> None:
         """A rectified (with guide rows) or other processed image, in its own view."""
-        message = self._decode(raw)
-        assert isinstance(message, Image | CompressedImage)
+        message = self._still_image(raw)
         cam = self._camera_of(route, message)
         if cam is not None and not cam.frames.shows(message.stamp_ns):
             return
@@ -268,8 +280,7 @@ class SceneLogger:
                      static=True)
 
     def _detections(self, raw: RawMessage, route: Route) -> None:
-        message = self._decode(raw)
-        assert isinstance(message, Image | CompressedImage)
+        message = self._still_image(raw)
         cam = self.cameras[route.namespace]
         stamp = message.stamp_ns
         if not cam.frames.shows(stamp):
@@ -285,8 +296,7 @@ class SceneLogger:
                 labels=[f"rejected: {why}"]))
 
     def _residuals(self, raw: RawMessage, route: Route) -> None:
-        message = self._decode(raw)
-        assert isinstance(message, Text)
+        message = self._decoded(raw, Text)
         view = ViewResiduals.from_message(message)
         cam = self.cameras[route.namespace]
         if not cam.frames.shows(view.stamp_ns):
@@ -306,8 +316,7 @@ class SceneLogger:
             cam.frames.hold(view.stamp_ns, view.until_ns)
 
     def _series(self, raw: RawMessage, route: Route) -> None:
-        message = self._decode(raw)
-        assert isinstance(message, PointStamped)
+        message = self._decoded(raw, PointStamped)
         if route.kind is Kind.SCALAR and route.by_frame:
             cam = self._camera_of(route, message)
             namespace = cam.plan.namespace if cam is not None else message.frame_id
@@ -325,8 +334,7 @@ class SceneLogger:
         self._emit(entity, rr.Scalars(values))
 
     def _segmentation(self, raw: RawMessage, route: Route) -> None:
-        message = self._decode(raw)
-        assert isinstance(message, Image | CompressedImage)
+        message = self._still_image(raw)
         cam = self._camera_of(route, message)
         if cam is None or not cam.frames.shows(message.stamp_ns):
             return
@@ -340,8 +348,7 @@ class SceneLogger:
                       rr.SegmentationImage(classes, opacity=opacity, draw_order=order))
 
     def _point_2d(self, raw: RawMessage, route: Route) -> None:
-        message = self._decode(raw)
-        assert isinstance(message, PointStamped)
+        message = self._decoded(raw, PointStamped)
         cam = self._camera_of(route, message)
         if cam is None or not cam.frames.shows(message.stamp_ns):
             return
@@ -363,8 +370,7 @@ class SceneLogger:
         if last is not None and last[0] == key and last[1] is model and stamp is not None:
             uv = last[2]
         else:
-            message = self._decode(raw)
-            assert isinstance(message, PoseStamped)
+            message = self._decoded(raw, PoseStamped)
             stamp = message.stamp_ns
             uv = inside_image(project_target(
                 points, position_m=message.position_m, orientation_xyzw=message.orientation_xyzw,
@@ -387,8 +393,7 @@ class SceneLogger:
         return PointsRow(np.asarray(positions, dtype=np.float32))
 
     def _text(self, raw: RawMessage, route: Route) -> None:
-        message = self._decode(raw)
-        assert isinstance(message, Text)
+        message = self._decoded(raw, Text)
         indented = reindent_json(message.data)  # None: shown as it is
         text = message.data if indented is None else f"```json\n{indented}\n```"
         self._times(raw, None)

@@ -18,9 +18,9 @@ from typing import Any, Self
 import rerun as rr
 
 from replay.atomic import AtomicOutput
-from replay.errors import ViewerError
 
 from .combine import combine_recordings
+from .errors import ViewerError
 from .viewer import DEFAULT_PORT, LOCALHOST, grpc_url, require_viewer, spawn_viewer
 
 __all__ = ["Destination", "RecordingSink", "flush_recording"]

@@ -19,6 +19,15 @@ from typing import TYPE_CHECKING
 
 from replay import topics as names
 from replay.display import Display
+from replay.msgtypes import (
+    CAMERA_INFO,
+    COMPRESSED_IMAGE,
+    FOXGLOVE_COMPRESSED_VIDEO,
+    IMAGE,
+    POINT_STAMPED,
+    POSE_STAMPED,
+    STRING,
+)
 from replay.topics import ResyncTopics
 from replay.wire import record_msgtype
 
@@ -26,14 +35,6 @@ if TYPE_CHECKING:
     from replay.records import ProcessedOutput
 
 __all__ = ["Kind", "Route", "classify", "route_output"]
-
-IMAGE = "sensor_msgs/msg/Image"
-VIDEO = "foxglove.CompressedVideo"
-COMPRESSED = "sensor_msgs/msg/CompressedImage"
-CAMERA_INFO = "sensor_msgs/msg/CameraInfo"
-POINT = "geometry_msgs/msg/PointStamped"
-POSE = "geometry_msgs/msg/PoseStamped"
-STRING = "std_msgs/msg/String"
 
 PROCESSOR_NS = "/image_converter"
 
@@ -101,13 +102,13 @@ SUFFIXES: dict[str, tuple[tuple[str, Kind], ...]] = {
             (f"/{names.IMAGE_RAW}", Kind.IMAGE), ("/image", Kind.IMAGE)),
     CAMERA_INFO: ((f"/{names.CALIBRATED_INFO}", Kind.CALIBRATED_INFO),
                   (f"/{names.CAMERA_INFO}", Kind.CAMERA_INFO), ("/calibration", Kind.CAMERA_INFO)),
-    POINT: ((f"/{names.VIEW_ERROR}", Kind.VIEW_ERROR),
-            (ResyncTopics("").offset, Kind.STEREO_OFFSET)),
+    POINT_STAMPED: ((f"/{names.VIEW_ERROR}", Kind.VIEW_ERROR),
+                    (ResyncTopics("").offset, Kind.STEREO_OFFSET)),
     STRING: ((f"/{names.RESIDUALS}", Kind.RESIDUALS),),
 }
 #: type -> kind of a topic no suffix names (its namespace is the topic itself)
 FALLBACK: dict[str, Kind] = {
-    IMAGE: Kind.IMAGE, CAMERA_INFO: Kind.CAMERA_INFO, POINT: Kind.POINT_SERIES,
+    IMAGE: Kind.IMAGE, CAMERA_INFO: Kind.CAMERA_INFO, POINT_STAMPED: Kind.POINT_SERIES,
     STRING: Kind.TEXT,
 }
 
@@ -128,9 +129,9 @@ def classify(topic: str, msgtype: str,
              outputs: Mapping[str, ProcessedOutput] | None = None) -> Route:
     """The route of one topic, from the recorded ``outputs`` (topic -> output) first.
 
-    >>> classify("/stereo_camera/left/image_raw/compressed", COMPRESSED).namespace
+    >>> classify("/stereo_camera/left/image_raw/compressed", COMPRESSED_IMAGE).namespace
     '/stereo_camera/left'
-    >>> classify("/image_converter/red_centroid", POINT).by_frame
+    >>> classify("/image_converter/red_centroid", POINT_STAMPED).by_frame
     True
     """
     route = route_output(outputs[topic]) if outputs and topic in outputs else None
@@ -140,11 +141,11 @@ def classify(topic: str, msgtype: str,
 def _by_name(topic: str, msgtype: str) -> Route:
     name = topic
     msgtype = record_msgtype(msgtype)  # Foxglove camera schemas show as their ROS kinds
-    if msgtype == COMPRESSED:
+    if msgtype == COMPRESSED_IMAGE:
         msgtype, name = IMAGE, topic.removesuffix("/compressed") or topic
-    elif msgtype == VIDEO:
+    elif msgtype == FOXGLOVE_COMPRESSED_VIDEO:
         msgtype, name = IMAGE, topic.removesuffix("/video") or topic
-    if msgtype == POSE:
+    if msgtype == POSE_STAMPED:
         truth = names.split_ground_truth(topic)
         return Route(Kind.GROUND_TRUTH, truth[0], detail=truth[1]) if truth \
             else Route(Kind.SKIPPED)

@@ -19,7 +19,7 @@ import time
 from pathlib import Path
 from urllib.parse import urlsplit
 
-from replay.errors import ViewerError
+from .errors import ViewerError
 
 __all__ = ["DEFAULT_PORT", "LOCALHOST", "grpc_url", "require_viewer", "spawn_viewer"]
 

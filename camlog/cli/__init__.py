@@ -53,7 +53,8 @@ COMMANDS: dict[str, tuple[str, str]] = {
 
 #: (module, exception) of every package's error tree: one line on stderr, exit status 1
 KNOWN_ERRORS = (("camlog.errors", "CamlogError"), ("replay.errors", "ReplayError"),
-                ("recorder.errors", "RecorderError"), ("processors.errors", "ProcessorError"))
+                ("recorder.errors", "RecorderError"), ("processors.errors", "ProcessorError"),
+                ("rerun_export.errors", "RerunExportError"))
 
 
 class _Parser(argparse.ArgumentParser):

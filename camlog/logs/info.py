@@ -20,7 +20,7 @@ from replay import storage
 from replay.buffer_layout import check_buffer
 from replay.errors import ReplayError
 from replay.formats.base import ROS_SERIALIZATIONS, LogReader, RawMessage
-from replay.msgtypes import CAMERA_INFO_TYPES, CDR, DECODABLE, FRAME_TYPES
+from replay.msgtypes import CAMERA_INFO, CAMERA_INFO_TYPES, CDR, DECODABLE, FRAME_TYPES, IMAGE
 from replay.sizes import bytes_on_disk, format_size
 
 if TYPE_CHECKING:
@@ -253,7 +253,7 @@ def _describe_by_schema(raw: RawMessage) -> str | None:
     reader's own decode then says why)."""
     schema = raw.schema
     if (raw.serialization != CDR or schema is None or schema.encoding != "ros2msg"
-            or raw.msgtype not in ("sensor_msgs/msg/Image", "sensor_msgs/msg/CameraInfo")):
+            or raw.msgtype not in (IMAGE, CAMERA_INFO)):
         return None
     from mcap_ros2.decoder import DecoderFactory
 
@@ -264,7 +264,7 @@ def _describe_by_schema(raw: RawMessage) -> str | None:
         msg = decode(bytes(raw.data)) if decode is not None else None
         if msg is None:
             return None
-        if raw.msgtype == "sensor_msgs/msg/CameraInfo":
+        if raw.msgtype == CAMERA_INFO:
             return f"{int(msg.width)}x{int(msg.height)} {msg.distortion_model}"
         encoding, width, height = str(msg.encoding), int(msg.width), int(msg.height)
         check_buffer(encoding, width=width, height=height, step=int(msg.step),

@@ -6,6 +6,7 @@ from collections.abc import Iterable
 
 from replay.formats import LogReader
 from replay.messages import CameraInfo
+from replay.msgtypes import CAMERA_INFO, POINT_STAMPED, POSE_STAMPED
 from replay.wire import FRAME_TYPES, RECORD_TYPES
 
 from ..errors import InputError
@@ -13,8 +14,7 @@ from ..errors import InputError
 #: types whose messages are camera frames (ROS and Foxglove images, Foxglove video)
 IMAGE_TYPES = tuple(sorted(FRAME_TYPES))
 #: types with a header stamp (what a throttle can thin)
-STAMPED_TYPES = (*IMAGE_TYPES, "sensor_msgs/msg/CameraInfo", "geometry_msgs/msg/PointStamped",
-                 "geometry_msgs/msg/PoseStamped")
+STAMPED_TYPES = (*IMAGE_TYPES, CAMERA_INFO, POINT_STAMPED, POSE_STAMPED)
 #: types of camera models (ROS camera_info, Foxglove CameraCalibration)
 INFO_TYPES = tuple(sorted(t for t, kind in RECORD_TYPES.items() if kind is CameraInfo))
 #: a camera namespace's camera model topic, most preferred first

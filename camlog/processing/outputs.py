@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 from processors.spec import Configured
+from replay.msgtypes import COMPRESSED_IMAGE, IMAGE
 
 from ..errors import UsageError
 
@@ -24,8 +25,6 @@ __all__ = ["CHAPTER_NS", "COMPRESSIONS", "input_namespace", "output_namespace", 
 CHAPTER_NS = "/image_converter"
 #: formats image outputs may be compressed to
 COMPRESSIONS = ("jpeg", "png")
-IMAGE = "sensor_msgs/msg/Image"
-COMPRESSED = "sensor_msgs/msg/CompressedImage"
 
 
 def input_namespace(topic: str) -> str:
@@ -77,7 +76,7 @@ def plan_outputs(
             for out in spec.outputs:
                 topic, msgtype = f"{namespace}/{out.name}", out.msgtype
                 if compress and msgtype == IMAGE:
-                    topic, msgtype = topic + "/compressed", COMPRESSED
+                    topic, msgtype = topic + "/compressed", COMPRESSED_IMAGE
                 where = f"{spec.name}'s {out.name} of {source}"
                 if topic in taken:
                     raise UsageError(f"{topic} would hold both {taken[topic]} and {where}; "

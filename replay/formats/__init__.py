@@ -15,8 +15,8 @@ from ..errors import LogFormatError, LogReadError
 from ..format_names import WRITE_FORMATS
 from .base import FrameRecord, LogReader, LogWriter, RawMessage, Record, TopicInfo
 from .mcap import MAGIC, McapLogReader, is_mcap
-from .rosbag2_metadata import BagMetadata, count_warnings, read_metadata
-from .rosbag2_reindex import lone_storage
+from .rosbag2.metadata import BagMetadata, count_warnings, read_metadata
+from .rosbag2.reindex import lone_storage
 
 __all__ = [
     "FORMATS",
@@ -39,33 +39,33 @@ ROS1_MAGIC = b"#ROSBAG V2.0"
 
 
 def _mcap_writer(path: Path, **options: Any) -> LogWriter:
-    from .mcap_writer import McapLogWriter
+    from .mcap.writer import McapLogWriter
 
     return McapLogWriter(path, **options)
 
 
 def _rosbag2_writer(storage_name: str) -> Callable[..., LogWriter]:
     def create(path: Path, **options: Any) -> LogWriter:
-        from .rosbags_formats import Rosbag2LogWriter
+        from .rosbag2.writer import Rosbag2LogWriter
 
         return Rosbag2LogWriter(path, storage=storage_name, **options)
     return create
 
 
 def _ros1_writer(path: Path, **options: Any) -> LogWriter:
-    from .rosbags_formats import Ros1LogWriter
+    from .ros1.writer import Ros1LogWriter
 
     return Ros1LogWriter(path, **options)
 
 
 def _rosbag2_reader(path: Path, **options: Any) -> LogReader:
-    from .rosbag2_reader import Rosbag2LogReader
+    from .rosbag2.reader import Rosbag2LogReader
 
     return Rosbag2LogReader(path, **options)
 
 
 def _ros1_reader(path: Path, **options: Any) -> LogReader:
-    from .rosbags_formats import Ros1LogReader
+    from .ros1.reader import Ros1LogReader
 
     return Ros1LogReader(path, **options)
 

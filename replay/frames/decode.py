@@ -18,6 +18,7 @@ from ..errors import EncodingError, UnsupportedEncodingError
 from ..messages import CompressedImage, CompressedVideo, Image, Message
 from .compressed import compressed_kind, decode_compressed_depth, decode_still
 from .frame import Frame
+from .lookup import table_entry
 from .raw import RAW_ENCODINGS, Raw
 from .video import VideoDecoder
 
@@ -45,11 +46,8 @@ IMAGE_ENCODINGS: dict[str, tuple[np.dtype[Any], int]] = {
 
 def raw_encoding(encoding: str) -> Raw:
     """The table entry of a raw encoding; :class:`EncodingError` naming the supported ones."""
-    decoder = DECODERS.get((Image, encoding))
-    if not isinstance(decoder, Raw):
-        raise UnsupportedEncodingError(f"unsupported image encoding {encoding!r} "
-                                       f"(supported: {', '.join(sorted(IMAGE_ENCODINGS))})")
-    return decoder
+    return cast(Raw, table_entry(DECODERS, Image, encoding, error=UnsupportedEncodingError,
+                                 unknown="unsupported image encoding"))
 
 
 def decode_frame(message: Image | CompressedImage) -> Frame:
@@ -60,11 +58,8 @@ def decode_frame(message: Image | CompressedImage) -> Frame:
     if not isinstance(message, CompressedImage):
         raise EncodingError(f"{type(message).__name__} is not a still image message")
     kind = compressed_kind(message)
-    decoder = DECODERS.get((CompressedImage, kind))
-    if decoder is None:
-        known = sorted(k for t, k in DECODERS if t is CompressedImage)
-        raise UnsupportedEncodingError(f"unsupported compressed image format {message.format!r} "
-                                       f"(supported: {', '.join(known)})")
+    decoder = table_entry(DECODERS, CompressedImage, kind, error=UnsupportedEncodingError,
+                          unknown="unsupported compressed image format", shown=message.format)
     frame: Frame = decoder(message)
     return frame
 
@@ -83,11 +78,9 @@ class FrameStream:
                 raise EncodingError(f"{type(message).__name__} is not an image message")
             return decode_frame(message)
         if self._video is None:
-            factory = DECODERS.get((CompressedVideo, message.format))
-            if factory is None:
-                known = sorted(k for t, k in DECODERS if t is CompressedVideo)
-                raise UnsupportedEncodingError(f"unsupported video format {message.format!r} "
-                                               f"(supported: {', '.join(known)})")
+            factory = table_entry(DECODERS, CompressedVideo, message.format,
+                                  error=UnsupportedEncodingError,
+                                  unknown="unsupported video format")
             self._video = cast(Callable[[CompressedVideo], Frame | None],
                                factory(message.format))
         return self._video(message)

@@ -18,6 +18,7 @@ from ..messages import CompressedImage, Image
 from .compressed import encode_compressed_depth, encode_still, original_encoding
 from .decode import DECODERS, Raw
 from .frame import Color, Frame, Pixels
+from .lookup import table_entry
 
 __all__ = ["ENCODERS", "decompress", "encode_compressed", "encode_image", "natural_encoding"]
 
@@ -90,11 +91,8 @@ def encode_image(frame: Frame, encoding: str | None = None) -> Image:
     which keeps the pixels without a copy)."""
     if encoding is None:
         return Image(frame.stamp_ns, frame.frame_id, natural_encoding(frame), frame.pixels)
-    encoder = ENCODERS.get((Image, encoding))
-    if encoder is None:
-        writable = sorted(e for t, e in ENCODERS if t is Image)
-        raise EncodingError(f"cannot write images as {encoding!r} "
-                            f"(writable: {', '.join(writable)})")
+    encoder = table_entry(ENCODERS, Image, encoding, error=EncodingError,
+                          unknown="cannot write images as", choices="writable: {}")
     image: Image = encoder(frame)
     return image
 
@@ -102,12 +100,10 @@ def encode_image(frame: Frame, encoding: str | None = None) -> Image:
 def encode_compressed(frame: Frame, fmt: str = "jpeg", *, jpeg_quality: int = 90
                       ) -> CompressedImage:
     """A CompressedImage of the frame in ``fmt`` (``jpeg`` or ``png``)."""
-    if (CompressedImage, fmt) not in ENCODERS:
-        formats = sorted(f for t, f in ENCODERS if t is CompressedImage)
-        raise EncodingError(f"unsupported compression {fmt!r} (use {' or '.join(formats)})")
+    encoder = table_entry(ENCODERS, CompressedImage, fmt, error=EncodingError,
+                          unknown="unsupported compression", choices="use {}", sep=" or ")
     original = frame.source if (Image, frame.source) in DECODERS else ""
-    message: CompressedImage = ENCODERS[CompressedImage, fmt](
-        frame, original=original, jpeg_quality=jpeg_quality)
+    message: CompressedImage = encoder(frame, original=original, jpeg_quality=jpeg_quality)
     return message
 
 

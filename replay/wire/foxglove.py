@@ -24,7 +24,14 @@ from mcap.records import Schema
 from ..bounded import json_loads
 from ..errors import ReplayError
 from ..messages import CameraInfo, CompressedImage, CompressedVideo, Image, Message
-from ..msgtypes import JSON, PROTOBUF
+from ..msgtypes import (
+    FOXGLOVE_CAMERA_CALIBRATION,
+    FOXGLOVE_COMPRESSED_IMAGE,
+    FOXGLOVE_COMPRESSED_VIDEO,
+    FOXGLOVE_RAW_IMAGE,
+    JSON,
+    PROTOBUF,
+)
 from .layout import image_from_buffer
 
 __all__ = [
@@ -68,10 +75,10 @@ def _calibration(f: Fields) -> Message:
 
 #: Foxglove schema name -> typed record builder
 FOXGLOVE_TYPES: dict[str, Callable[[Fields], Message]] = {
-    "foxglove.RawImage": _image,
-    "foxglove.CompressedImage": _compressed,
-    "foxglove.CameraCalibration": _calibration,
-    "foxglove.CompressedVideo": _video,
+    FOXGLOVE_RAW_IMAGE: _image,
+    FOXGLOVE_COMPRESSED_IMAGE: _compressed,
+    FOXGLOVE_CAMERA_CALIBRATION: _calibration,
+    FOXGLOVE_COMPRESSED_VIDEO: _video,
 }
 _ERRORS: tuple[type[Exception], ...] = (McapError, KeyError, TypeError, ValueError,
                                         binascii.Error)

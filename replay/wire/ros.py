@@ -15,6 +15,7 @@ from rosbags.serde import SerdeError
 from rosbags.typesys import Stores, get_typestore
 from rosbags.typesys.store import Typestore
 
+from .. import msgtypes
 from ..errors import ReplayError
 from ..messages import (
     MSGTYPES,
@@ -68,7 +69,7 @@ def to_ros(message: Message) -> Any:
             channels = 1 if pixels.ndim == 2 else pixels.shape[2]
             row_bytes = pixels.shape[1] * pixels.itemsize * channels
             big = pixels.dtype.itemsize > 1 and pixels.dtype.byteorder == ">"
-            return types["sensor_msgs/msg/Image"](
+            return types[msgtypes.IMAGE](
                 header=_header(ts, message.stamp_ns, message.frame_id),
                 height=message.height,  # semi-planar YUV: fewer than the buffer's rows
                 width=pixels.shape[1],
@@ -78,7 +79,7 @@ def to_ros(message: Message) -> Any:
                 data=pixels.reshape(-1).view(np.uint8),
             )
         case CompressedImage():
-            return types["sensor_msgs/msg/CompressedImage"](
+            return types[msgtypes.COMPRESSED_IMAGE](
                 header=_header(ts, message.stamp_ns, message.frame_id),
                 format=message.format,
                 data=np.frombuffer(message.data, dtype=np.uint8),
@@ -86,7 +87,7 @@ def to_ros(message: Message) -> Any:
         case CameraInfo():
             roi_cls = types["sensor_msgs/msg/RegionOfInterest"]
             x, y, h, w, rectify = message.roi
-            return types["sensor_msgs/msg/CameraInfo"](
+            return types[msgtypes.CAMERA_INFO](
                 header=_header(ts, message.stamp_ns, message.frame_id),
                 height=message.height,
                 width=message.width,
@@ -102,7 +103,7 @@ def to_ros(message: Message) -> Any:
         case PoseStamped():
             pos = message.position_m
             q = message.orientation_xyzw
-            return types["geometry_msgs/msg/PoseStamped"](
+            return types[msgtypes.POSE_STAMPED](
                 header=_header(ts, message.stamp_ns, message.frame_id),
                 pose=types["geometry_msgs/msg/Pose"](
                     position=types["geometry_msgs/msg/Point"](x=pos[0], y=pos[1], z=pos[2]),
@@ -113,12 +114,12 @@ def to_ros(message: Message) -> Any:
             )
         case PointStamped():
             p = message.point
-            return types["geometry_msgs/msg/PointStamped"](
+            return types[msgtypes.POINT_STAMPED](
                 header=_header(ts, message.stamp_ns, message.frame_id),
                 point=types["geometry_msgs/msg/Point"](x=p[0], y=p[1], z=p[2]),
             )
         case Text():
-            return types["std_msgs/msg/String"](data=message.data)
+            return types[msgtypes.STRING](data=message.data)
     raise TypeError(f"not a camlog message: {type(message).__name__}")
 
 
@@ -143,14 +144,14 @@ def from_ros(msg: Any) -> Message:
     """Typed record for a rosbags message object (ROS 1 or ROS 2 definitions)."""
     msgtype = msg.__msgtype__
     match msgtype:
-        case "sensor_msgs/msg/Image":
+        case msgtypes.IMAGE:
             return _image_from_ros(msg)
-        case "sensor_msgs/msg/CompressedImage":
+        case msgtypes.COMPRESSED_IMAGE:
             return CompressedImage(
                 _stamp_ns(msg.header), str(msg.header.frame_id), str(msg.format),
                 bytes(np.asarray(msg.data, dtype=np.uint8)),
             )
-        case "sensor_msgs/msg/CameraInfo":
+        case msgtypes.CAMERA_INFO:
             # ROS1 spells the fields D, K, R, P.
             def get(name: str) -> Any:
                 return getattr(msg, name) if hasattr(msg, name) else getattr(msg, name.upper())
@@ -171,18 +172,18 @@ def from_ros(msg: Any) -> Message:
                 roi=(int(roi.x_offset), int(roi.y_offset), int(roi.height), int(roi.width),
                      bool(roi.do_rectify)),
             )
-        case "geometry_msgs/msg/PoseStamped":
+        case msgtypes.POSE_STAMPED:
             p, q = msg.pose.position, msg.pose.orientation
             return PoseStamped(
                 _stamp_ns(msg.header), str(msg.header.frame_id),
                 np.array([p.x, p.y, p.z]), np.array([q.x, q.y, q.z, q.w]),
             )
-        case "geometry_msgs/msg/PointStamped":
+        case msgtypes.POINT_STAMPED:
             p = msg.point
             return PointStamped(
                 _stamp_ns(msg.header), str(msg.header.frame_id), np.array([p.x, p.y, p.z])
             )
-        case "std_msgs/msg/String":
+        case msgtypes.STRING:
             return Text(str(msg.data))
     raise ReplayError(f"camlog has no typed record for {msgtype}")
 

@@ -12,6 +12,7 @@ import pytest
 import rerun as rr
 
 import replay.frames.compressed
+import replay.frames.lookup
 from processors.red_pixels import CENTROID, COUNT, RedPixels
 from replay import (
     IMAGE_ENCODINGS,
@@ -27,10 +28,12 @@ from replay.frames import (
     ENCODERS,
     Color,
     Frame,
+    FrameStream,
     decode_frame,
     decompress,
     encode_compressed,
     encode_image,
+    raw_encoding,
 )
 from rerun_export.images import rerun_image
 from tests.encodings import (
@@ -239,8 +242,30 @@ def test_every_decoder_key_is_a_record_kind_and_a_name() -> None:
 
 
 def test_docstring_examples() -> None:
-    result = doctest.testmod(replay.frames.compressed)
-    assert result.attempted > 0 and result.failed == 0
+    for module in (replay.frames.compressed, replay.frames.lookup):
+        result = doctest.testmod(module)
+        assert result.attempted > 0 and result.failed == 0
+
+
+def test_an_unknown_encoding_is_named_with_the_table_s_choices() -> None:
+    frame = decode_frame(Image(0, "c", "mono8", np.zeros((2, 2), np.uint8)))
+    raw = ", ".join(sorted(IMAGE_ENCODINGS))
+    writable = ", ".join(sorted(e for kind, e in ENCODERS if kind is Image))
+    calls = [
+        (lambda: raw_encoding("yuv411"), f"unsupported image encoding 'yuv411' (supported: {raw})"),
+        (lambda: decode_frame(CompressedImage(0, "c", "tiff", b"")),
+         "unsupported compressed image format 'tiff' (supported: compressedDepth, jpeg, png)"),
+        (lambda: FrameStream().decode(CompressedVideo(0, "c", "av1", b"")),
+         "unsupported video format 'av1' (supported: h264, h265)"),
+        (lambda: encode_image(frame, "yuv411"), f"cannot write images as 'yuv411' "
+                                                f"(writable: {writable})"),
+        (lambda: encode_compressed(frame, "webp"), "unsupported compression 'webp' (use "
+                                                   "compressedDepth or jpeg or png)"),
+    ]
+    for call, text in calls:
+        with pytest.raises(EncodingError) as raised:
+            call()
+        assert str(raised.value) == text
 
 
 def _rvl(depth: np.ndarray) -> bytes:

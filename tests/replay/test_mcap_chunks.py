@@ -19,9 +19,9 @@ from rosbags.typesys import Stores, get_typestore
 from camlog.logs.convert import convert_log
 from replay import LogWriteError, open_reader
 from replay.formats.chunk_worker import OrderedWorker
-from replay.formats.mcap_chunks import McapChunkWriter
-from replay.formats.mcap_writer import McapLogWriter
-from replay.formats.rosbag2_storage import McapStorage
+from replay.formats.mcap.chunks import McapChunkWriter
+from replay.formats.mcap.writer import McapLogWriter
+from replay.formats.rosbag2.storage_plugins import McapStorage
 from tests.recordings import chunked_camera_log
 
 COMPRESSIONS = [(CompressionType.ZSTD, "zstd"), (CompressionType.LZ4, "lz4"),
@@ -164,3 +164,32 @@ def test_ros1_to_rosbag2_in_many_chunks_reads_back(tmp_path: Path,
     with open_reader(source) as original:
         expected = [bytes(r.data) for r in original.raw_messages(["/cam/image_raw"])]
     assert [bytes(raw) for raw in images] == expected
+
+
+class KeptBytes(io.BytesIO):
+    """A file whose bytes can still be read after it is closed."""
+
+    kept = b""
+
+    def close(self) -> None:
+        self.kept = self.getvalue()
+        super().close()
+
+
+def test_a_writer_given_its_file_closes_it_when_finished_or_aborted() -> None:
+    theirs = io.BytesIO()
+    writer = Writer(theirs, chunk_size=1024)
+    writer.start(profile="ros2", library="test")
+    writer.add_metadata("end", {"k": "v"})
+    writer.finish()
+    owned = KeptBytes()
+    ours = McapChunkWriter(owned, chunk_size=1024, close_file=True)
+    ours.start(profile="ros2", library="test")
+    ours.finish({"end": {"k": "v"}})  # the metadata written first, as add_metadata does
+    assert owned.closed and owned.kept == theirs.getvalue()
+    aborted = io.BytesIO()
+    McapChunkWriter(aborted, close_file=True).abort()
+    assert aborted.closed
+    kept = io.BytesIO()
+    McapChunkWriter(kept).abort()
+    assert not kept.closed

@@ -10,7 +10,7 @@ from mcap.reader import SeekingReader
 from mcap.writer import CompressionType, IndexType, Writer
 
 from replay import LogReadError, open_reader
-from replay.formats.mcap_ordered import ordered_chunks
+from replay.formats.mcap.ordered import ordered_chunks
 
 
 def write_mcap(path: Path, *, overlap: bool, compression: CompressionType) -> None:

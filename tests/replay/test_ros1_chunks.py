@@ -9,7 +9,7 @@ import pytest
 from rosbags.rosbag1 import Reader, Writer
 from rosbags.typesys import Stores, get_typestore
 
-from replay.formats.ros1_chunks import ThreadedRos1Writer
+from replay.formats.ros1.chunks import ThreadedRos1Writer
 
 TYPESTORE = get_typestore(Stores.ROS1_NOETIC)
 

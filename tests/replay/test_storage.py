@@ -105,3 +105,33 @@ def test_locations_and_their_errors(tmp_path: Path) -> None:
     with pytest.raises(StorageError, match=r"gs://bucket/x\.mcap") as err:
         open_reader("gs://bucket/x.mcap")  # gcsfs is not installed
     assert "\n" not in str(err.value)
+
+
+def test_local_and_remote_locations_answer_alike(tmp_path: Path) -> None:
+    fsspec.filesystem("memory").pipe("/bucket/keep/dir/x", b"1")
+    for base in (tmp_path, "memory://bucket/alike"):
+        location = storage.join(base, "sub", "s.json")
+        assert not storage.exists(location)
+        storage.write_bytes(location, b"{}")
+        assert storage.exists(location) and storage.read_bytes(location) == b"{}"
+        assert storage.size(location) == 2
+        storage.remove(location)
+        storage.remove(location)  # a missing file: nothing to do
+        assert not storage.exists(location)
+    download = tmp_path / "download"
+    download.mkdir()
+    for failing, text in [
+        (lambda: storage.read_bytes("memory://bucket/none"), "memory://bucket/none does not exist"),
+        (lambda: storage.identity("memory://bucket/none"), "memory://bucket/none does not exist"),
+        (lambda: storage.download("memory://bucket/none", download),
+         "memory://bucket/none does not exist"),
+        (lambda: storage.remove("memory://bucket/keep/dir"),
+         "cannot delete memory://bucket/keep/dir: FileNotFoundError: /bucket/keep/dir"),
+        (lambda: storage.write_bytes("memory://bucket/keep/dir/x/y", b""),
+         "cannot write memory://bucket/keep/dir/x/y: FileExistsError: /bucket/keep/dir/x"),
+        (lambda: storage.expand("memory://bucket/keep/*.q"), "memory://bucket/keep/*.q matches "
+                                                             "nothing"),
+    ]:
+        with pytest.raises(StorageError) as raised:
+            failing()
+        assert str(raised.value) == text

@@ -10,9 +10,9 @@ import pytest
 import rerun as rr
 from rerun.chunk import RrdReader
 
-from replay.errors import ViewerError
 from rerun_export import combine
 from rerun_export.combine import combine_recordings
+from rerun_export.errors import ViewerError
 from tests.rrd import rerun_cli
 
 

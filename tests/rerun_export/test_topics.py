@@ -6,9 +6,10 @@ import pytest
 
 from replay.display import Display
 from replay.records import ProcessedOutput
-from rerun_export.topics import COMPRESSED, Kind, Route, classify
+from rerun_export.topics import Kind, Route, classify
 
 IMAGE, INFO = "sensor_msgs/msg/Image", "sensor_msgs/msg/CameraInfo"
+COMPRESSED = "sensor_msgs/msg/CompressedImage"
 POINT, POSE, STRING = ("geometry_msgs/msg/PointStamped", "geometry_msgs/msg/PoseStamped",
                        "std_msgs/msg/String")
 

@@ -7,8 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from replay import LogFormatError, LogReadError, OutputError, TopicError, ViewerError
+from replay import LogFormatError, LogReadError, OutputError, TopicError
 from rerun_export import view_logs
+from rerun_export.errors import ViewerError
 from tests.outputs import temp_outputs
 from tests.recordings import chunked_camera_log, corrupt_middle_chunk
 from tests.rrd import load_rrd

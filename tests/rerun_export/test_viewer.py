@@ -24,8 +24,8 @@ from pathlib import Path
 import pytest
 from rerun.error_utils import RerunWarning
 
-from replay.errors import ViewerError
 from rerun_export import sink as sink_module
+from rerun_export.errors import ViewerError
 from rerun_export.sink import RecordingSink
 from tests.conftest import REPO_ROOT
 from tests.rrd import Receiver, load_rrd

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import socket
 from pathlib import Path
 
 import pytest
@@ -39,14 +40,19 @@ def test_view_writes_an_rrd_beside_the_log(red_processed_log: Path, tmp_path: Pa
     (["view", "{log}", "--topics", "/nothing"], "has no topic matching '/nothing'"),
     (["view", "{log}", "--start", "3", "--end", "1"], "--end (1.0 s) must be after --start"),
     (["view", "{log}", "-o", "{tmp}/x.png"], "must end in .rrd"),
+    (["view", "{log}", "--connect", "nowhere"], "not a viewer address: 'nowhere'"),
+    (["view", "{log}", "--connect", "127.0.0.1:{port}"], "no rerun viewer is listening at"),
 ])
 def test_errors_are_one_line(argv: list[str], message: str, red_log: Path, tmp_path: Path,
                              capsys: pytest.CaptureFixture[str]) -> None:
     corrupt = tmp_path / "corrupt.mcap"
     chunked_camera_log(corrupt)
     corrupt_middle_chunk(corrupt)
+    with socket.socket() as probe:  # a loopback port nobody listens on
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
     names = {"missing": tmp_path / "missing.mcap", "corrupt": corrupt, "log": red_log,
-             "tmp": tmp_path}
+             "tmp": tmp_path, "port": port}
     assert main([a.format(**names) for a in argv]) == 1
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith("camlog view: error: ") and message in err

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ..bounded import MAX_RECORD_BYTES, read_text, yaml_load
+from ...bounded import MAX_RECORD_BYTES, read_text, yaml_load
 
 __all__ = ["BagMetadata", "count_warnings", "read_metadata"]
 

@@ -13,7 +13,8 @@ from __future__ import annotations
 
 import struct
 import zlib
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Mapping
+from contextlib import contextmanager
 from typing import IO, Any
 
 from mcap.data_stream import RecordBuilder
@@ -33,7 +34,7 @@ from mcap.records import (
 )
 from mcap.stream_reader import MAGIC_SIZE
 
-from .chunk_worker import OrderedWorker
+from ..chunk_worker import OrderedWorker
 
 __all__ = ["CHUNK_COMPRESSIONS", "McapChunkWriter"]
 
@@ -75,15 +76,17 @@ class McapChunkWriter:
 
     The calls are those of ``mcap.writer.Writer``; :meth:`abort` stops the worker without
     finishing the file. Errors of the worker (a full disk) are raised by a later call.
+    ``close_file``: :meth:`finish` and :meth:`abort` close ``file``, whatever they raise.
     """
 
     def __init__(self, file: IO[bytes], *, chunk_size: int = 1024 * 1024,
-                 compression: str = "zstd") -> None:
+                 compression: str = "zstd", close_file: bool = False) -> None:
         factory = CHUNK_COMPRESSIONS[compression]
         self._compress = None if factory is None else factory()
         self._compression = compression
         self._compression_field = _U32.pack(len(compression)) + compression.encode()
         self._file = file
+        self._close_file = close_file
         self._position = 0  # bytes written so far, counted by whoever writes (one at a time)
         self._chunk_size = chunk_size
         self._worker = OrderedWorker()
@@ -150,16 +153,29 @@ class McapChunkWriter:
         self._worker.drain()
         self._file.flush()
 
-    def finish(self) -> None:
-        """Complete the last chunk, write the summary and the footer; stop the worker."""
-        self._finish_chunk()
-        self._worker.close()
-        self._out(_record(DataEnd(0)))
-        self._out(self._summary())
+    def finish(self, metadata: Mapping[str, dict[str, str]] | None = None) -> None:
+        """Write the ``metadata`` records (name -> values), complete the last chunk, write the
+        summary and the footer; stop the worker."""
+        with self._closing():
+            for name, values in (metadata or {}).items():
+                self.add_metadata(name, values)
+            self._finish_chunk()
+            self._worker.close()
+            self._out(_record(DataEnd(0)))
+            self._out(self._summary())
 
     def abort(self) -> None:
         """Stop the worker; the file stays unfinished."""
-        self._worker.abort()
+        with self._closing():
+            self._worker.abort()
+
+    @contextmanager
+    def _closing(self) -> Iterator[None]:
+        try:
+            yield
+        finally:
+            if self._close_file:
+                self._file.close()
 
     def _out(self, data: bytes | bytearray) -> None:
         self._file.write(data)

@@ -16,11 +16,11 @@ from pathlib import Path
 
 from rosbags.rosbag2 import Reader as Reader2
 
-from ..errors import LogReadError
-from .rosbag2_metadata import BagMetadata, count_warnings, read_metadata
-from .rosbag2_reindex import ZSTD_MAGIC, has_journal, lone_storage, rolled_back_copy
-from .rosbag2_salvage import Salvaged, salvaged_copy
-from .rosbags_reader import RosbagsReader, first_line
+from ...errors import LogReadError
+from ..rosbags_reader import RosbagsReader, first_line
+from .metadata import BagMetadata, count_warnings, read_metadata
+from .reindex import ZSTD_MAGIC, has_journal, lone_storage, rolled_back_copy
+from .salvage import Salvaged, salvaged_copy
 
 __all__ = ["Rosbag2LogReader"]
 
@@ -30,9 +30,9 @@ class Rosbag2LogReader(RosbagsReader):
 
     A directory without metadata.yaml (the recording was cut short) is read from its one
     SQLite storage file up to its last commit, as ``ros2 bag reindex`` would (see
-    :mod:`.rosbag2_reindex`; the input is never modified), with a warning. With
+    :mod:`.reindex`; the input is never modified), with a warning. With
     ``recover``, a damaged SQLite storage file is read row by row: the rows that read are
-    kept, and what was lost (rows, log times) is reported (:mod:`.rosbag2_salvage`).
+    kept, and what was lost (rows, log times) is reported (:mod:`.salvage`).
     """
 
     format_name = "rosbag2"

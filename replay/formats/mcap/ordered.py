@@ -24,7 +24,7 @@ from mcap.exceptions import McapError
 from mcap.records import Chunk, ChunkIndex
 from mcap.stream_reader import CRCValidationError
 
-from .mcap_checks import check_chunk_size
+from .checks import check_chunk_size
 
 __all__ = ["chunk_messages", "ordered_chunks"]
 

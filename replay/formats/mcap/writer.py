@@ -1,9 +1,9 @@
 """Writing MCAP files with ROS 2 (CDR) messages (or Foxglove schemas).
 
 Chunks are zstd-compressed by default, carry CRCs and are finished on a worker thread
-(:mod:`.mcap_chunks`); a live writer completes a chunk at least
-every :data:`~.base.FLUSH_INTERVAL_S` so that a killed writer's file keeps all but its last
-moments.
+(:mod:`.chunks`); a live writer completes a chunk at least every
+:data:`~replay.formats.base.FLUSH_INTERVAL_S` so that a killed writer's file keeps all but
+its last moments.
 """
 
 from __future__ import annotations
@@ -11,11 +11,11 @@ from __future__ import annotations
 from collections.abc import Iterable
 from pathlib import Path
 
-from .._version import VERSION
-from ..errors import LogWriteError
-from ..wire import CDR, JSON, PROTOBUF, ros2_typestore
-from .base import LogWriter, RawMessage
-from .mcap_chunks import McapChunkWriter
+from ..._version import VERSION
+from ...errors import LogWriteError
+from ...wire import CDR, JSON, PROTOBUF, ros2_typestore
+from ..base import LogWriter, RawMessage
+from .chunks import McapChunkWriter
 
 __all__ = ["COMPRESSION", "McapLogWriter"]
 
@@ -55,7 +55,8 @@ class McapLogWriter(LogWriter):
             raise LogWriteError(f"cannot write {path}: {err.strerror}") from None
         try:  # every chunk carries the CRC of its content
             self._writer = McapChunkWriter(self._file, chunk_size=chunk_size,
-                                           compression=COMPRESSION[compression])
+                                           compression=COMPRESSION[compression],
+                                           close_file=True)
             self._writer.start(profile="ros2" if profile == "ros2" else "",
                                library=f"camlog {VERSION}")
         except BaseException:  # e.g. Ctrl-C: no temporary file stays behind
@@ -104,13 +105,7 @@ class McapLogWriter(LogWriter):
         self._writer.flush()  # chunk (with CRC) to the file
 
     def _finish(self) -> None:
-        try:
-            self._writer.finish()
-        finally:
-            self._file.close()
+        self._writer.finish()
 
     def _abort(self) -> None:
-        try:
-            self._writer.abort()
-        finally:
-            self._file.close()
+        self._writer.abort()

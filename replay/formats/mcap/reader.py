@@ -1,7 +1,7 @@
 """MCAP files with ROS 2 (CDR) or ROS1 messages, through the ``mcap`` package.
 
 Files are written chunked and zstd-compressed with a summary section so that rerun,
-Foxglove and ``ros2 bag`` open them (:mod:`.mcap_writer`). A file without summary (a
+Foxglove and ``ros2 bag`` open them (:mod:`.writer`). A file without summary (a
 recording that was killed) is read by streaming through its records up to the last complete
 chunk; with ``recover``, past damaged chunks too. A chunk written twice is read once.
 """
@@ -21,13 +21,13 @@ from mcap.reader import SeekingReader
 from mcap.records import Channel, Chunk, DataEnd, Footer, Message, MessageIndex, Schema
 from mcap.stream_reader import StreamReader, breakup_chunk
 
-from ..errors import LogReadError
-from ..msgtypes import CDR, ROS1, normalize_msgtype
-from .base import LogReader, RawMessage, TopicInfo
-from .bounded import BoundedFile
-from .mcap_checks import check_chunk_size, summary_problem
-from .mcap_index import channel_spans
-from .mcap_ordered import chunk_messages, ordered_chunks
+from ...errors import LogReadError
+from ...msgtypes import CDR, ROS1, normalize_msgtype
+from ..base import LogReader, RawMessage, TopicInfo
+from ..bounded_file import BoundedFile
+from .checks import check_chunk_size, summary_problem
+from .index import channel_spans
+from .ordered import chunk_messages, ordered_chunks
 
 MAGIC = b"\x89MCAP0\r\n"
 ENCODINGS = {"cdr": CDR, "ros1": ROS1}
@@ -332,7 +332,7 @@ class McapLogReader(LogReader):
 
     def topic_spans(self) -> dict[str, tuple[int, int]] | None:
         """From the message indexes of an MCAP file with a summary (see
-        :mod:`replay.formats.mcap_index`)."""
+        :mod:`replay.formats.mcap.index`)."""
         if self._summary is None:
             return None
         try:

@@ -17,7 +17,7 @@ from rosbags.rosbag1 import Writer
 from rosbags.rosbag1.reader import RecordType
 from rosbags.rosbag1.writer import MAXSIZE, Header, WriteChunk
 
-from .chunk_worker import OrderedWorker
+from ..chunk_worker import OrderedWorker
 
 __all__ = ["ThreadedRos1Writer"]
 

@@ -1,9 +1,10 @@
 """rosbag2 storage writers that survive a killed process, plugged into ``rosbags``' writer.
 
 ``rosbags`` writes metadata.yaml, message definitions, type hashes and QoS; these classes
-store the messages. The MCAP storage is written by :mod:`.mcap_chunks` (chunks with CRCs,
-zstd-compressed when asked, finished on a worker thread), the SQLite storage commits what it
-holds at each flush and after every few megabytes instead of once at the end.
+store the messages. The MCAP storage is written by :mod:`replay.formats.mcap.chunks`
+(chunks with CRCs, zstd-compressed when asked, finished on a worker thread), the SQLite
+storage commits what it holds at each flush and after every few megabytes instead of once at
+the end.
 """
 
 from __future__ import annotations
@@ -15,8 +16,8 @@ from rosbags.interfaces import MessageDefinitionFormat
 from rosbags.rosbag2.enums import CompressionMode
 from rosbags.rosbag2.storage_sqlite3 import Sqlite3Writer
 
-from .._version import VERSION
-from .mcap_chunks import McapChunkWriter
+from ..._version import VERSION
+from ..mcap.chunks import McapChunkWriter
 
 #: an SQLite transaction is committed at least after this many bytes of messages
 SQLITE_CHUNK_BYTES = 8 * 1024 * 1024
@@ -36,7 +37,7 @@ class McapStorage:
         self._file = self.path.open("xb")
         chunks = "zstd" if compression == CompressionMode.STORAGE else ""
         self._writer = McapChunkWriter(self._file, chunk_size=self.CHUNK_SIZE,
-                                       compression=chunks)
+                                       compression=chunks, close_file=True)
         self._writer.start(profile="ros2", library=f"camlog {VERSION}")
         self._schemas: dict[str, int] = {}
         self._channels: dict[int, int] = {}  # rosbags connection id -> MCAP channel id
@@ -69,18 +70,11 @@ class McapStorage:
     def close(self, version: int, metadata: str) -> None:
         """Write the summary (with the bag metadata, as rosbag2 does) and close the file."""
         del version
-        try:
-            self._writer.add_metadata("rosbag2", {"serialized_metadata": metadata})
-            self._writer.finish()
-        finally:
-            self._file.close()
+        self._writer.finish({"rosbag2": {"serialized_metadata": metadata}})
 
     def abort(self) -> None:
         """Close without a summary."""
-        try:
-            self._writer.abort()
-        finally:
-            self._file.close()
+        self._writer.abort()
 
 
 class Sqlite3Storage(Sqlite3Writer):

@@ -27,7 +27,7 @@ from rosbags.rosbag1.reader import (
 )
 from rosbags.typesys.msg import normalize_msgtype
 
-from .bounded import BoundedFile
+from ..bounded_file import BoundedFile
 
 
 @dataclass(frozen=True)
