@@ -10,7 +10,7 @@ process wall; target <= 1.25) and each engine's time to its first finished log.
 
 from __future__ import annotations
 
-from camlog.batch.run import BatchResult, run_batch
+from camlog.batch.run import BatchResult, Engine, run_batch
 
 from .batch_speedup import batch_inputs
 from .report import emit
@@ -21,7 +21,7 @@ def main() -> None:
         runs: dict[str, BatchResult] = {}
         for engine in ("process", "ray"):
             runs[engine] = run_batch(inputs.pipeline, inputs.logs, inputs.folder / f"out_{engine}",
-                                     jobs=2, engine=engine, progress=False)
+                                     jobs=2, engine=Engine(engine), progress=False)
             assert not runs[engine].failed, runs[engine].failed
     args = inputs.args
     process, ray = runs["process"], runs["ray"]

@@ -33,6 +33,7 @@ command on a log a third as long and on the full one (flat in log length).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import tempfile
 import time
@@ -43,8 +44,10 @@ from typing import Any
 import cv2
 import numpy as np
 
-from camlog.calibrate.flow import CalibrationRun, MeasureAgain, calibrate_log
-from camlog.cli.calibrate import add_arguments, board_and_options, cameras_from
+from camlog.calibrate.flow import CalibrationRun, MeasureAgain, calibrate_log, cameras_of
+from camlog.cli.calibrate import add_arguments
+from camlog.requests.arguments import request_from_args
+from camlog.requests.calibrate import CalibrateRequest
 from recorder.record import record
 from recorder.scenario import load_scenario
 from replay import open_reader
@@ -93,23 +96,20 @@ def decode_only_s(path: Path, topics: list[str]) -> float:
     return time.perf_counter() - started
 
 
-def parse_flags(path: Path, flags: str) -> argparse.Namespace:
+def parse_flags(path: Path, flags: str) -> CalibrateRequest:
     """``camlog calibrate PATH FLAGS`` parsed as the command parses it."""
     parser = argparse.ArgumentParser()
     add_arguments(parser)
-    return parser.parse_args([str(path), *flags.split()])
+    return request_from_args(CalibrateRequest, parser.parse_args([str(path), *flags.split()]))
 
 
 def calibrate(path: Path, flags: str, out: Path, *, report: bool,
               measure_again: MeasureAgain | None = None) -> CalibrationRun:
     """``camlog calibrate PATH FLAGS`` as a function call (no printout); ``measure_again``
     as :func:`~camlog.calibrate.flow.calibrate_log` takes it."""
-    args = parse_flags(path, flags)
-    board, options = board_and_options(args)
-    return calibrate_log(path, board=board, cameras=cameras_from(args), output_dir=out,
-                         options=options, approximate_s=args.approximate, diameter_m=args.diameter,
-                         overwrite=True, progress=False, report=report,
-                         measure_again=measure_again)
+    request = dataclasses.replace(parse_flags(path, flags), output=out, overwrite=True,
+                                  progress=False, report=report)
+    return calibrate_log(request, measure_again=measure_again)
 
 
 def z_scores(run: CalibrationRun) -> list[float]:
@@ -261,7 +261,7 @@ def kept_cases(parser: argparse.ArgumentParser, args: argparse.Namespace) -> lis
 
 def run_board(case: Case, path: Path) -> Any:
     """The case's board (from its flags)."""
-    return board_and_options(parse_flags(path, case.flags))[0]
+    return parse_flags(path, case.flags).board()
 
 
 def speed(duration: float, tmp: Path) -> None:
@@ -271,8 +271,7 @@ def speed(duration: float, tmp: Path) -> None:
         path = tmp / f"speed_{scenario}.mcap"
         record(load_scenario(scenario, {"duration_s": duration, "seed": 0}), path,
                progress=False)
-        args = parse_flags(path, case.flags)
-        cameras = cameras_from(args)
+        cameras = cameras_of(parse_flags(path, case.flags))
         decode = decode_only_s(path, [f"{c}/image_raw" for c in cameras])
         started = time.perf_counter()
         calibrate(path, case.flags, tmp / "speed_out", report=True)

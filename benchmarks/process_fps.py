@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from camlog.processing.process_log import process_log
+from camlog.requests.processing import ProcessRequest
 from processors.base import Output
 from processors.red_pixels import CENTROID, COUNT, OUTPUT_VIDEO
 from processors.registry import configure, spec_of
@@ -71,7 +72,8 @@ def decode_fps(log: Path) -> float:
 
 def pipeline_fps(log: Path, out: Path, processors: list[Configured]) -> tuple[float, int]:
     """Frames per second of ``process_log`` and the output size in bytes."""
-    result = process_log(log, out, topics=[TOPIC], processors=processors, overwrite=True)
+    result = process_log(ProcessRequest(log=log, output=out, topic=(TOPIC,),
+                                        processors=tuple(processors), overwrite=True))
     return result.fps, out.stat().st_size
 
 

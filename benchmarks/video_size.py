@@ -19,6 +19,7 @@ from pathlib import Path
 
 from camlog.cli import main as camlog
 from camlog.logs.convert import convert_log
+from camlog.requests.logs import ConvertRequest
 from replay.frames.video import DEFAULT_CRF
 
 from .report import emit
@@ -48,7 +49,8 @@ def main() -> None:
         for crf in args.crf:
             out = Path(tmp) / f"h264_crf{crf}.mcap"
             started = time.perf_counter()
-            result = convert_log(raw, out, compress="h264", crf=crf, progress=False)
+            result = convert_log(ConvertRequest(input=raw, output=out, compress="h264",
+                                                crf=crf, progress=False))
             convert_s = time.perf_counter() - started
             video_mb = out.stat().st_size / 1e6
             images = result.reencoded

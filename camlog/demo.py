@@ -20,8 +20,6 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from processors.calibration.board import make_board
-from processors.calibration.options import CalibrationOptions
 from processors.registry import configure
 from recorder.record import record
 from recorder.scenario import load_scenario
@@ -31,6 +29,8 @@ from .calibrate.flow import calibrate_log
 from .cli.lean import pandas_hidden, without_pandas
 from .processing.process_log import process_log
 from .processing.resync_log import resync_log
+from .requests.calibrate import CalibrateRequest
+from .requests.processing import ProcessRequest, ResyncRequest
 
 
 @dataclass
@@ -54,9 +54,9 @@ def red_block_chain(out_dir: Path, seed: int) -> list[tuple[str, Path, str]]:
     rec = record(load_scenario("red_block", {"seed": seed}), red, overwrite=True,
                  progress=False)
     processed = out_dir / "red_block_processed.mcap"
-    proc = process_log(red, processed, topics=["/stereo_camera/left/image_raw"],
-                       processors=[configure("red_pixels"), configure("edges")],
-                       overwrite=True)
+    proc = process_log(ProcessRequest(
+        log=red, output=processed, topic=("/stereo_camera/left/image_raw",),
+        processors=(configure("red_pixels"), configure("edges")), overwrite=True))
     return [("record", red, f"{sum(rec.frames.values())} frames, {rec.wall_s:.1f} s"),
             ("process", processed, f"red pixels + edges on {proc.frames_processed} frames, "
                                    f"{proc.wall_s:.1f} s")]
@@ -83,14 +83,13 @@ def _stereo_chain(out_dir: Path, duration_s: float, seed: int, progress: bool | 
          f"{rec.wall_s:.1f} s")
 
     synced = out_dir / "stereo_synced.mcap"
-    sync = resync_log(unsynced, synced, overwrite=True)
+    sync = resync_log(ResyncRequest(log=unsynced, output=synced, overwrite=True))
     done("resync", synced, f"{sync.stats.pairs} pairs re-stamped")
 
     calibration = out_dir / "calibration"
-    cal = calibrate_log(synced, board=make_board("7x6", 0.01),
-                        cameras=["/stereo_sync/left", "/stereo_sync/right"],
-                        output_dir=calibration, options=CalibrationOptions(), overwrite=True,
-                        progress=progress)
+    cal = calibrate_log(CalibrateRequest(
+        log=synced, size="7x6", square=0.01, left="/stereo_sync/left",
+        right="/stereo_sync/right", output=calibration, overwrite=True, progress=progress))
     stereo = cal.summary.stereo
     assert stereo is not None
     fx = cal.summary.cameras[0].parameters["fx"]

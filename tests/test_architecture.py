@@ -27,6 +27,9 @@ FORBIDDEN = {
     "camlog": set(),
 }
 MAX_LINES = 400
+#: the most parameters a public function or method takes (a request or an options dataclass
+#: carries more)
+MAX_PARAMETERS = 8
 
 
 @dataclass
@@ -204,6 +207,40 @@ def undocumented(modules: dict[str, Module]) -> Iterator[str]:
                             and item.name not in inherited and ast.get_docstring(item) is None)
 
 
+def _parameters(node: ast.FunctionDef | ast.AsyncFunctionDef, *, method: bool) -> int:
+    """Positional, keyword-only, ``*args`` and ``**kwargs`` parameters (a method's first,
+    ``self`` or ``cls``, not counted)."""
+    args = node.args
+    count = len(args.posonlyargs) + len(args.args) + len(args.kwonlyargs) + \
+        (args.vararg is not None) + (args.kwarg is not None)
+    static = any(isinstance(d, ast.Name) and d.id == "staticmethod"
+                 for d in node.decorator_list)
+    return count - 1 if method and not static and (args.posonlyargs or args.args) else count
+
+
+def crowded(modules: dict[str, Module]) -> list[str]:
+    """Public module-level functions, and public methods of public classes, with more than
+    :data:`MAX_PARAMETERS` parameters."""
+    defs = ast.FunctionDef | ast.AsyncFunctionDef
+    found = []
+    for module in modules.values():
+        for node in module.tree.body:
+            if not isinstance(node, defs | ast.ClassDef) or node.name.startswith("_"):
+                continue
+            if isinstance(node, defs):
+                n = _parameters(node, method=False)
+                if n > MAX_PARAMETERS:
+                    found.append(f"{module.where}:{node.lineno} {node.name} ({n})")
+            else:
+                for item in node.body:
+                    if isinstance(item, defs) and not item.name.startswith("_"):
+                        n = _parameters(item, method=True)
+                        if n > MAX_PARAMETERS:
+                            found.append(f"{module.where}:{item.lineno} {node.name}."
+                                         f"{item.name} ({n})")
+    return found
+
+
 def _sample(**sources: str) -> dict[str, Module]:
     """Modules made from source text, named by their keyword (``a__b`` is ``a.b``)."""
     modules = {}
@@ -227,6 +264,14 @@ def test_the_checks_find_what_they_look_for() -> None:
     assert private_uses(sample) == ["camlog.c:1 imports replay.a._secret",
                                     "replay.b:3 uses replay.a._hidden"]
     assert list(undocumented(sample)) == ["camlog.c:3 run", "camlog.c:8 K.go"]
+    many = _sample(
+        camlog__m="def wide(a, b, c, d, e, f, g, *, h, i):\n    pass\n\n"
+                  "def fine(a, b, c, d, e, f, *g, **h):\n    pass\n\n"
+                  "def _hidden(a, b, c, d, e, f, g, h, i):\n    pass\n\n"
+                  "class K:\n    def go(self, a, b, c, d, e, f, g, h):\n        pass\n\n"
+                  "    def far(self, a, b, c, d, e, f, g, h, *, i):\n        pass\n",
+    )
+    assert crowded(many) == ["camlog.m:1 wide (9)", "camlog.m:14 K.far (9)"]
 
 
 def test_the_source_tree_is_read() -> None:
@@ -245,6 +290,10 @@ def test_no_import_cycles() -> None:
 
 def test_no_private_names_across_modules() -> None:
     assert private_uses(MODULES) == []
+
+
+def test_public_functions_take_few_parameters() -> None:
+    assert crowded(MODULES) == []
 
 
 def test_modules_are_small() -> None:

@@ -67,25 +67,38 @@ class BatchResult:
         return [s for s in self.statuses if s["status"] == "failed"]
 
 
+@dataclass(frozen=True)
+class Engine:
+    """Where the logs run: local processes or Ray (``name``); ``address``: an existing Ray
+    cluster (``host:port`` or ``auto``); ``cpus_per_log``: the CPUs each log's Ray task asks
+    for; ``retries``: how often a log whose worker or node died is run again."""
+
+    name: str = "process"
+    address: str | None = None
+    cpus_per_log: float = 1.0
+    retries: int = 2
+
+
 def run_batch(pipeline: Pipeline, logs: Sequence[Location], out_dir: Location, *,
-              jobs: int | None = None, engine: str = "process", progress: bool | None = None,
-              address: str | None = None, cpus_per_log: float = 1.0,
-              retries: int = 2) -> BatchResult:
-    """Run ``pipeline`` over ``logs``; statuses come back in the order of ``logs``.
+              jobs: int | None = None, engine: Engine = Engine(),
+              progress: bool | None = None) -> BatchResult:
+    """Run ``pipeline`` over ``logs`` on ``engine``; statuses come back in the order of
+    ``logs``.
 
     ``jobs``: logs at once (default 2; on an existing Ray cluster, as many as its CPUs
-    hold). ``address``: an existing Ray cluster (``host:port`` or ``auto``). ``retries``:
-    how often a log whose worker or node died is run again.
+    hold).
     """
-    if engine not in ENGINES:
-        raise UsageError(f"unknown engine {engine!r} (use {' or '.join(ENGINES)})")
+    address, cpus_per_log, retries = engine.address, engine.cpus_per_log, engine.retries
+    engine_name = engine.name
+    if engine_name not in ENGINES:
+        raise UsageError(f"unknown engine {engine_name!r} (use {' or '.join(ENGINES)})")
     if jobs is not None and jobs < 1:
         raise UsageError(f"-j must be at least 1, got {jobs}")
     if cpus_per_log <= 0:
         raise UsageError(f"--cpus-per-log must be positive, got {cpus_per_log}")
     if retries < 0:
         raise UsageError(f"--retries must be 0 or more, got {retries}")
-    if address is not None and engine != "ray":
+    if address is not None and engine_name != "ray":
         raise UsageError("--address needs --engine ray")
     logs = [found for log in logs for found in storage.expand(str(log))] \
         if any(storage.is_remote(log) for log in logs) else logs
@@ -97,7 +110,7 @@ def run_batch(pipeline: Pipeline, logs: Sequence[Location], out_dir: Location, *
             raise UsageError(f"output {out_dir} exists and is not a directory")
         out_dir.mkdir(parents=True, exist_ok=True)
     at_once = jobs or DEFAULT_JOBS
-    workers = max(1, round(cpus_per_log)) if engine == "ray" else \
+    workers = max(1, round(cpus_per_log)) if engine_name == "ray" else \
         max(1, (os.cpu_count() or 2) // at_once)
     planned = plan_jobs(pipeline, logs, out_dir, workers)
     results: dict[str, dict[str, Any]] = {}
@@ -118,7 +131,7 @@ def run_batch(pipeline: Pipeline, logs: Sequence[Location], out_dir: Location, *
                             refresh=True)
 
     try:
-        if engine == "ray":
+        if engine_name == "ray":
             from .cluster import run_on_ray
 
             run_on_ray(planned, address=address, jobs_at_once=jobs if address else at_once,
@@ -133,7 +146,7 @@ def run_batch(pipeline: Pipeline, logs: Sequence[Location], out_dir: Location, *
     statuses = [results[j.key] for j in planned]
     wall = time.perf_counter() - started
     summary_path = storage.join(out_dir, SUMMARY_FILE)
-    summary = {"pipeline": pipeline.source, "engine": engine, "address": address,
+    summary = {"pipeline": pipeline.source, "engine": engine_name, "address": address,
                "jobs": jobs, "wall_s": round(wall, 3), "logs": statuses}
     storage.write_bytes(summary_path, (json.dumps(summary, indent=1) + "\n").encode())
     return BatchResult(statuses, wall, summary_path, min(first, default=None), notes)

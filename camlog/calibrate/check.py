@@ -4,11 +4,9 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
-from processors.calibration.board import Board
 from processors.calibration.holds import Seen
 from processors.calibration.stereo import epipolar_errors, orient_right_views
 from processors.calibration.view_fit import ViewFit, fit_view, linearity_error
@@ -19,7 +17,9 @@ from replay.messages import F64
 
 from ..errors import CalibrationError, InputError, UsageError
 from ..processing.cameras import find_camera
+from ..requests.calibrate import CalibrateRequest
 from .circles import CircleSize, circle_size
+from .flow import cameras_of
 from .instants import stereo_pairs
 from .views import CameraViews, detect_views, size_hint
 
@@ -50,16 +50,18 @@ class CheckResult:
         return out
 
 
-def check_log(log: Path, *, board: Board, cameras: list[str], calibrations: list[Path],
-              approximate_s: float | None = None, diameter_m: float | None = None,
-              progress: bool | None = None, recover: bool = False) -> CheckResult:
-    """Linearity and reprojection error per view (mono), plus epipolar error (stereo).
+def check_log(request: CalibrateRequest) -> CheckResult:
+    """Linearity and reprojection error per view (mono), plus epipolar error (stereo), of the
+    request's ``calibration`` files on its log.
 
     A circle grid's detections are the centroids of its discs' images, as in ``calibrate``:
     the circles are ``diameter_m`` across (None: as the images measure them), the
     reprojection compares the detections with the discs' centroids, and the rows and the
     epipolar lines are those of the circles' centres (the detections moved by the disc
     shift at each view's fitted pose)."""
+    board, cameras = request.board(), cameras_of(request)
+    log, calibrations, recover = request.log, list(request.calibration), request.recover
+    approximate_s, diameter_m, progress = request.approximate, request.diameter, request.progress
     if len(calibrations) != len(cameras):
         raise UsageError(f"give one --calibration per camera ({len(cameras)}), "
                          f"got {len(calibrations)}")

@@ -26,8 +26,9 @@ from replay.formats.background import BackgroundWriter
 from replay.records import CalibrationSummary, Scenario
 from replay.storage import Location, local_paths
 
-from ..errors import InputError, UsageError
-from ..processing.cameras import find_camera
+from ..errors import InputError, RequestError, UsageError
+from ..processing.cameras import cameras_in, find_camera
+from ..requests.calibrate import CalibrateRequest
 from .evidence import write_evidence, write_summary
 from .instants import ViewsOfRig
 from .remeasure import remeasured_rig
@@ -43,7 +44,7 @@ from .solving import (
 from .summary import build_summary
 from .views import CameraViews, LogViews, detect_views, with_speed_limit
 
-__all__ = ["CalibrationRun", "MeasureAgain", "calibrate_log"]
+__all__ = ["CalibrationRun", "MeasureAgain", "calibrate_log", "cameras_of"]
 
 #: the views' corners given again after a first solve: (every camera's views, the rig's views,
 #: the first solve) -> the rig's views with new corners
@@ -114,41 +115,48 @@ def _write_report(reader: LogReader, folder: Path, calibrated: list[CalibratedCa
     return summary
 
 
-def calibrate_log(
-    log: Location,
-    *,
-    board: Board,
-    cameras: list[str],
-    output_dir: Path,
-    options: CalibrationOptions,
-    approximate_s: float | None = None,
-    camera_name: str | None = None,
-    max_speed_px: float | None = None,
-    diameter_m: float | None = None,
-    overwrite: bool = False,
-    workers: int | None = None,
-    progress: bool | None = None,
-    recover: bool = False,
-    report: bool = True,
-    measure_again: MeasureAgain | None = None,
-    rig: bool = False,
-) -> CalibrationRun:
-    """Calibrate one camera (``cameras=[ns]``), a stereo pair (``[left_ns, right_ns]``) or,
-    with ``rig`` or three cameras or more, a rig (every camera's file named after its
-    namespace, and rig.yaml with every camera's pose relative to the first); a circle
-    grid's circles are ``diameter_m`` across (None: measured in the images); without
-    ``report`` only the calibration files and calibration.json are written (no
-    second pass over the log, no figures). ``measure_again`` gives the views' corners again
-    after a first solve, which is then solved again (default: measured on the board plane
-    where :func:`~processors.calibration.corners.remeasures` says; an analysis may give, for
+def cameras_of(request: CalibrateRequest) -> list[str]:
+    """The cameras a request names, or the log's only camera (its raw images first: processed
+    images, masks or edges, are cameras of their own)."""
+    named = request.named_cameras
+    if named:
+        return named
+    with open_reader(request.log, recover=request.recover) as reader:
+        cameras = cameras_in(reader)
+    raw = {namespace for namespace, topic in cameras if "/image_raw" in topic}
+    spaces = sorted(raw or {namespace for namespace, _topic in cameras})
+    if len(spaces) != 1:
+        found = f"{request.log}: {', '.join(spaces) or 'none'}".replace("{", "{{").replace(
+            "}", "}}")
+        raise RequestError(CalibrateRequest, "name the camera with {camera} (or "
+                                             "{left}/{right}); camera namespaces in " + found)
+    return spaces
+
+
+def calibrate_log(request: CalibrateRequest, *, workers: int | None = None,
+                  measure_again: MeasureAgain | None = None) -> CalibrationRun:
+    """Calibrate one camera, a stereo pair (``left``/``right``) or, with ``rig`` or three
+    cameras or more, a rig (every camera's file named after its namespace, and rig.yaml with
+    every camera's pose relative to the first); a circle grid's circles are ``diameter``
+    across (None: measured in the images); without ``report`` only the calibration files and
+    calibration.json are written (no second pass over the log, no figures).
+    ``measure_again`` gives the views' corners again after a first solve, which is then
+    solved again (default: measured on the board plane where
+    :func:`~processors.calibration.corners.remeasures` says; an analysis may give, for
     instance, ideal corners)."""
+    board, options = request.board(), request.options()
+    cameras = cameras_of(request)
+    log, output_dir, recover = request.log, request.output_dir, request.recover
+    progress, report = request.progress, request.report
+    approximate_s, camera_name = request.approximate, request.camera_name
+    max_speed_px, diameter_m = request.max_chessboard_speed, request.diameter
     started = time.perf_counter()
-    as_rig = len(cameras) > 2 or (rig and len(cameras) > 1)
+    as_rig = len(cameras) > 2 or (request.is_rig and len(cameras) > 1)
     stereo_mode = len(cameras) == 2 and not as_rig
     with AtomicFolder(output_dir, output_names(stereo_mode, report=report,
                                                rig=_namespaces(log, cameras, recover=recover)
                                                if as_rig else None),
-                      overwrite=overwrite, inputs=local_paths(log)) as staged, \
+                      overwrite=request.overwrite, inputs=local_paths(log)) as staged, \
             open_reader(log, recover=recover) as reader:
         if reader.message_count == 0:
             raise InputError(f"{log} is empty (no messages)")

@@ -45,7 +45,7 @@ def run(args: argparse.Namespace) -> int:
     from pathlib import Path
 
     from ..batch.pipeline import load_pipeline
-    from ..batch.run import run_batch, summary_table
+    from ..batch.run import Engine, run_batch, summary_table
     from ..errors import UsageError
 
     pipeline = load_pipeline(Path(args.pipeline))
@@ -53,9 +53,10 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError("--address needs --engine ray")
     address = (args.address or os.environ.get("RAY_ADDRESS") or None) \
         if args.engine == "ray" else None
-    result = run_batch(pipeline, list(args.logs), args.output, jobs=args.jobs,
-                       engine=args.engine, progress=False if args.no_progress else None,
-                       address=address, cpus_per_log=args.cpus_per_log, retries=args.retries)
+    engine = Engine(args.engine, address=address, cpus_per_log=args.cpus_per_log,
+                    retries=args.retries)
+    result = run_batch(pipeline, list(args.logs), args.output, jobs=args.jobs, engine=engine,
+                       progress=False if args.no_progress else None)
     for note in result.notes:
         print(f"camlog batch: note: {note}", file=sys.stderr)
     print(summary_table(result))

@@ -7,23 +7,14 @@ import argparse
 import dataclasses
 from pathlib import Path
 
-from .args import add_recover
+from ..requests.arguments import request_from_args
+from ..requests.logs import InfoRequest
+from .args import add_request
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Register the ``info`` arguments."""
-    parser.add_argument(
-        "log", metavar="LOG", type=Path,
-        help="MCAP file, rosbag2 directory or ROS1 .bag; or a folder, to list the temporary "
-             "outputs that unfinished camlog runs left in it"
-    )
-    add_recover(parser)
-    parser.add_argument(
-        "--verify",
-        action="store_true",
-        help="read every message (checksums included) instead of the log's index, so that "
-             "damage anywhere is found",
-    )
+    add_request(parser, InfoRequest)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -37,20 +28,22 @@ def run(args: argparse.Namespace) -> int:
 
     from .args import print_warnings
 
-    if args.log.is_dir():
+    request = request_from_args(InfoRequest, args)
+    log = Path(request.log)
+    if log.is_dir():
         try:
-            detect_format(args.log)
+            detect_format(log)
         except LogFormatError as err:
-            leftovers = leftovers_in(args.log)
+            leftovers = leftovers_in(log)
             if not leftovers:
                 raise LogFormatError(f"{err}, and holds no output an unfinished camlog run "
                                      "left") from None
-            print(format_leftovers(args.log, leftovers))
+            print(format_leftovers(log, leftovers))
             return 0
-    with open_reader(args.log, recover=args.recover) as reader:
-        summary = summarize(reader, verify=args.verify)
+    with open_reader(log, recover=request.recover) as reader:
+        summary = summarize(reader, verify=request.verify)
     print(format_summary(dataclasses.replace(summary, warnings=())))
     print_warnings(summary.warnings)
-    inside = leftovers_in(args.log) if args.log.is_dir() else []
-    print_warnings(describe_leftovers(inside + leftovers_of(args.log)))
+    inside = leftovers_in(log) if log.is_dir() else []
+    print_warnings(describe_leftovers(inside + leftovers_of(log)))
     return 0

@@ -3,39 +3,15 @@
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 
-from replay.topics import RESYNC_PREFIX
-
-from .args import add_format_argument, add_overwrite, add_recover, name, number, output_path
+from ..requests.arguments import request_from_args
+from ..requests.processing import ResyncRequest
+from .args import add_request
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Register the ``resync`` arguments."""
-    p.epilog = (
-        "Pairs: |right - left| <= slop, each frame used once, as many pairs as possible, then "
-        "the smallest total stamp difference (ties to the earlier frame). Each pair is "
-        "re-stamped with the later of its two stamps and written to "
-        "PREFIX/{left,right}/{image_raw,camera_info}; PREFIX/offset_s (PointStamped, x = "
-        "right - left in s) per pair and PREFIX/stats (JSON) summarise the pairing. Every "
-        "input topic is kept."
-    )
-    p.add_argument("log", metavar="LOG", type=Path, help="input log (never modified)")
-    p.add_argument("-o", "--output", type=output_path, required=True, metavar="OUT",
-                   help="output log: .mcap, .bag or a rosbag2 directory name")
-    p.add_argument("--left", type=name, default="/unsynced/left", metavar="NS",
-                   help="left camera namespace with image_raw[/compressed] and camera_info, or "
-                        "its image topic (default /unsynced/left)")
-    p.add_argument("--right", type=name, default="/unsynced/right", metavar="NS",
-                   help="right camera namespace or its image topic (default /unsynced/right)")
-    p.add_argument("--slop", type=number(low=0.0, high=3600.0), metavar="SEC",
-                   help="largest |right - left| stamp difference of a pair "
-                        "(default: half the median frame period)")
-    p.add_argument("--out-prefix", type=name, default=RESYNC_PREFIX, metavar="NS",
-                   help=f"namespace of the re-stamped topics (default {RESYNC_PREFIX})")
-    add_format_argument(p, default_from="OUT")
-    add_overwrite(p)
-    add_recover(p)
+    add_request(p, ResyncRequest)
 
 
 def _stamps(values: list[int]) -> str:
@@ -48,10 +24,7 @@ def run(args: argparse.Namespace) -> int:
     statistics."""
     from ..processing.resync_log import resync_log
 
-    result = resync_log(
-        args.log, args.output, left=args.left, right=args.right, out_prefix=args.out_prefix,
-        slop_s=args.slop, fmt=args.format, overwrite=args.overwrite, recover=args.recover,
-    )
+    result = resync_log(request_from_args(ResyncRequest, args))
     s = result.stats
     print(f"paired {s.pairs} of {s.left_frames} left / {s.right_frames} right frames "
           f"(slop {s.slop_ns / 1e6:.3f} ms, re-stamped with the later stamp)")

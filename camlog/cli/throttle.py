@@ -7,26 +7,20 @@ decode of pixels, no re-encoding), and every other topic is copied whole.
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
+import dataclasses
 
 from processors.registry import spec_of
 
-from .args import add_format_argument, add_overwrite, add_recover
+from ..requests.arguments import request_from_args
+from ..requests.processing import ThrottleRequest
+from .args import add_request
 from .processor_args import add_processor_arguments, chosen_processors, worded
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Register the ``throttle`` arguments."""
-    p.add_argument("log", metavar="LOG", type=Path, help="input log (never modified)")
-    p.add_argument("-o", "--output", type=Path, required=True, metavar="OUT",
-                   help="output log: .mcap, .bag or a rosbag2 directory name")
-    p.add_argument("--topic", required=True, action="append", metavar="T", dest="topics",
-                   help="topic to thin (images, camera_info or other stamped messages); "
-                        "repeat it for several (each is thinned by its own stamps)")
+    add_request(p, ThrottleRequest)
     add_processor_arguments(p, [spec_of("throttle")], required=True)
-    add_format_argument(p, default_from="OUT")
-    add_overwrite(p)
-    add_recover(p)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -34,12 +28,11 @@ def run(args: argparse.Namespace) -> int:
     from ..processing.process_log import process_log
 
     spec = spec_of("throttle")
-    processors = chosen_processors(args, [spec])
+    request = dataclasses.replace(request_from_args(ThrottleRequest, args),
+                                  processors=tuple(chosen_processors(args, [spec])))
     with worded({spec.name: spec}):
-        result = process_log(args.log, args.output, topics=args.topics, processors=processors,
-                             thin=True, fmt=args.format, overwrite=args.overwrite,
-                             recover=args.recover)
+        result = process_log(request.processing())
     print(f"kept {result.frames_processed} of {result.frames_read} messages of "
-          f"{', '.join(args.topics)} in {result.wall_s:.2f} s")
+          f"{', '.join(request.topic)} in {result.wall_s:.2f} s")
     print(f"wrote {result.output}")
     return 0

@@ -10,7 +10,7 @@ compressed bytes.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -25,6 +25,8 @@ from replay.records import CalibrationSummary, ResyncStats, to_json
 from replay.topics import ResyncTopics, read_record
 
 from ..errors import GoldenError
+from ..requests.calibrate import CalibrateRequest
+from ..requests.processing import ProcessRequest, ResyncRequest
 from .artifacts import Artifacts, dumps_json
 
 __all__ = [
@@ -101,25 +103,20 @@ def calibration_numbers(summary: CalibrationSummary) -> dict[str, Any]:
 
 @dataclass(frozen=True)
 class Calibrate:
-    """``camlog calibrate`` of one camera or a pair (7x6 inner corners, 1 cm squares)."""
+    """``camlog calibrate`` as ``request`` asks (its log, output and progress set here)."""
 
     name: str
-    cameras: tuple[str, ...]
+    request: CalibrateRequest
     log: str | None = None  # another job's output log, relative to the input's folder
 
     def run(self, log: Path, folder: Path, workers: int) -> Artifacts:
         """Calibrate and keep the YAML files, the key numbers and the log summary."""
-        from processors.calibration.board import make_board
-        from processors.calibration.options import CalibrationOptions
-
         from ..calibrate.flow import calibrate_log
 
         out = folder / self.name
-        calibrate_log(
-            folder / self.log if self.log else log, board=make_board("7x6", 0.01),
-            cameras=list(self.cameras), output_dir=out, options=CalibrationOptions(),
-            overwrite=True, workers=workers, progress=False)
-        yamls = ("left.yaml", "right.yaml") if len(self.cameras) == 2 else ("ost.yaml",)
+        calibrate_log(replace(self.request, log=folder / self.log if self.log else log,
+                              output=out, overwrite=True, progress=False), workers=workers)
+        yamls = ("left.yaml", "right.yaml") if self.request.left else ("ost.yaml",)
         return {name: (out / name).read_text() for name in yamls} | {
             "calibration.json": _json(calibration_numbers(CalibrationSummary.from_json_text(
                 (out / "calibration.json").read_text()))),
@@ -129,11 +126,11 @@ class Calibrate:
 
 @dataclass(frozen=True)
 class Resync:
-    """``camlog resync``: the pair table rebuilt from the output log, its stats and summary."""
+    """``camlog resync`` as ``request`` asks: the pair table rebuilt from the output log, its
+    stats and summary."""
 
     name: str
-    left: str
-    right: str
+    request: ResyncRequest
 
     def run(self, log: Path, folder: Path, workers: int) -> Artifacts:
         """Resync and keep the pair table, the stats and the log summary."""
@@ -141,8 +138,9 @@ class Resync:
 
         output = folder / self.name / "output.mcap"
         output.parent.mkdir(parents=True, exist_ok=True)
-        resync_log(log, output, left=self.left, right=self.right, overwrite=True)
-        return {"pairs.json": _json(pair_table(log, output, self.left, self.right)),
+        resync_log(replace(self.request, log=log, output=output, overwrite=True))
+        left, right = self.request.left, self.request.right
+        return {"pairs.json": _json(pair_table(log, output, left, right)),
                 "stats.json": _json(_stats(output)),
                 "output.txt": log_summary(output)}
 
@@ -188,11 +186,12 @@ def _stats(output: Path, topics: ResyncTopics = SYNCED) -> Any:
 
 @dataclass(frozen=True)
 class Process:
-    """``camlog process`` of one topic: first and last output frames, the red centroid and
-    edge-pixel tracks per frame, and the output log's summary."""
+    """``camlog process`` as ``request`` asks, with the registry's ``processors``: first and
+    last output frames, the red centroid and edge-pixel tracks per frame, and the output
+    log's summary."""
 
     name: str
-    topic: str
+    request: ProcessRequest
     processors: tuple[str, ...]
     calibration: str | None = None  # for rectify: another job's YAML, relative to the folder
 
@@ -210,11 +209,10 @@ class Process:
         """Process and keep the output frames, tracks and the log summary."""
         from ..processing.process_log import process_log
 
-        processors = self.build(folder)
         output = folder / self.name / "output.mcap"
         output.parent.mkdir(parents=True, exist_ok=True)
-        result = process_log(log, output, topics=[self.topic], processors=processors,
-                             overwrite=True, workers=workers)
+        result = process_log(replace(self.request, log=log, output=output, overwrite=True,
+                                     workers=workers, processors=tuple(self.build(folder))))
         topics = [o.topic for o in result.outputs]
         return _frame_artifacts(output, topics) | {"output.txt": log_summary(output)}
 

@@ -32,6 +32,8 @@ from replay.records import Scenario
 from replay.topics import SCENARIO, read_record
 
 from ..errors import GoldenError
+from ..requests.calibrate import CalibrateRequest
+from ..requests.processing import ProcessRequest, ResyncRequest
 from .artifacts import (
     Artifacts,
     Difference,
@@ -114,20 +116,24 @@ class GoldenInput:
 #: and the red block
 INPUTS: tuple[GoldenInput, ...] = (
     GoldenInput("mono_checkerboard", seed=0, width=640, height=480, frames=240, jobs=(
-        Calibrate("calibrate", cameras=("/simple_camera",)),
-        Process("edges", topic="/simple_camera/image_raw", processors=("edges",)),
-        Process("rectify", topic="/simple_camera/image_raw", processors=("rectify",),
-                calibration="calibrate/ost.yaml"),
+        Calibrate("calibrate", CalibrateRequest(size="7x6", square=0.01,
+                                                camera=("/simple_camera",))),
+        Process("edges", ProcessRequest(topic=("/simple_camera/image_raw",)),
+                processors=("edges",)),
+        Process("rectify", ProcessRequest(topic=("/simple_camera/image_raw",)),
+                processors=("rectify",), calibration="calibrate/ost.yaml"),
     )),
     GoldenInput("stereo_unsynced", seed=0, width=640, height=480, frames=240, jobs=(
-        Resync("resync", left="/unsynced/left", right="/unsynced/right"),
-        Calibrate("calibrate", cameras=("/stereo_sync/left", "/stereo_sync/right"),
+        Resync("resync", ResyncRequest(left="/unsynced/left", right="/unsynced/right")),
+        Calibrate("calibrate", CalibrateRequest(size="7x6", square=0.01,
+                                                left="/stereo_sync/left",
+                                                right="/stereo_sync/right"),
                   log="resync/output.mcap"),
     )),
     GoldenInput("red_block", seed=0, width=640, height=480, frames=10, jobs=(
-        Process("left", topic="/stereo_camera/left/image_raw",
+        Process("left", ProcessRequest(topic=("/stereo_camera/left/image_raw",)),
                 processors=("red_pixels", "edges")),
-        Process("right", topic="/stereo_camera/right/image_raw",
+        Process("right", ProcessRequest(topic=("/stereo_camera/right/image_raw",)),
                 processors=("red_pixels", "edges")),
     )),
 )

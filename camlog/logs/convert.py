@@ -12,20 +12,21 @@ each topic becomes.
 from __future__ import annotations
 
 import time
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from replay.atomic import check_not_input
 from replay.errors import LogReadError, OptionError, ReplayError, TopicError
-from replay.format_names import DEFAULT_CRF, STILL_CODECS, VIDEO_CODEC_NAMES
+from replay.format_names import STILL_CODECS, VIDEO_CODEC_NAMES
 from replay.formats import format_for_output, open_reader, open_writer
 from replay.formats.base import LogReader
 from replay.messages import MSGTYPES, CameraInfo, CompressedImage, CompressedVideo, Image, Message
 from replay.progress import progress_bar
 from replay.selection import select_topics, window_ns
 from replay.wire import record_msgtype, ros2_typestore
+
+from ..requests.logs import ConvertRequest
 
 if TYPE_CHECKING:
     from replay.reencode import TopicReencoder
@@ -105,29 +106,21 @@ def _reencoders(renamed: dict[str, str], compress: str | None,
     return {t: TopicReencoder(t, compress, crf) for t in renamed}
 
 
-def convert_log(
-    input_path: Path,
-    output: Path,
-    *,
-    fmt: str | None = None,
-    topics: Sequence[str] | None = None,
-    start_s: float | None = None,
-    end_s: float | None = None,
-    compress: str | None = None,
-    decompress: bool = False,
-    profile: str = "ros2",
-    overwrite: bool = False,
-    recover: bool = False,
-    progress: bool | None = None,
-    crf: int = DEFAULT_CRF,
-) -> ConvertResult:
-    """Write the chosen topics and time window of ``input_path`` to ``output`` atomically.
+def convert_log(request: ConvertRequest) -> ConvertResult:
+    """Write the chosen topics and time window of the request's ``input`` to its ``output``
+    atomically.
 
-    ``fmt`` defaults from the output name (``.mcap``, ``.bag``, a directory for rosbag2).
+    ``format`` defaults from the output name (``.mcap``, ``.bag``, a directory for rosbag2).
     ``profile="foxglove"`` (MCAP only) stores images, camera models and video in
     Foxglove's schemas, so that Foxglove shows them in its own panels. ``crf`` is the
     video encoder's constant rate factor (``compress`` h264 or h265).
     """
+    input_path, output, fmt, topics = request.input, request.output, request.format, \
+        request.topics
+    start_s, end_s, compress, decompress = (request.start, request.end, request.compress,
+                                            request.decompress)
+    profile, overwrite, recover = request.profile, request.overwrite, request.recover
+    progress, crf = request.progress, request.crf
     started = time.perf_counter()
     check_not_input(Path(output), [Path(input_path)])
     fmt = format_for_output(Path(output), fmt)

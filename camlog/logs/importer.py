@@ -21,10 +21,11 @@ from tqdm import tqdm
 
 from replay.calibration_yaml import load_calibration
 from replay.errors import ImageFolderError, OptionError
-from replay.format_names import DEFAULT_START_NS
 from replay.formats import open_writer
 from replay.messages import CameraInfo, Image
 from replay.topics import camera_of
+
+from ..requests.logs import ImportRequest
 
 __all__ = [
     "EXTENSIONS",
@@ -171,21 +172,8 @@ def _camera_infos(paths: Sequence[Path], namespaces: Sequence[str]) -> list[Came
     return [load_calibration(path).camera_info for path in paths]
 
 
-def import_images(
-    folder: Path,
-    output: Path,
-    *,
-    camera: str | None = None,
-    rate_hz: float = 10.0,
-    stereo: bool = False,
-    camera_info: Sequence[Path] = (),
-    start_ns: int = DEFAULT_START_NS,
-    frame_id: str | None = None,
-    fmt: str | None = None,
-    overwrite: bool = False,
-    progress: bool | None = None,
-) -> ImportResult:
-    """Write the images of ``folder`` to the log ``output`` (atomically).
+def import_images(request: ImportRequest) -> ImportResult:
+    """Write the images of the request's ``folder`` to the log ``output`` (atomically).
 
     Mono: ``camera`` is a camera namespace (default ``/camera``) and the log gets
     ``{ns}/image_raw`` (+ ``{ns}/camera_info``); a name ending in a raw image topic's name
@@ -193,6 +181,11 @@ def import_images(
     ``camera`` is the rig's namespace (default ``/stereo``) and the log gets
     ``{ns}/left/image_raw`` and ``{ns}/right/image_raw`` (+ ``camera_info``).
     """
+    folder, output, camera, rate_hz = request.folder, request.output, request.camera, \
+        request.rate
+    stereo, camera_info, start_ns = request.stereo, request.camera_info, request.start_time
+    frame_id, fmt, overwrite, progress = (request.frame_id, request.format, request.overwrite,
+                                          request.progress)
     started = time.perf_counter()
     files = image_files(folder)
     skipped: list[Path] = []

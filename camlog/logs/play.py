@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import contextlib
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Protocol
@@ -30,7 +30,8 @@ from rerun_export.blueprint import REPLAY_TIME, make_blueprint
 from rerun_export.logger import LoggerOptions, SceneLogger
 from rerun_export.sink import RecordingSink
 from rerun_export.view import ExportSession, open_logs
-from rerun_export.viewer import DEFAULT_PORT, LOCALHOST
+
+from ..requests.play import PlayRequest
 
 __all__ = ["LOG_TIMES", "REPLAY_TIME", "PlayResult", "play_log"]
 
@@ -102,32 +103,19 @@ def _loops(session: ExportSession, loops: int) -> Iterator[tuple[int, RawMessage
         k += 1
 
 
-def play_log(
-    paths: Sequence[Path],
-    *,
-    rate: float = 1.0,
-    start_s: float | None = None,
-    end_s: float | None = None,
-    topics: Sequence[str] | None = None,
-    loops: int = 1,
-    output: Path | None = None,
-    spawn: bool = False,
-    connect: str | None = None,
-    bind: str = LOCALHOST,
-    port: int = DEFAULT_PORT,
-    log_time: str = "replay",
-    fmt: str | None = None,
-    overwrite: bool = False,
-    recover: bool = False,
-    options: LoggerOptions | None = None,
-    progress: bool | None = None,
-    clock: Callable[[], float] = time.monotonic,
-    sleep: Callable[[float], None] = time.sleep,
-) -> PlayResult:
-    """Replay ``paths`` (merged like ``view``) at ``rate`` x real time, ``loops`` times
-    (0: until interrupted). ``output`` ending in ``.rrd`` is a rerun recording; any other
-    output is a log (format from its name or ``fmt``). ``bind``, ``port``: where a
+def play_log(request: PlayRequest, *, options: LoggerOptions | None = None,
+             clock: Callable[[], float] = time.monotonic,
+             sleep: Callable[[float], None] = time.sleep) -> PlayResult:
+    """Replay the request's ``logs`` (merged like ``view``) at ``rate`` x real time, ``loop``
+    times (0: until interrupted). ``output`` ending in ``.rrd`` is a rerun recording; any other
+    output is a log (format from its name or ``format``). ``bind``, ``port``: where a
     spawned viewer listens."""
+    paths, rate, start_s, end_s = request.logs, request.rate, request.start, request.end
+    topics, loops, output, log_time = request.topics, request.loop, request.output, \
+        request.log_time
+    spawn, connect, bind, port = request.spawn, request.connect, request.bind, request.port
+    fmt, overwrite, recover, progress = (request.format, request.overwrite, request.recover,
+                                         request.progress)
     started = time.perf_counter()
     pacer = Pacer(rate, clock=clock, sleep=sleep)
     if loops < 0:

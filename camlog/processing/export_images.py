@@ -22,9 +22,11 @@ from replay import ReplayError, open_reader
 from replay.atomic import AtomicFolder, AtomicOutput
 from replay.frames import Color, Frame
 from replay.selection import window_ns
+from replay.storage import Location, local_paths
 from replay.wire import FRAME_TYPES
 
 from ..errors import InputError, UsageError
+from ..requests.logs import ExportRequest
 
 __all__ = ["EXPORT_FORMATS", "ExportResult", "export_images", "frame_file_name"]
 
@@ -92,7 +94,7 @@ def _check_topic(reader: Any, topic: str) -> None:
                          f"{', '.join(images) or 'none'})")
 
 
-def _frames(log: Path, topic: str, start_s: float | None, end_s: float | None, *,
+def _frames(log: Location, topic: str, start_s: float | None, end_s: float | None, *,
             every: int, recover: bool) -> tuple[int, Iterator[Frame]]:
     """(how many frames will be exported, the decoded frames: every ``every``-th)."""
     reader = open_reader(log, recover=recover)
@@ -113,11 +115,12 @@ def _frames(log: Path, topic: str, start_s: float | None, end_s: float | None, *
     return total, stream()
 
 
-def export_images(log: Path, topic: str, output: Path, *, fmt: str = "png", every: int = 1,
-                  start_s: float | None = None, end_s: float | None = None,
-                  jpeg_quality: int = 95, overwrite: bool = False, recover: bool = False,
-                  progress: bool = True) -> ExportResult:
+def export_images(request: ExportRequest) -> ExportResult:
     """Write the frames of ``topic`` as image files into ``output`` (or one MP4 there)."""
+    log, topic, output, fmt = request.log, request.topic, request.output, request.file_format
+    every, start_s, end_s = request.every, request.start, request.end
+    jpeg_quality, overwrite, recover = request.jpeg_quality, request.overwrite, request.recover
+    progress = request.progress
     if fmt not in EXPORT_FORMATS:
         raise UsageError(f"unknown export format {fmt!r} (use {', '.join(EXPORT_FORMATS)})")
     if every < 1:
@@ -136,7 +139,7 @@ def export_images(log: Path, topic: str, output: Path, *, fmt: str = "png", ever
     count = size = 0
     seen: dict[int, int] = {}
     try:
-        with AtomicFolder(output, [], overwrite=overwrite, inputs=[log]) as folder:
+        with AtomicFolder(output, [], overwrite=overwrite, inputs=local_paths(log)) as folder:
             for frame in tqdm(frames, total=total, unit="frame", desc=f"export {topic}",
                               disable=not progress, leave=False):
                 repeat = seen.get(frame.stamp_ns, 0)
@@ -165,7 +168,7 @@ def _median_fps(stamps_ns: list[int]) -> float:
     return 1e9 / period_ns if period_ns > 0 else 30.0
 
 
-def _export_video(log: Path, topic: str, output: Path, *, every: int, start_s: float | None,
+def _export_video(log: Location, topic: str, output: Path, *, every: int, start_s: float | None,
                   end_s: float | None, overwrite: bool, recover: bool,
                   progress: bool) -> ExportResult:
     """One H.264 MP4 at the median frame rate of the exported stamps (yuv420p)."""
@@ -189,7 +192,8 @@ def _export_video(log: Path, topic: str, output: Path, *, every: int, start_s: f
     total, frames = _frames(log, topic, start_s, end_s, every=every, recover=recover)
     count = 0
     try:
-        with AtomicOutput(output, overwrite=overwrite, inputs=[log], what="a video") as out:
+        with AtomicOutput(output, overwrite=overwrite, inputs=local_paths(log),
+                          what="a video") as out:
             container = av.open(str(out.temp), mode="w", format="mp4")
             try:
                 stream: Any = None

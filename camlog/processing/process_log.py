@@ -33,11 +33,12 @@ from replay.formats import LogReader, LogWriter, RawMessage, open_reader, open_w
 from replay.frames import Frame, FrameStream, decode_frame, encode_compressed
 from replay.messages import CompressedVideo, Image, Message
 from replay.records import ProcessedOutput, ProcessedOutputs
-from replay.storage import Location, local_paths
+from replay.storage import local_paths
 from replay.topics import PROCESSED
 from replay.wire import msgtype_of, serialize
 
 from ..errors import ProcessingError, UsageError
+from ..requests.processing import ProcessRequest
 from .checks import (
     IMAGE_TYPES,
     STAMPED_TYPES,
@@ -155,23 +156,9 @@ def _record(plans: Mapping[str, list[list[tuple[str, ProcessedOutput]]]],
     return ProcessedOutputs(outputs, options, VERSION)
 
 
-def process_log(
-    input_path: Location,
-    output: Path,
-    *,
-    topics: Sequence[str],
-    processors: Sequence[Configured],
-    output_ns: str | None = None,
-    compress: str | None = None,
-    drop_input: bool = False,
-    thin: bool = False,
-    max_frames: int | None = None,
-    fmt: str | None = None,
-    overwrite: bool = False,
-    workers: int | None = None,
-    recover: bool = False,
-) -> ProcessResult:
-    """Run ``processors`` over ``topics`` of ``input_path`` and write ``output`` atomically.
+def process_log(request: ProcessRequest) -> ProcessResult:
+    """Run ``processors`` over the ``topic`` list of the request's log and write its ``output``
+    atomically.
 
     The output keeps every input message (unless ``drop_input``) plus the processors'
     outputs, which carry the input frame's log time and header; output topics are planned
@@ -180,6 +167,11 @@ def process_log(
     the chosen frames, copied as stored. ``max_frames`` stops once every topic has that
     many frames (and the messages logged before them).
     """
+    input_path, output, topics = request.log, request.output, list(request.topic)
+    processors, output_ns, compress = request.processors, request.output_ns, request.compress
+    drop_input, thin, max_frames = request.drop_input, request.thin, request.max_frames
+    fmt, overwrite, workers, recover = (request.format, request.overwrite, request.workers,
+                                        request.recover)
     started = time.perf_counter()
     _check_options(processors, topics, compress, thin)
     check_not_input(output, local_paths(input_path))

@@ -32,10 +32,11 @@ from replay.messages import (
     PointStamped,
 )
 from replay.records import ResyncStats
-from replay.storage import Location, local_paths
-from replay.topics import RESYNC_PREFIX, ResyncTopics
+from replay.storage import local_paths
+from replay.topics import ResyncTopics
 
 from ..errors import InputError, SyncError
+from ..requests.processing import ResyncRequest
 from .cameras import find_camera, image_suffix
 from .checks import require_free_topics, require_messages
 
@@ -113,25 +114,17 @@ def _keys(stamps: list[int]) -> tuple[np.ndarray, list[tuple[int, int]]]:
     return sorted_ns, keys
 
 
-def resync_log(
-    input_path: Location,
-    output: Path,
-    *,
-    left: str = "/unsynced/left",
-    right: str = "/unsynced/right",
-    out_prefix: str = RESYNC_PREFIX,
-    slop_s: float | None = None,
-    fmt: str | None = None,
-    overwrite: bool = False,
-    recover: bool = False,
-) -> ResyncResult:
-    """Pair ``left``/``right`` camera namespaces of ``input_path`` and write ``output``.
+def resync_log(request: ResyncRequest) -> ResyncResult:
+    """Pair ``left``/``right`` camera namespaces of the request's log and write its ``output``.
 
-    ``slop_s`` bounds ``|right - left|`` of a pair; default half the median frame period.
+    ``slop`` (s) bounds ``|right - left|`` of a pair; default half the median frame period.
     Pairs are re-stamped with the later stamp. Every input message is kept; the output adds
     ``PREFIX/{left,right}/{image_raw,camera_info}``, ``PREFIX/offset_s``
     (``PointStamped``, x = right - left stamp in s, per pair) and ``PREFIX/stats`` (JSON).
     """
+    input_path, output, left, right = request.log, request.output, request.left, request.right
+    out_prefix, slop_s, fmt = request.out_prefix, request.slop, request.format
+    overwrite, recover = request.overwrite, request.recover
     started = time.perf_counter()
     check_not_input(output, local_paths(input_path))
     prefix = "/" + out_prefix.strip("/")

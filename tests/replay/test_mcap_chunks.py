@@ -17,6 +17,7 @@ from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_typestore
 
 from camlog.logs.convert import convert_log
+from camlog.requests.logs import ConvertRequest
 from replay import LogWriteError, open_reader
 from replay.formats.chunk_worker import OrderedWorker
 from replay.formats.mcap.chunks import McapChunkWriter
@@ -148,10 +149,10 @@ def test_ros1_to_rosbag2_in_many_chunks_reads_back(tmp_path: Path,
     source = tmp_path / "cam.mcap"
     stamps = chunked_camera_log(source, frames=60)
     bag = tmp_path / "cam.bag"
-    convert_log(source, bag, progress=False)
+    convert_log(ConvertRequest(input=source, output=bag, progress=False))
     monkeypatch.setattr(McapStorage, "CHUNK_SIZE", 8 * 1024)  # a chunk per image or two
     out = tmp_path / "cam_r2"
-    convert_log(bag, out, progress=False)
+    convert_log(ConvertRequest(input=bag, output=out, progress=False))
     with (out / "cam_r2.mcap").open("rb") as f:
         reader = SeekingReader(f, validate_crcs=True)
         summary = reader.get_summary()

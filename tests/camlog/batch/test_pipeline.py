@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from camlog.batch.pipeline import load_pipeline, parse_pipeline
+from camlog.batch.pipeline import STEPS, load_pipeline, parse_pipeline
 from camlog.errors import PipelineError
 from replay.bounded import MAX_DEPTH, MAX_FILE_BYTES
 from tests.conftest import REPO_ROOT
@@ -87,14 +87,14 @@ def test_process_keys_come_from_the_registry() -> None:
     from camlog.batch.pipeline import STEPS
     from processors.registry import PROCESSORS
 
-    keys = STEPS["process"][0]
+    keys = STEPS["process"].keys
     for spec in PROCESSORS.values():
         if spec.flag:
             assert spec.name in keys
         else:
             assert {o.name for o in spec.options} <= keys
     assert {"topic", "output_ns", "compress", "drop_input"} <= keys
-    assert STEPS["throttle"][0] == {"topic", "every", "rate"}
+    assert STEPS["throttle"].keys == {"topic", "every", "rate", "recover"}
 
 
 @pytest.mark.parametrize(("options", "chosen"), [
@@ -162,3 +162,26 @@ def test_a_pipeline_file_of_many_megabytes_is_refused(tmp_path: Path) -> None:
     assert result.returncode == 1
     (line,) = result.stderr.splitlines()
     assert f"pipeline file {path} is larger than 4 MiB" in line, line
+
+
+def test_the_readme_and_the_docstring_list_every_step_and_its_keys() -> None:
+    import camlog.batch.pipeline
+    from camlog.batch.steps import keys_lines, keys_table
+
+    readme = (REPO_ROOT / "README.md").read_text()
+    assert "\n".join(keys_table()) in readme, "README: paste camlog.batch.steps.keys_table()"
+    doc = camlog.batch.pipeline.__doc__ or ""
+    assert "\n".join(keys_lines()) in doc, "pipeline.py: paste camlog.batch.steps.keys_lines()"
+    for step in STEPS:
+        assert f"| `{step}` |" in readme and f"- {step}: " in doc
+
+
+def test_a_request_error_found_when_the_step_runs_names_the_key(tmp_path: Path) -> None:
+    from camlog.batch.pipeline import run_step
+
+    (step,) = parse_pipeline({"steps": [{"run": "calibrate", "size": "7x6", "square": 0.01,
+                                         "diameter": 0.005}]}, "p.toml").steps
+    with pytest.raises(PipelineError) as err:
+        run_step(step, tmp_path / "never_read.mcap", tmp_path / "out", 1)
+    assert str(err.value) == ("calibrate: diameter belongs to circle grids (pattern circles "
+                              "or acircles)")

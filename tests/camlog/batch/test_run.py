@@ -10,7 +10,7 @@ from pathlib import Path
 import pytest
 
 from camlog.batch.pipeline import load_pipeline
-from camlog.batch.run import run_batch
+from camlog.batch.run import Engine, run_batch
 from camlog.cli import main
 
 SCENARIOS = Path(__file__).resolve().parents[3] / "datasets" / "scenarios"
@@ -121,7 +121,7 @@ def test_ray_engine_gives_the_same_results(logs: list[Path], pipeline: Path,
     local = run_batch(load_pipeline(pipeline), logs, tmp_path / "local", jobs=2,
                       progress=False)
     ray_run = run_batch(load_pipeline(pipeline), logs, tmp_path / "ray", jobs=2,
-                        engine="ray", progress=False)
+                        engine=Engine("ray"), progress=False)
     assert listing(REAL_HOME / ".ray") == before
     assert Path.home() == temporary_home
     assert (temporary_home / ".ray" / "auth_token").is_file()

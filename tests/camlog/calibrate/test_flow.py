@@ -12,9 +12,8 @@ import pytest
 from camlog.calibrate.flow import calibrate_log
 from camlog.calibrate.instants import ViewsOfRig
 from camlog.calibrate.views import CameraViews
-from processors.calibration.board import Board
+from camlog.requests.calibrate import CalibrateRequest
 from processors.calibration.joint import JointResult
-from processors.calibration.options import CalibrationOptions
 
 
 def test_corners_given_again_are_solved_again(mono_calibration_log: Path,
@@ -33,9 +32,10 @@ def test_corners_given_again_are_solved_again(mono_calibration_log: Path,
         return ViewsOfRig(views, rig.frames_of, rig.pairs, rig.candidates,
                           rig.frame_scatter_px)
 
-    run = calibrate_log(log, board=Board(7, 6, 0.01), cameras=["/simple_camera"],
-                        output_dir=tmp_path / "cal", options=CalibrationOptions(),
-                        progress=False, report=False, measure_again=stretched)
+    run = calibrate_log(CalibrateRequest(log=log, size="7x6", square=0.01,
+                                         camera=("/simple_camera",), output=tmp_path / "cal",
+                                         progress=False, report=False),
+                        measure_again=stretched)
     assert len(first) == 1
     before, after = first[0].models[0], run.cameras[0].solution.result.model
     assert after.fx / before.fx == pytest.approx(1.001, abs=2e-4)
@@ -52,9 +52,9 @@ def test_corners_given_again_are_solved_again(mono_calibration_log: Path,
 def test_a_pinhole_chessboard_is_measured_once(mono_calibration_log: Path,
                                                 tmp_path: Path) -> None:
     log = mono_calibration_log.parent.parent / "mono.mcap"
-    run = calibrate_log(log, board=Board(7, 6, 0.01), cameras=["/simple_camera"],
-                        output_dir=tmp_path / "cal", options=CalibrationOptions(),
-                        progress=False, report=False)
+    run = calibrate_log(CalibrateRequest(log=log, size="7x6", square=0.01,
+                                         camera=("/simple_camera",), output=tmp_path / "cal",
+                                         progress=False, report=False))
     assert run.solved.measured_again is None
     evidence = run.summary.cameras[0].evidence
     assert evidence is not None and evidence.measured_again is None

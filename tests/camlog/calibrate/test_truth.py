@@ -10,8 +10,8 @@ import pytest
 
 from camlog.calibrate.flow import CalibrationRun, calibrate_log
 from camlog.golden.run import golden_dir
+from camlog.requests.calibrate import CalibrateRequest
 from processors.calibration.board import Board
-from processors.calibration.options import CalibrationOptions
 from processors.calibration.rotation import rigid_fit
 from processors.calibration.uncertainty import error_against
 from replay import open_reader
@@ -27,9 +27,9 @@ BOARD = Board(7, 6, 0.01)
 
 @pytest.fixture(scope="module")
 def run(tmp_path_factory: pytest.TempPathFactory) -> CalibrationRun:
-    return calibrate_log(LOG, board=BOARD, cameras=[NAMESPACE],
-                         output_dir=tmp_path_factory.mktemp("truth") / "out",
-                         options=CalibrationOptions(), progress=False, report=False)
+    return calibrate_log(CalibrateRequest(
+        log=LOG, size="7x6", square=0.01, camera=(NAMESPACE,),
+        output=tmp_path_factory.mktemp("truth") / "out", progress=False, report=False))
 
 
 def logged_truth(path: Path) -> tuple[Scenario, dict[int, np.ndarray]]:

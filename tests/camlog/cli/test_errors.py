@@ -32,7 +32,7 @@ def test_one_line_per_error_tree(tmp_path: Path, capsys: pytest.CaptureFixture[s
 def test_camlog_errors_form_one_tree() -> None:
     leaves = [errors.InputError, errors.UsageError, errors.CalibrationError,
               errors.ProcessingError, errors.SyncError, errors.PipelineError,
-              errors.GoldenError, errors.ClusterError]
+              errors.GoldenError, errors.ClusterError, errors.RequestError]
     assert all(issubclass(leaf, errors.CamlogError) for leaf in leaves)
     assert sorted(errors.__all__) == sorted([errors.CamlogError.__name__,
                                              *(leaf.__name__ for leaf in leaves)])

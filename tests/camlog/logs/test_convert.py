@@ -10,6 +10,7 @@ from rosbags.highlevel import AnyReader
 from rosbags.typesys import Stores, get_typestore
 
 from camlog.logs.convert import convert_log
+from camlog.requests.logs import ConvertRequest
 from replay import (
     CompressedImage,
     Image,
@@ -53,8 +54,8 @@ def test_round_trip_through_every_format_is_byte_exact(
     for source in (sample_log, red_processed_log):
         middle = tmp_path / f"{source.stem}_{OUTPUT_NAMES[fmt]}"
         back = tmp_path / f"{source.stem}_back.mcap"
-        there = convert_log(source, middle, fmt=fmt, progress=False)
-        convert_log(middle, back, progress=False)
+        there = convert_log(ConvertRequest(input=source, output=middle, format=fmt, progress=False))
+        convert_log(ConvertRequest(input=middle, output=back, progress=False))
         original = raw_messages(source)
         assert there.messages == len(original) and there.reencoded == 0
         # CDR -> ROS1 -> CDR (rosbags) is byte-exact for camlog's messages as well
@@ -65,9 +66,9 @@ def test_round_trip_through_every_format_is_byte_exact(
 
 def test_rerun_reads_converted_mcap_logs(sample_log: Path, tmp_path: Path) -> None:
     bag = tmp_path / "bag2"
-    convert_log(sample_log, bag, fmt="rosbag2", progress=False)
+    convert_log(ConvertRequest(input=sample_log, output=bag, format="rosbag2", progress=False))
     back = tmp_path / "back.mcap"
-    convert_log(bag, back, progress=False)
+    convert_log(ConvertRequest(input=bag, output=back, progress=False))
     for mcap in (back, bag / "bag2.mcap"):
         done = rerun_cli("mcap", "convert", str(mcap), "-o", str(tmp_path / "x.rrd"),
                          cwd=tmp_path)
@@ -79,8 +80,9 @@ def test_rerun_reads_converted_mcap_logs(sample_log: Path, tmp_path: Path) -> No
 
 def test_topics_and_time_window(red_processed_log: Path, tmp_path: Path) -> None:
     out = tmp_path / "part.bag"
-    convert_log(red_processed_log, out, topics=["/stereo_camera/left/*"], start_s=0.2,
-                end_s=0.4, progress=False)
+    convert_log(ConvertRequest(input=red_processed_log, output=out,
+                               topics=["/stereo_camera/left/*"], start=0.2, end=0.4,
+                               progress=False))
     got = raw_messages(out)
     with open_reader(red_processed_log) as reader:
         start = reader.start_ns
@@ -96,7 +98,8 @@ def test_topics_and_time_window(red_processed_log: Path, tmp_path: Path) -> None
 
 def test_compress_png_is_lossless_and_renames(red_log: Path, tmp_path: Path) -> None:
     packed = tmp_path / "png.mcap"
-    result = convert_log(red_log, packed, compress="png", progress=False)
+    result = convert_log(ConvertRequest(input=red_log, output=packed, compress="png",
+                                        progress=False))
     assert result.renamed == {f"/stereo_camera/{s}/image_raw": f"/stereo_camera/{s}/image_raw"
                               "/compressed" for s in ("left", "right")}
     with open_reader(packed) as reader:
@@ -104,7 +107,7 @@ def test_compress_png_is_lossless_and_renames(red_log: Path, tmp_path: Path) -> 
             "sensor_msgs/msg/CompressedImage"
         assert "/stereo_camera/left/image_raw" not in reader.topics
     unpacked = tmp_path / "raw.mcap"
-    convert_log(packed, unpacked, decompress=True, progress=False)
+    convert_log(ConvertRequest(input=packed, output=unpacked, decompress=True, progress=False))
     with open_reader(red_log) as a, open_reader(unpacked) as b:
         topics = ["/stereo_camera/left/image_raw"]
         before = [r.message for r in a.messages(topics)]
@@ -117,7 +120,7 @@ def test_compress_jpeg_and_its_limits(tmp_path: Path) -> None:
     gray = np.tile(np.arange(64, dtype=np.uint8) * 4, (48, 1))
     write_log(log, [("/a/image_raw", T0_NS, Image(T0_NS, "a", "mono8", gray))])
     out = tmp_path / "jpeg.mcap"
-    convert_log(log, out, compress="jpeg", progress=False)
+    convert_log(ConvertRequest(input=log, output=out, compress="jpeg", progress=False))
     with open_reader(out) as reader:
         (record,) = reader.messages()
     assert isinstance(record.message, CompressedImage) and "jpeg" in record.message.format
@@ -125,7 +128,8 @@ def test_compress_jpeg_and_its_limits(tmp_path: Path) -> None:
     write_log(deep, [("/d/image_raw", T0_NS, Image(T0_NS, "d", "mono16",
                                                    gray.astype(np.uint16) * 200))])
     # JPEG cannot hold 16 bits: that topic goes to lossless PNG instead, with a warning
-    result = convert_log(deep, tmp_path / "deep_jpeg.mcap", compress="jpeg", progress=False)
+    result = convert_log(ConvertRequest(input=deep, output=tmp_path / "deep_jpeg.mcap",
+                                        compress="jpeg", progress=False))
     assert result.warnings == ["/d/image_raw: jpeg cannot hold its images losslessly; "
                                "stored as png"]
     with open_reader(tmp_path / "deep_jpeg.mcap") as reader:
@@ -133,14 +137,16 @@ def test_compress_jpeg_and_its_limits(tmp_path: Path) -> None:
     assert record.topic == "/d/image_raw/compressed" and record.message.source == "png"
     assert np.array_equal(record.message.pixels, gray.astype(np.uint16) * 200)
     both = tmp_path / "both.mcap"
-    convert_log(log, both, compress="png", progress=False)
+    convert_log(ConvertRequest(input=log, output=both, compress="png", progress=False))
     write_log(tmp_path / "two.mcap", [
         ("/a/image_raw", T0_NS, Image(T0_NS, "a", "mono8", gray)),
         ("/a/image_raw/compressed", T0_NS + 1, raw_compressed(both))])
     with pytest.raises(TopicError, match="two /a/image_raw/compressed topics"):
-        convert_log(tmp_path / "two.mcap", tmp_path / "c.mcap", compress="png", progress=False)
+        convert_log(ConvertRequest(input=tmp_path / "two.mcap", output=tmp_path / "c.mcap",
+                                   compress="png", progress=False))
     with pytest.raises(OptionError, match="exclude each other"):
-        convert_log(log, tmp_path / "x.mcap", compress="png", decompress=True, progress=False)
+        convert_log(ConvertRequest(input=log, output=tmp_path / "x.mcap", compress="png",
+                                   decompress=True, progress=False))
 
 
 def raw_compressed(path: Path) -> CompressedImage:
@@ -155,9 +161,10 @@ def test_damaged_inputs(tmp_path: Path) -> None:
     stamps = chunked_camera_log(log)
     damaged_from = corrupt_middle_chunk(log)
     with pytest.raises(LogReadError, match="corrupt"):
-        convert_log(log, tmp_path / "out.bag", progress=False)
+        convert_log(ConvertRequest(input=log, output=tmp_path / "out.bag", progress=False))
     assert not (tmp_path / "out.bag").exists() and temp_outputs(tmp_path) == []
-    result = convert_log(log, tmp_path / "out.bag", recover=True, progress=False)
+    result = convert_log(ConvertRequest(input=log, output=tmp_path / "out.bag", recover=True,
+                                        progress=False))
     intact = sum(1 for s in stamps if s < damaged_from)
     (skipped,) = [w for w in result.warnings if "skipped the damaged chunk" in w]
     lost = int(skipped.split(": ")[-1].split()[0])  # "...: N messages lost, log times ..."
@@ -167,11 +174,13 @@ def test_damaged_inputs(tmp_path: Path) -> None:
 
 def test_bad_arguments(red_log: Path, tmp_path: Path) -> None:
     with pytest.raises(OutputError, match="is the input"):
-        convert_log(red_log, red_log, progress=False)
+        convert_log(ConvertRequest(input=red_log, output=red_log, progress=False))
     with pytest.raises(LogFormatError, match="cannot tell the log format"):
-        convert_log(red_log, tmp_path / "out.txt", progress=False)
+        convert_log(ConvertRequest(input=red_log, output=tmp_path / "out.txt", progress=False))
     with pytest.raises(LogFormatError, match="unknown log format"):
-        convert_log(red_log, tmp_path / "out", fmt="hdf5", progress=False)
+        convert_log(ConvertRequest(input=red_log, output=tmp_path / "out", format="hdf5",
+                                   progress=False))
     with pytest.raises(OptionError, match="--end"):
-        convert_log(red_log, tmp_path / "o.mcap", start_s=2, end_s=1, progress=False)
+        convert_log(ConvertRequest(input=red_log, output=tmp_path / "o.mcap", start=2, end=1,
+                                   progress=False))
     assert sorted(p.name for p in tmp_path.iterdir()) == []

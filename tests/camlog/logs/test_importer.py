@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from camlog.logs.importer import import_images, natural_key, stereo_pairs
+from camlog.requests.logs import ImportRequest
 from replay import CameraInfo, Image, ImageFolderError, OptionError, open_reader
 from replay.calibration_yaml import save_calibration
 from replay.camera import CameraModel
@@ -43,7 +44,8 @@ def test_every_file_kind_keeps_its_pixels(tmp_path: Path) -> None:
         assert cv2.imwrite(str(folder / name), array)
     (folder / "notes.txt").write_text("not an image")
     out = tmp_path / "log.mcap"
-    result = import_images(folder, out, camera="/cam/image_raw", rate_hz=20.0, progress=False)
+    result = import_images(ImportRequest(folder=folder, output=out, camera="/cam/image_raw",
+                                         rate=20.0, progress=False))
     got = images(out, "/cam/image_raw")
     assert result.frames == 6 and result.topics == ["/cam/image_raw"]
     assert [m.stamp_ns for m in got] == [DEFAULT_START_NS + i * 50_000_000 for i in range(6)]
@@ -69,8 +71,8 @@ def test_stereo_pairs_share_stamps_and_camera_info(tmp_path: Path) -> None:
         calibrations.append(tmp_path / f"{side}.yaml")
         save_calibration(calibrations[-1], info, camera_name=side)
     out = tmp_path / "stereo_bag"
-    result = import_images(folder, out, stereo=True, camera="/rig", camera_info=calibrations,
-                           start_ns=5, progress=False)
+    result = import_images(ImportRequest(folder=folder, output=out, stereo=True, camera="/rig",
+                                         camera_info=calibrations, start_time=5, progress=False))
     assert [p.name for p in result.skipped] == ["left0099.png"]
     left, right = images(out, "/rig/left/image_raw"), images(out, "/rig/right/image_raw")
     assert [m.stamp_ns for m in left] == [m.stamp_ns for m in right] == [5, 100_000_005,
@@ -93,26 +95,26 @@ def test_stereo_pairing_by_suffix() -> None:
 def test_bad_folders(tmp_path: Path) -> None:
     out = tmp_path / "out.mcap"
     with pytest.raises(ImageFolderError, match="does not exist"):
-        import_images(tmp_path / "missing", out, progress=False)
+        import_images(ImportRequest(folder=tmp_path / "missing", output=out, progress=False))
     empty = tmp_path / "empty"
     empty.mkdir()
     (empty / "readme.md").write_text("x")
     with pytest.raises(ImageFolderError, match="has no image files"):
-        import_images(empty, out, progress=False)
+        import_images(ImportRequest(folder=empty, output=out, progress=False))
     bad = tmp_path / "bad"
     bad.mkdir()
     cv2.imwrite(str(bad / "a1.png"), pattern(0, (8, 8)))
     (bad / "a2.png").write_bytes(b"\x89PNG broken")
     with pytest.raises(ImageFolderError, match=r"a2\.png: not a readable image"):
-        import_images(bad, out, progress=False)
+        import_images(ImportRequest(folder=bad, output=out, progress=False))
     sizes = tmp_path / "sizes"
     sizes.mkdir()
     cv2.imwrite(str(sizes / "a1.png"), pattern(0, (8, 8)))
     cv2.imwrite(str(sizes / "a2.png"), pattern(0, (9, 8)))
     with pytest.raises(ImageFolderError, match=r"a2\.png is 8x9, but .* 8x8"):
-        import_images(sizes, out, progress=False)
+        import_images(ImportRequest(folder=sizes, output=out, progress=False))
     with pytest.raises(ImageFolderError, match="no left\\*/right\\* file pairs"):
-        import_images(sizes, out, stereo=True, progress=False)
+        import_images(ImportRequest(folder=sizes, output=out, stereo=True, progress=False))
     with pytest.raises(OptionError, match="--rate"):
-        import_images(sizes, out, rate_hz=0.0, progress=False)
+        import_images(ImportRequest(folder=sizes, output=out, rate=0.0, progress=False))
     assert not out.exists() and temp_outputs(out.parent) == []

@@ -8,6 +8,7 @@ from pathlib import Path
 import pytest
 
 from camlog.logs.play import play_log
+from camlog.requests.play import PlayRequest
 from replay import OptionError, open_reader
 from tests.rrd import load_rrd
 
@@ -21,7 +22,7 @@ def test_pacing_into_a_log(red_log: Path, tmp_path: Path) -> None:
     out = tmp_path / "played.mcap"
     before_ns = time.time_ns()
     started = time.perf_counter()
-    result = play_log([red_log], rate=2.0, output=out, progress=False)
+    result = play_log(PlayRequest(logs=[red_log], rate=2.0, output=out, progress=False))
     wall = time.perf_counter() - started
     source = raw(red_log)
     span = (source[-1][1] - source[0][1]) / 1e9
@@ -38,8 +39,9 @@ def test_pacing_into_a_log(red_log: Path, tmp_path: Path) -> None:
 
 def test_original_log_time_and_loops(red_log: Path, tmp_path: Path) -> None:
     out = tmp_path / "looped.bag"
-    result = play_log([red_log], rate=20.0, loops=2, output=out, log_time="original",
-                      topics=["/stereo_camera/left/image_raw"], progress=False)
+    result = play_log(PlayRequest(logs=[red_log], rate=20.0, loop=2, output=out,
+                                  log_time="original", topics=["/stereo_camera/left/image_raw"],
+                                  progress=False))
     assert result.messages == 40 and result.loops == 2
     source = raw(red_log)
     first = [t for topic, t, _ in source if topic == "/stereo_camera/left/image_raw"]
@@ -50,7 +52,8 @@ def test_original_log_time_and_loops(red_log: Path, tmp_path: Path) -> None:
 def test_play_into_an_rrd(red_processed_log: Path, tmp_path: Path) -> None:
     out = tmp_path / "played.rrd"
     started = time.perf_counter()
-    result = play_log([red_processed_log], rate=8.0, output=out, loops=2, progress=False)
+    result = play_log(PlayRequest(logs=[red_processed_log], rate=8.0, output=out, loop=2,
+                                  progress=False))
     assert time.perf_counter() - started >= 2 * result.log_span_s / 8
     rec = load_rrd(out)
     assert rec.blueprints == 1
@@ -63,6 +66,6 @@ def test_play_into_an_rrd(red_processed_log: Path, tmp_path: Path) -> None:
 
 def test_play_needs_a_destination(red_log: Path) -> None:
     with pytest.raises(OptionError, match="choose where to play"):
-        play_log([red_log], progress=False)
+        play_log(PlayRequest(logs=[red_log], progress=False))
     with pytest.raises(OptionError, match="--rate"):
-        play_log([red_log], rate=0, output=Path("x.mcap"), progress=False)
+        play_log(PlayRequest(logs=[red_log], rate=0, output=Path("x.mcap"), progress=False))
