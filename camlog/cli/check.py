@@ -18,8 +18,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         "explains it; cameras that see a board (--size, --square) by its reprojection "
         "error. A window is flagged when its metric passes a limit set by the log's own "
         "window-to-window noise and the calibration's uncertainty (--threshold replaces it). "
-        "Writes OUTDIR/check.csv, OUTDIR/report.md and one PNG per log; prints one line per "
-        "log: clean, or drifted from when and by how much.")
+        "Writes OUTDIR/check.csv, OUTDIR/report.md, one PNG per log and OUTDIR/check.rrd; "
+        "prints one line per log: clean, drifted from when and by how much, or not judged "
+        "and why. Exit status: 0 every log clean, 3 a log drifted, 4 none drifted but one "
+        "could not be judged (too few windows, nothing checkable), 1 an error, 2 a usage "
+        "error.")
     p.add_argument("logs", nargs="+", metavar="LOG", help="logs to check (paths or URIs)")
     p.add_argument("-o", "--output", type=Path, default=Path("check"), metavar="OUTDIR",
                    help="report folder (default ./check)")
@@ -45,10 +48,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Check every log, write the report and print one line per log."""
+    """Check every log, write the report and print one line per log; the exit status says
+    whether any drifted (:func:`camlog.check.flow.exit_status`)."""
     from processors.calibration.board import make_board
 
-    from ..check.flow import CheckOptions, check_log
+    from ..check.flow import CheckOptions, check_log, exit_status
     from ..check.report import write_report
     from ..errors import UsageError
 
@@ -64,5 +68,6 @@ def run(args: argparse.Namespace) -> int:
         print(checked.summary(), flush=True)
         checks.append(checked)
     write_report(checks, args.output)
-    print(f"wrote {args.output / 'check.csv'} and {args.output / 'report.md'}")
-    return 0
+    print(f"wrote {args.output / 'check.csv'}, {args.output / 'report.md'} and "
+          f"{args.output / 'check.rrd'}")
+    return exit_status(checks)
