@@ -13,11 +13,12 @@ from .args import number, positive
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Register the ``check`` arguments."""
     p.epilog = (
-        "Stereo pairs are checked by the vertical error of natural features matched across "
-        "the rectified pair and the right camera's rotation relative to the left that "
-        "explains it; cameras that see a board (--size, --square) by its reprojection "
-        "error. A window is flagged when its metric passes a limit set by the log's own "
-        "window-to-window noise and the calibration's uncertainty (--threshold replaces it). "
+        "Stereo pairs are checked by the right camera's rotation relative to the left that "
+        "explains the vertical error of natural features matched across the rectified "
+        "pair; cameras that see a board (--size, --square) by its reprojection error. A "
+        "pair is flagged from the window where its rotation, from there on, passes 5 "
+        "sigmas of the log's own noise and the calibration's uncertainty; a board's window "
+        "when its error passes their median by as much (--threshold replaces the limit). "
         "Writes OUTDIR/check.csv, OUTDIR/report.md, one PNG per log and OUTDIR/check.rrd; "
         "prints one line per log: clean, drifted from when and by how much, or not judged "
         "and why. Exit status: 0 every log clean, 3 a log drifted, 4 none drifted but one "
