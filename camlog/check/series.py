@@ -129,7 +129,7 @@ def stereo_series(check: Checkable, matches: list[list[PairMatches]],
                       _flags(metrics["vertical_error_px"], threshold, unjudged), unjudged)
     floor_deg = math.degrees(MIN_ERROR_PX / float(right.p[1, 1]))
     metrics["drift_sigmas"], onset = drift_sigmas(metrics, check.rotation_std_deg,
-                                                   floor_deg)
+                                                  floor_deg)
     flagged = [not unjudged and onset is not None and index >= onset
                for index in range(len(matches))]
     return Series(check.name, "stereo", metrics, "drift_sigmas", NOISE_SIGMAS, flagged,
@@ -137,7 +137,7 @@ def stereo_series(check: Checkable, matches: list[list[PairMatches]],
 
 
 def drift_sigmas(metrics: dict[str, list[float]], calibration_std_deg: float,
-                  floor_deg: float) -> tuple[list[float], int | None]:
+                 floor_deg: float) -> tuple[list[float], int | None]:
     """For each window ``k`` the mean rotation of windows ``k..`` (to the log's end) from
     the calibration, in its sigmas, leaving out the one window of them that is furthest
     from the calibration ``(W,)`` (NaN where window ``k`` has no value), and the window
