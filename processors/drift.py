@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import cv2
 import numpy as np
+import numpy.typing as npt
 
 from replay.camera import CameraModel
 from replay.messages import F64, CameraInfo
@@ -41,6 +42,11 @@ LK_MIN_EIGEN = 1e-3
 #: least-squares rounds of the rotation fit, and the residual (robust sigmas) a match may
 #: have to take part in the next one
 REFITS, REJECT_SIGMAS = 3, 3.0
+#: the fit's start: rotations through two matches each (seeded, so a check repeats), and the
+#: vertical disparity (px) within which a match agrees with one
+HYPOTHESES, AGREE_PX = 400, 0.5
+#: the least residual sigma a view is given (px): a few matches can agree by chance
+MIN_SIGMA_PX = 0.02
 #: consistent with a normal distribution: sigma = MAD_TO_SIGMA * median absolute deviation
 MAD_TO_SIGMA = 1.4826
 
@@ -115,13 +121,16 @@ class StereoMatcher:
 class RotationFit:
     """The small rotation of the right camera that explains a set of vertical disparities:
     ``pitch_rad`` about its x axis and ``roll_rad`` about its z axis (its optical frame as
-    calibrated), the median absolute vertical disparity left after the fit (what the pair
-    would show were it calibrated) and the matches used."""
+    calibrated), their standard errors (from the residuals), the median absolute vertical
+    disparity left after the fit (what the pair would show were it calibrated) and the
+    matches used."""
 
     pitch_rad: float
     roll_rad: float
     clean_px: float
     matches: int
+    pitch_std_rad: float = math.nan
+    roll_std_rad: float = math.nan
 
     @property
     def angle_deg(self) -> float:
@@ -129,17 +138,24 @@ class RotationFit:
         return math.degrees(math.hypot(self.pitch_rad, self.roll_rad))
 
 
-def fit_rotation(matches: PairMatches, *, p_rect: F64, rect_from_right: F64) -> RotationFit:
-    """Least-squares pitch and roll of the right camera from its matches' vertical
+def fit_rotation(matches: PairMatches, *, p_rect: F64, rect_from_right: F64,
+                 views: npt.NDArray[np.int64] | None = None) -> RotationFit:
+    """Weighted least-squares pitch and roll of the right camera from its matches' vertical
     disparities (outliers beyond ``REJECT_SIGMAS`` robust sigmas left out).
 
     ``p_rect`` (3, 4) is the rectified right camera's projection (its ``P``),
     ``rect_from_right`` (3, 3) its rectification ``R``: the rotation is fitted about the
-    rectified axes and turned back into the right camera's own frame."""
+    rectified axes and turned back into the right camera's own frame. ``views`` ``(N,)``
+    names the pair of images each match comes from (default: one): each view's matches are
+    weighted by ``1 / sigma_view²``, its own residuals' robust sigma, so that a view whose
+    features are poorly placed (a board seen edge-on) counts for less than a sharp one."""
     if p_rect.shape != (3, 4) or rect_from_right.shape != (3, 3):
         raise ValueError(f"p_rect must be (3, 4) and rect_from_right (3, 3), got "
                          f"{p_rect.shape} and {rect_from_right.shape}")
     count = len(matches.dy_px)
+    views = np.zeros(count, np.int64) if views is None else np.asarray(views, np.int64)
+    if views.shape != (count,):
+        raise ValueError(f"views must be ({count},), got {views.shape}")
     if count < 3:
         return RotationFit(math.nan, math.nan, math.nan, count)
     f_px, cx, cy = float(p_rect[1, 1]), float(p_rect[0, 2]), float(p_rect[1, 2])
@@ -147,22 +163,64 @@ def fit_rotation(matches: PairMatches, *, p_rect: F64, rect_from_right: F64) -> 
     y = (matches.right_px[:, 1] - cy) / f_px
     design = f_px * np.column_stack([1.0 + y * y, -x])
     dy = matches.dy_px
-    # a robust start, pitch alone (the median), then least squares on the matches within
-    # REJECT_SIGMAS robust sigmas of the previous fit: features on occluding edges, seen
-    # against different backgrounds by the two cameras, are not points of the scene
-    solution = np.array([float(np.median(dy / design[:, 0])), 0.0])
+    # the matches that agree with a rotation through two of them, then least squares on
+    # those within REJECT_SIGMAS robust sigmas (of their view's agreeing ones) of the
+    # previous fit: features on occluding edges, seen against different backgrounds by the
+    # two cameras, are not points of the scene, and the corners of a repeating pattern (a
+    # checkerboard) matched one period off agree among themselves, frame by frame, enough
+    # to pull a median
+    residual = dy - design @ _consensus(design, dy)
+    used = np.abs(residual) <= AGREE_PX
     for _ in range(REFITS):
-        residual = dy - design @ solution
-        sigma = MAD_TO_SIGMA * float(np.median(np.abs(residual - np.median(residual))))
-        used = np.abs(residual) <= max(REJECT_SIGMAS * sigma, 1e-6)
         if used.sum() < 3:
             return RotationFit(math.nan, math.nan, math.nan, count)
-        solution = np.linalg.lstsq(design[used], dy[used], rcond=None)[0]
-    residual = dy - design @ solution
-    rotation_rect = np.array([solution[0], 0.0, solution[1]])
-    rotation_right = rect_from_right.T @ rotation_rect
+        sigma_px = _view_sigmas(residual, used, views)
+        weight = np.sqrt(used / sigma_px**2)
+        solution = np.linalg.lstsq(design * weight[:, None], dy * weight, rcond=None)[0]
+        residual = dy - design @ solution
+        used = np.abs(residual) <= REJECT_SIGMAS * sigma_px
+    weighted = design[used] / sigma_px[used, None]
+    covariance_rect = np.zeros((3, 3))
+    covariance_rect[np.ix_([0, 2], [0, 2])] = np.linalg.pinv(weighted.T @ weighted)
+    covariance = rect_from_right.T @ covariance_rect @ rect_from_right
+    rotation_right = rect_from_right.T @ np.array([solution[0], 0.0, solution[1]])
     return RotationFit(float(rotation_right[0]), float(rotation_right[2]),
-                       float(np.median(np.abs(residual))), int(used.sum()))
+                       float(np.median(np.abs(residual))), int(used.sum()),
+                       math.sqrt(covariance[0, 0]), math.sqrt(covariance[2, 2]))
+
+
+def _view_sigmas(residual: F64, used: npt.NDArray[np.bool_], views: npt.NDArray[np.int64]
+                 ) -> F64:
+    """Each match's view's robust residual sigma ``(N,)`` (px) over its used matches; a
+    view with fewer than three takes the sigma of all; at least ``MIN_SIGMA_PX``."""
+    def robust(values: F64) -> float:
+        return MAD_TO_SIGMA * float(np.median(np.abs(values - np.median(values))))
+
+    every = robust(residual[used])
+    sigma_px = np.full(len(residual), every)
+    for view in np.unique(views):
+        mine = views == view
+        if (used & mine).sum() >= 3:
+            sigma_px[mine] = robust(residual[used & mine])
+    return np.asarray(np.maximum(sigma_px, MIN_SIGMA_PX), dtype=np.float64)
+
+
+def _consensus(design: F64, dy: F64) -> F64:
+    """The rotation ``(2,)`` through two matches that most matches agree with (within
+    ``AGREE_PX``); pitch alone through the median when no two matches determine one."""
+    rng = np.random.default_rng(0)
+    first, second = rng.integers(0, len(dy), (2, HYPOTHESES))
+    a, b = design[first], design[second]
+    det = a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0]
+    usable = np.abs(det) > 1e-9 * np.abs(design).max() ** 2
+    if not usable.any():
+        return np.array([float(np.median(dy / design[:, 0])), 0.0])
+    det, a, b = det[usable], a[usable], b[usable]
+    ya, yb = dy[first[usable]], dy[second[usable]]
+    rotations = np.column_stack([(ya * b[:, 1] - yb * a[:, 1]) / det,
+                                 (a[:, 0] * yb - b[:, 0] * ya) / det])
+    agree = (np.abs(dy[None, :] - rotations @ design.T) <= AGREE_PX).sum(axis=1)
+    return np.asarray(rotations[int(np.argmax(agree))])
 
 
 def window_noise(values: F64) -> float:

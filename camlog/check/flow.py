@@ -5,13 +5,12 @@ vertical disparity of the features matched across the rectified pair (``vertical
 the median of its absolute value) and the right camera's rotation relative to the left that
 explains it (``pitch_deg``, ``roll_deg`` and their angle ``rotation_deg``), and per camera
 with a board in view, the board's reprojection error (``reprojection_px``, the median over
-its views, each view's pose fitted as ``calibrate --check`` does).
+its views, each view's pose fitted as ``calibrate --check`` does). How windows are flagged:
+:mod:`camlog.check.series`.
 
-The limit a window is flagged above comes from the log itself and the calibration: the
-noise ``sigma`` of the metric from window to window (:func:`processors.drift.window_noise`,
-which one drift cannot move), at least the statistical error of one window's fit, combined
-with the calibration's own rotation uncertainty; a pair's rotation is flagged beyond
-``NOISE_SIGMAS`` such sigmas from zero, a board's error beyond that above its median.
+A log's verdict is ``drifted`` (a window of a check flagged), ``not judged`` (a check that
+could not judge it: too few windows with a value, or nothing checkable) or ``clean``; the
+command's exit status is that of its worst log (:func:`exit_status`).
 """
 
 from __future__ import annotations
@@ -26,47 +25,24 @@ import numpy as np
 from processors.calibration.board import Board
 from processors.calibration.targets import find_board
 from processors.calibration.view_fit import fit_view
-from processors.drift import PairMatches, StereoMatcher, fit_rotation, window_noise
+from processors.drift import PairMatches, StereoMatcher
 from replay.camera import CameraModel
 from replay.formats import open_reader
 
 from ..errors import InputError
 from .cameras import Checkable, Unchecked, checkable
 from .samples import samples
+from .series import NOISE_SIGMAS, CheckOptions, Series, board_series, stereo_series
 
-__all__ = ["NOISE_SIGMAS", "CheckOptions", "LogCheck", "Series", "check_log"]
+__all__ = ["EXIT_DRIFTED", "EXIT_NOT_JUDGED", "NOISE_SIGMAS", "CheckOptions", "LogCheck",
+           "Series", "check_log", "exit_status"]
 
-#: a window is flagged this many noise sigmas beyond a calibrated window's value
-NOISE_SIGMAS = 5.0
-#: windows with a value needed to measure the noise (fewer: no limit without --threshold)
-MIN_WINDOWS = 3
-
-
-@dataclass(frozen=True)
-class CheckOptions:
-    """How a log is checked: window length, frames looked at per second, the board (None:
-    stereo pairs only), the calibration (None: the log's camera_info), the cameras (empty:
-    every one) and a limit that replaces the measured one (per flagged metric's unit)."""
-
-    window_s: float = 2.0
-    rate_hz: float = 5.0
-    board: Board | None = None
-    calibration: Path | None = None
-    cameras: list[str] = field(default_factory=list)
-    threshold: float | None = None
-
-
-@dataclass
-class Series:
-    """One check's metrics per window: ``values[metric]`` ``(W,)`` (NaN where a window had
-    nothing to measure), the metric its windows are flagged by, its limit and the flags."""
-
-    camera: str
-    kind: str
-    values: dict[str, list[float]]
-    metric: str
-    limit: float
-    flagged: list[bool]
+#: exit status of ``camlog check`` when a log drifted (errors exit with 1, usage with 2)
+EXIT_DRIFTED = 3
+#: exit status when no log drifted but one could not be judged
+EXIT_NOT_JUDGED = 4
+#: a log's verdicts
+CLEAN, DRIFTED, NOT_JUDGED = "clean", "drifted", "not judged"
 
 
 @dataclass
@@ -83,30 +59,62 @@ class LogCheck:
         """Start and end (s from the log's start) of window ``index``."""
         return index * self.window_s, (index + 1) * self.window_s
 
+    @property
+    def verdict(self) -> str:
+        """``drifted``, ``not judged`` or ``clean``."""
+        if any(any(s.flagged) for s in self.series):
+            return DRIFTED
+        if not self.series or any(s.unjudged for s in self.series):
+            return NOT_JUDGED
+        return CLEAN
+
+    def drifted_from_s(self) -> float | None:
+        """When the first flagged window starts (s from the log's start); None if none."""
+        starts = [self.span(s.flagged.index(True))[0] for s in self.series if any(s.flagged)]
+        return min(starts, default=None)
+
     def summary(self) -> str:
-        """One line: clean, or which camera drifted from when and by how much."""
-        if not self.series:
-            return f"{self.log}: not checkable ({'; '.join(_why(u) for u in self.unchecked)})"
-        drifted = []
-        for s in self.series:
-            if not any(s.flagged):
-                continue
-            first = s.flagged.index(True)
-            how = f"{s.metric} {_flagged_median(s, s.metric):.3g} (limit {s.limit:.3g})"
-            if s.kind == "stereo":
-                how = (f"rotated {_flagged_median(s, 'rotation_deg'):.3f}° relative to its "
-                       f"partner (pitch {_flagged_median(s, 'pitch_deg'):+.3f}°, roll "
-                       f"{_flagged_median(s, 'roll_deg'):+.3f}°), vertical error "
-                       f"{_flagged_median(s, s.metric):.2f} px (limit {s.limit:.2f} px)")
-            drifted.append(f"{s.camera} from {self.span(first)[0]:g} s, {how}")
-        if not drifted:
-            names = ", ".join(s.camera for s in self.series)
-            if any(math.isinf(s.limit) for s in self.series):
-                return (f"{self.log}: not judged ({names}: fewer than {MIN_WINDOWS} windows "
-                        f"of {self.window_s:g} s to measure the noise; give --threshold or a "
-                        "shorter --window)")
-            return f"{self.log}: clean ({names}; {self.windows} windows of {self.window_s:g} s)"
-        return f"{self.log}: drifted: " + "; ".join(drifted)
+        """One line: clean, drifted (which camera, from when, by how much), or not judged
+        and why."""
+        verdict = self.verdict
+        if verdict == DRIFTED:
+            return f"{self.log}: drifted: " + "; ".join(
+                _drift(self, s) for s in self.series if any(s.flagged))
+        if verdict == NOT_JUDGED:
+            if not self.series:
+                return (f"{self.log}: not judged: nothing checkable "
+                        f"({'; '.join(_why(u) for u in self.unchecked)})")
+            return f"{self.log}: not judged (" + "; ".join(
+                f"{s.camera}: {s.unjudged or 'clean'}" for s in self.series) + ")"
+        names = ", ".join(s.camera for s in self.series)
+        return f"{self.log}: clean ({names}; {self.windows} windows of {self.window_s:g} s)"
+
+
+def exit_status(checks: list[LogCheck]) -> int:
+    """0 when every log is clean, ``EXIT_DRIFTED`` when one drifted, else
+    ``EXIT_NOT_JUDGED`` (a log could not be judged)."""
+    verdicts = {c.verdict for c in checks}
+    if DRIFTED in verdicts:
+        return EXIT_DRIFTED
+    return EXIT_NOT_JUDGED if NOT_JUDGED in verdicts else 0
+
+
+def _drift(check: LogCheck, series: Series) -> str:
+    """Which camera drifted, from when and by how much (medians over its flagged windows)."""
+    start = check.span(series.flagged.index(True))[0]
+    limit = f"(limit {series.limit:.3g})"
+    if series.kind == "stereo":
+        how = (f"rotated {_flagged_median(series, 'rotation_deg'):.3f}° relative to its "
+               f"partner (pitch {_flagged_median(series, 'pitch_deg'):+.3f}°, roll "
+               f"{_flagged_median(series, 'roll_deg'):+.3f}°), ")
+        first = series.values[series.metric][series.flagged.index(True)]
+        how += (f"vertical error {_flagged_median(series, series.metric):.2f} px {limit}"
+                if series.metric == "vertical_error_px" else
+                f"{first:.3g} sigmas from the calibration {limit}, vertical error "
+                f"{_flagged_median(series, 'vertical_error_px'):.2f} px")
+    else:
+        how = f"{series.metric} {_flagged_median(series, series.metric):.3g} {limit}"
+    return f"{series.camera} from {start:g} s, {how}"
 
 
 def _flagged_median(series: Series, metric: str) -> float:
@@ -150,7 +158,10 @@ def check_log(log: Path | str, options: CheckOptions,
                 _board_view(window, sample.grays[0], checks[sample.check], options.board)
             if on_window is not None:
                 on_window()
-    series = [_series(c, w, options) for c, w in zip(checks, seen, strict=True)]
+    series = [stereo_series(c, [w.matches for w in windows], options.threshold)
+              if c.kind == "stereo" else
+              board_series(c, [w.reprojection_px for w in windows], options.threshold)
+              for c, windows in zip(checks, seen, strict=True)]
     return LogCheck(str(log), options.window_s, windows, series, unchecked)
 
 
@@ -167,55 +178,3 @@ def _board_view(window: _Window, gray: np.ndarray, check: Checkable, board: Boar
     fit = fit_view(detection.corners_px, model, board.points_in_board()[detection.ids])
     if fit is not None:
         window.reprojection_px.append(fit.rms_px)
-
-
-def _unmeasured(values: list[float]) -> float:
-    """Infinity (no limit) when too few windows have a value to measure the noise, else 0."""
-    return math.inf if sum(math.isfinite(v) for v in values) < MIN_WINDOWS else 0.0
-
-
-def _series(check: Checkable, windows: list[_Window], options: CheckOptions) -> Series:
-    if check.kind == "stereo":
-        return _stereo_series(check, windows, options)
-    values = [float(np.median(w.reprojection_px)) if w.reprojection_px else math.nan
-              for w in windows]
-    within = [float(np.std(w.reprojection_px)) / math.sqrt(len(w.reprojection_px))
-              for w in windows if len(w.reprojection_px) > 1]
-    sigma = max(window_noise(np.asarray(values)), float(np.median(within)) if within else 0.0)
-    finite = [v for v in values if math.isfinite(v)]
-    centre = float(np.median(finite)) if finite else 0.0
-    limit = options.threshold if options.threshold is not None \
-        else _unmeasured(values) or centre + NOISE_SIGMAS * sigma
-    return Series(check.name, "board", {"reprojection_px": values,
-                                        "views": [float(len(w.reprojection_px)) for w in windows]},
-                  "reprojection_px", limit, [bool(math.isfinite(v) and v > limit) for v in values])
-
-
-def _stereo_series(check: Checkable, windows: list[_Window], options: CheckOptions) -> Series:
-    right = check.infos[1]
-    metrics: dict[str, list[float]] = {m: [] for m in (
-        "vertical_error_px", "rotation_deg", "pitch_deg", "roll_deg", "matches")}
-    clean = []
-    for window in windows:
-        joined = PairMatches(
-            np.concatenate([m.left_px for m in window.matches] or [np.zeros((0, 2))]),
-            np.concatenate([m.right_px for m in window.matches] or [np.zeros((0, 2))]))
-        fit = fit_rotation(joined, p_rect=right.p, rect_from_right=right.r)
-        dy = joined.dy_px
-        metrics["vertical_error_px"].append(float(np.median(np.abs(dy))) if dy.size
-                                            else math.nan)
-        metrics["rotation_deg"].append(fit.angle_deg)
-        metrics["pitch_deg"].append(math.degrees(fit.pitch_rad))
-        metrics["roll_deg"].append(math.degrees(fit.roll_rad))
-        metrics["matches"].append(float(fit.matches))
-        if math.isfinite(fit.clean_px):
-            clean.append(fit.clean_px)
-    errors = np.asarray(metrics["vertical_error_px"])
-    # a calibrated window's vertical error: what is left once the rotation is fitted
-    centre = float(np.median(clean)) if clean else 0.0
-    calibration_px = math.radians(check.rotation_std_deg) * float(right.p[1, 1])
-    limit = options.threshold if options.threshold is not None \
-        else _unmeasured(metrics["vertical_error_px"]) \
-        or centre + NOISE_SIGMAS * math.hypot(window_noise(errors), calibration_px)
-    return Series(check.name, "stereo", metrics, "vertical_error_px", limit,
-                  [bool(math.isfinite(v) and v > limit) for v in errors])

@@ -15,8 +15,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Check every log, write the report and print one line per log."""
-    from ..check.flow import check_log
+    """Check every log, write the report and print one line per log; the exit status says
+    whether any drifted (:func:`camlog.check.flow.exit_status`)."""
+    from ..check.flow import check_log, exit_status
     from ..check.report import write_report
 
     request = request_from_args(CheckRequest, args)
@@ -27,5 +28,6 @@ def run(args: argparse.Namespace) -> int:
         print(checked.summary(), flush=True)
         checks.append(checked)
     write_report(checks, request.output)
-    print(f"wrote {request.output / 'check.csv'} and {request.output / 'report.md'}")
-    return 0
+    print(f"wrote {request.output / 'check.csv'}, {request.output / 'report.md'} and "
+          f"{request.output / 'check.rrd'}")
+    return exit_status(checks)

@@ -25,13 +25,17 @@ class CheckRequest:
     window."""
 
     epilog: ClassVar[str] = (
-        "Stereo pairs are checked by the vertical error of natural features matched across "
-        "the rectified pair and the right camera's rotation relative to the left that "
-        "explains it; cameras that see a board (--size, --square) by its reprojection "
-        "error. A window is flagged when its metric passes a limit set by the log's own "
-        "window-to-window noise and the calibration's uncertainty (--threshold replaces it). "
-        "Writes OUTDIR/check.csv, OUTDIR/report.md and one PNG per log; prints one line per "
-        "log: clean, or drifted from when and by how much.")
+        "Stereo pairs are checked by the right camera's rotation relative to the left that "
+        "explains the vertical error of natural features matched across the rectified "
+        "pair; cameras that see a board (--size, --square) by its reprojection error. A "
+        "pair is flagged from the window where its rotation, from there on, passes 5 "
+        "sigmas of the log's own noise and the calibration's uncertainty; a board's window "
+        "when its error passes their median by as much (--threshold replaces the limit). "
+        "Writes OUTDIR/check.csv, OUTDIR/report.md, one PNG per log and OUTDIR/check.rrd; "
+        "prints one line per log: clean, drifted from when and by how much, or not judged "
+        "and why. Exit status: 0 every log clean, 3 a log drifted, 4 none drifted but one "
+        "could not be judged (too few windows, nothing checkable), 1 an error, 2 a usage "
+        "error.")
 
     logs: tuple[str, ...] = option((), metavar="LOG", nargs="+", batch=False,
                                    help="logs to check (paths or URIs)")

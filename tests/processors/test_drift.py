@@ -90,3 +90,44 @@ def test_window_noise_ignores_one_step() -> None:
     assert window_noise(values) == pytest.approx(0.1, rel=0.25)
     assert window_noise(stepped) == pytest.approx(window_noise(values), rel=0.05)
     assert window_noise(np.array([1.0, math.nan])) == 0.0
+
+
+def test_mismatches_that_agree_among_themselves_do_not_pull_the_fit() -> None:
+    """A repeating pattern matched one period off: many matches, all a few rows off alike."""
+    good = _matches(0.1, 0.0)
+    right = good.right_px.copy()
+    right[::2, 1] += 4.0  # half the matches, one consistent offset
+    right[1::4, 1] += 1.0e-3  # the other half, less one in four: exact
+    fit = fit_rotation(PairMatches(good.left_px, right), p_rect=_p_right(),
+                       rect_from_right=np.eye(3))
+    assert math.degrees(fit.pitch_rad) == pytest.approx(0.1, abs=0.003)
+
+
+def test_standard_errors_match_the_scatter_of_the_fit() -> None:
+    good = _matches(0.0, 0.1)
+    rng = np.random.default_rng(5)
+    pitch, roll, std = [], [], []
+    for _ in range(60):
+        noisy = good.right_px + np.column_stack([np.zeros(400), rng.normal(0, 0.1, 400)])
+        fit = fit_rotation(PairMatches(good.left_px, noisy), p_rect=_p_right(),
+                           rect_from_right=np.eye(3))
+        pitch.append(fit.pitch_rad)
+        roll.append(fit.roll_rad)
+        std.append((fit.pitch_std_rad, fit.roll_std_rad))
+    assert np.mean(std, axis=0) == pytest.approx([np.std(pitch), np.std(roll)], rel=0.3)
+
+
+def test_a_sloppy_view_counts_for_less() -> None:
+    """Two views of the same rotation, one with ten times the noise of the other: the fit
+    is about as good as the sharp view's alone."""
+    good = _matches(0.0, 0.1)
+    rng = np.random.default_rng(6)
+    noise = np.where(np.arange(400) < 200, 0.02, 0.5) * rng.normal(0, 1, 400)
+    noisy = good.right_px + np.column_stack([np.zeros(400), noise])
+    views = (np.arange(400) >= 200).astype(np.int64)
+    weighted = fit_rotation(PairMatches(good.left_px, noisy), p_rect=_p_right(),
+                            rect_from_right=np.eye(3), views=views)
+    sharp = fit_rotation(PairMatches(good.left_px[:200], noisy[:200]), p_rect=_p_right(),
+                         rect_from_right=np.eye(3))
+    assert weighted.roll_std_rad < 1.1 * sharp.roll_std_rad
+    assert math.degrees(weighted.roll_rad) == pytest.approx(0.1, abs=0.005)

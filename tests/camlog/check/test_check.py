@@ -1,4 +1,5 @@
-"""``camlog check``: a drifted stereo log is flagged from the drift on, a clean one is not."""
+"""``camlog check``: a drifted stereo log is flagged from the drift on, a clean one is not;
+its exit status says which; its rerun recording holds what its report shows."""
 
 from __future__ import annotations
 
@@ -10,9 +11,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from camlog.check.flow import CheckOptions, check_log
+from camlog.check.flow import EXIT_DRIFTED, EXIT_NOT_JUDGED, CheckOptions, check_log
+from camlog.check.recording import TIMELINE
 from camlog.cli import main
 from processors.calibration.board import make_board
+from tests.rrd import load_rrd, rerun_cli
 
 DRIFT_S, DRIFT_DEG = 3.0, 0.1
 RIGHT = "/stereo_camera/right"
@@ -46,7 +49,7 @@ def report(logs: dict[str, Path], tmp_path_factory: pytest.TempPathFactory
     printed = StringIO()
     with redirect_stdout(printed):
         assert main(["check", str(logs["drifted"]), str(logs["clean"]), "--window", "1",
-                     "-o", str(out)]) == 0
+                     "-o", str(out)]) == EXIT_DRIFTED
     return out, printed.getvalue().splitlines()
 
 
@@ -96,7 +99,7 @@ def test_a_mono_camera_without_a_board_is_not_checkable(logs: dict[str, Path]) -
     checked = check_log(logs["mono"], CheckOptions())
     assert checked.series == []
     assert "/simple_camera: a mono camera: no stereo partner and no board" in checked.summary()
-    assert "not checkable" in checked.summary()
+    assert checked.summary().startswith(f"{logs['mono']}: not judged: nothing checkable")
 
 
 def test_a_camera_that_sees_the_board_is_checked_by_its_reprojection(
@@ -153,3 +156,72 @@ def test_too_few_windows_to_measure_the_noise_are_not_judged(logs: dict[str, Pat
     assert checked.windows == 2
     assert not any(checked.series[0].flagged)
     assert "not judged" in checked.summary()
+
+
+def test_a_log_without_a_usable_window_is_not_judged(logs: dict[str, Path]) -> None:
+    checked = check_log(logs["mono"], CheckOptions(window_s=0.5,
+                                                   board=make_board("4x3", 0.01)))
+    assert checked.verdict == "not judged"
+    assert checked.summary().endswith(
+        "not judged (/simple_camera: the board was not found in any window)")
+
+
+def _check(tmp_path: Path, *logs: Path) -> tuple[int, list[str]]:
+    printed = StringIO()
+    with redirect_stdout(printed):
+        code = main(["check", *map(str, logs), "--window", "1", "-o", str(tmp_path / "out")])
+    return code, printed.getvalue().splitlines()
+
+
+def test_exit_status_0_when_every_log_is_clean(logs: dict[str, Path], tmp_path: Path) -> None:
+    code, lines = _check(tmp_path, logs["clean"])
+    assert code == 0
+    assert lines[0].startswith(f"{logs['clean']}: clean")
+
+
+def test_exit_status_4_when_a_log_is_not_judged(logs: dict[str, Path], tmp_path: Path
+                                                ) -> None:
+    code, lines = _check(tmp_path, logs["clean"], logs["mono"])
+    assert code == EXIT_NOT_JUDGED == 4
+    assert lines[1] == (f"{logs['mono']}: not judged: nothing checkable (/simple_camera: a "
+                        "mono camera: no stereo partner and no board given (--size/--square))")
+
+
+def test_exit_status_3_when_a_log_drifted_whatever_the_others(
+        logs: dict[str, Path], tmp_path: Path) -> None:
+    code, _ = _check(tmp_path, logs["mono"], logs["drifted"])
+    assert code == EXIT_DRIFTED == 3
+
+
+def test_exit_status_2_for_a_usage_error(logs: dict[str, Path], tmp_path: Path,
+                                         capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as exited:
+        main(["check", str(logs["clean"]), "--window", "0", "-o", str(tmp_path / "out")])
+    assert exited.value.code == 2
+    assert len(capsys.readouterr().err.splitlines()) == 1
+
+
+def test_the_rerun_recording_holds_the_check(report: tuple[Path, list[str]],
+                                             logs: dict[str, Path], tmp_path: Path) -> None:
+    path = report[0] / "check.rrd"
+    verified = rerun_cli("rrd", "verify", str(path), cwd=tmp_path)
+    assert verified.returncode == 0, verified.stderr
+    recording = load_rrd(path)
+    assert recording.blueprints == 1
+    drifted = f"/drifted.mcap{RIGHT}"
+    metric = recording.column(f"{drifted}/drift_sigmas", "Scalars:scalars")
+    assert len(metric) == 6
+    assert recording.time(f"{drifted}/drift_sigmas", TIMELINE) == [
+        int((t + 0.5) * 1e9) for t in range(6)]
+    rows = _rows(report[0], logs["drifted"], "drift_sigmas")
+    assert [v[0] for v in metric] == pytest.approx([float(r["value"]) for r in rows],
+                                                   rel=1e-5)
+    assert {v[0] for v in recording.column(f"{drifted}/limit", "Scalars:scalars")} == {5.0}
+    # the flags as a step: each window's start and end
+    flags = [v[0] for v in recording.column(f"{drifted}/flagged", "Scalars:scalars")]
+    assert flags == [0.0] * 6 + [1.0] * 6
+    assert recording.time(f"{drifted}/flagged", TIMELINE)[:2] == [0, int(1e9)]
+    (verdict,) = recording.column("/drifted.mcap/verdict", "TextLog:text")
+    assert verdict == [report[1][0]]
+    clean = recording.column(f"/clean.mcap{RIGHT}/flagged", "Scalars:scalars")
+    assert [v[0] for v in clean] == [0.0] * 12
