@@ -29,6 +29,9 @@ from .jobs import Job, run_job
 
 PROBE_TIMEOUT_S = 120.0
 CONNECT_TIMEOUT_S = 5.0
+#: tries to start a local Ray instance (its servers may miss Ray's start-up deadline on a
+#: loaded machine)
+LOCAL_START_ATTEMPTS = 2
 
 
 def run_on_ray(jobs: list[Job], *, address: str | None, jobs_at_once: int | None,
@@ -91,8 +94,18 @@ def _start_local(ray: Any, cpus: float) -> None:
     if saved is not None:
         ray_constants.ENABLE_RAY_CLUSTER = False
     try:
-        ray.init(num_cpus=max(1, round(cpus)), include_dashboard=False, log_to_driver=False,
-                 configure_logging=False, _node_ip_address="127.0.0.1")
+        for attempt in range(1, LOCAL_START_ATTEMPTS + 1):
+            try:
+                ray.init(num_cpus=max(1, round(cpus)), include_dashboard=False,
+                         log_to_driver=False, configure_logging=False,
+                         _node_ip_address="127.0.0.1")
+                return
+            except Exception as err:  # a server that did not come up in Ray's own time
+                ray.shutdown()  # stops what did start: no server outlives the failure
+                if attempt == LOCAL_START_ATTEMPTS:
+                    reason = str(err).splitlines()[0] if str(err) else type(err).__name__
+                    raise ClusterError(f"cannot start a local Ray instance "
+                                       f"({LOCAL_START_ATTEMPTS} tries): {reason}") from None
     finally:
         if saved is not None:
             ray_constants.ENABLE_RAY_CLUSTER = saved

@@ -189,3 +189,36 @@ def test_a_node_killed_mid_batch_changes_no_output(
     assert output_files(out) == output_files(reference)
     assert time.monotonic() - started < 300
 
+
+
+class _SlowRay:
+    """The part of Ray's API the local start uses, whose servers never come up in time (as
+    on a loaded machine): ``init`` fails as Ray's does, ``shutdown`` is counted."""
+
+    def __init__(self, failures: int) -> None:
+        self.failures, self.inits, self.shutdowns = failures, 0, 0
+
+    def init(self, **_options: object) -> None:
+        self.inits += 1
+        if self.inits <= self.failures:
+            raise RuntimeError("Timed out waiting for file /tmp/ray/session_x/gcs_server_port\n"
+                               "more detail")
+
+    def shutdown(self) -> None:
+        self.shutdowns += 1
+
+
+def test_a_local_ray_that_misses_its_start_is_tried_again_then_one_line() -> None:
+    from camlog.batch.cluster import LOCAL_START_ATTEMPTS, _connect
+    from camlog.errors import ClusterError
+
+    once = _SlowRay(failures=1)
+    _connect(once, None, 2)
+    assert (once.inits, once.shutdowns) == (2, 1)  # what started the first time is stopped
+    never = _SlowRay(failures=LOCAL_START_ATTEMPTS)
+    with pytest.raises(ClusterError) as raised:
+        _connect(never, None, 2)
+    assert str(raised.value) == (f"cannot start a local Ray instance ({LOCAL_START_ATTEMPTS} "
+                                 "tries): Timed out waiting for file "
+                                 "/tmp/ray/session_x/gcs_server_port")
+    assert never.shutdowns == LOCAL_START_ATTEMPTS
