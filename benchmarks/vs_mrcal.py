@@ -185,14 +185,32 @@ def compare(cases: list[Case], seeds: range, *, cache: Path, duration_s: float |
     return progress
 
 
+def add_seed_arguments(parser: argparse.ArgumentParser, *, seeds: int,
+                       case_names: list[str]) -> None:
+    """``--seeds``, ``--cases`` (from ``case_names``) and ``--cache``: what every many-seed
+    benchmark over the cached recordings takes."""
+    parser.add_argument("--seeds", type=int, default=seeds,
+                        help=f"seeds per case (default {seeds})")
+    parser.add_argument("--cases", default=",".join(case_names),
+                        help=f"comma-separated, from {', '.join(case_names)} (default: all)")
+    parser.add_argument("--cache", type=Path, default=DEFAULT_CACHE,
+                        help=f"recordings are kept and reused here (default {DEFAULT_CACHE})")
+
+
+def check_seed_arguments(parser: argparse.ArgumentParser, args: argparse.Namespace,
+                         case_names: list[str]) -> None:
+    """Usage errors (exit 2, one line) for unknown cases or fewer than one seed."""
+    unknown = sorted(set(args.cases.split(",")) - set(case_names))
+    if unknown:
+        parser.error(f"unknown cases {', '.join(unknown)} (known: {', '.join(case_names)})")
+    if args.seeds < 1:
+        parser.error(f"--seeds must be at least 1, not {args.seeds}")
+
+
 def parse_arguments(argv: Sequence[str] | None) -> argparse.Namespace:
     """The command line (usage errors exit 2 with one line)."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seeds", type=int, default=40, help="seeds per case (default 40)")
-    parser.add_argument("--cases", default=",".join(CASE_NAMES),
-                        help=f"comma-separated, from {', '.join(CASE_NAMES)} (default: all)")
-    parser.add_argument("--cache", type=Path, default=DEFAULT_CACHE,
-                        help=f"recordings are kept and reused here (default {DEFAULT_CACHE})")
+    add_seed_arguments(parser, seeds=40, case_names=CASE_NAMES)
     parser.add_argument("--duration", type=float, default=None,
                         help="seconds per recording (default: 10, the fisheye 30 at 4 Hz)")
     parser.add_argument("--mrcal-python", type=Path, default=DEFAULT_VENV / "bin" / "python",
@@ -201,11 +219,7 @@ def parse_arguments(argv: Sequence[str] | None) -> argparse.Namespace:
     parser.add_argument("--minutes", type=float, default=None,
                         help="start no seed after this many minutes (default: run them all)")
     args = parser.parse_args(argv)
-    unknown = sorted(set(args.cases.split(",")) - set(CASE_NAMES))
-    if unknown:
-        parser.error(f"unknown cases {', '.join(unknown)} (known: {', '.join(CASE_NAMES)})")
-    if args.seeds < 1:
-        parser.error(f"--seeds must be at least 1, not {args.seeds}")
+    check_seed_arguments(parser, args, CASE_NAMES)
     if args.duration is not None and args.duration <= 0:
         parser.error(f"--duration must be positive, not {args.duration:g}")
     return args

@@ -5,7 +5,10 @@ with the manifest's board and model, read ``calibration.json``, and compare with
 ``reference.reference_calibration`` and with the calibration the source publishes. A
 dataset camlog (or OpenCV) cannot calibrate is a row saying so, with the message.
 
-    python -m benchmarks.corpus.run [--cache DIR] [--only NAME…] [--keep DIR]
+With ``--auto-order`` the pinhole datasets are calibrated with ``-k auto`` (the radial order
+chosen by cross-validation over the views) and the model column names the order chosen.
+
+    python -m benchmarks.corpus.run [--cache DIR] [--only NAME…] [--keep DIR] [--auto-order]
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ import json
 import subprocess
 import sys
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import cv2
@@ -33,13 +36,17 @@ class CamlogResult:
 
     cameras: list[CameraResult]
     baseline_m: float | None
+    orders: list[str] = field(default_factory=list)  # with -k auto: each camera's order
 
 
-def camlog_args(dataset: Dataset) -> list[str]:
-    """``camlog calibrate`` options for the dataset's board, model and cameras."""
+def camlog_args(dataset: Dataset, *, auto_order: bool = False) -> list[str]:
+    """``camlog calibrate`` options for the dataset's board, model and cameras (with
+    ``auto_order``, ``-k auto`` for a plumb_bob dataset)."""
     board = dataset.board
     args = ["--size", board.size, "--square", str(board.square_m), "--pattern", board.pattern,
             "--model", dataset.model]
+    if auto_order and dataset.model == "plumb_bob":
+        args += ["-k", "auto"]
     if board.diameter_m is not None:
         args += ["--diameter", str(board.diameter_m)]
     if board.marker_m is not None:
@@ -59,14 +66,16 @@ def _camlog(*args: str) -> None:
         raise CorpusError(f"camlog {args[0]} exit {done.returncode}: {lines[-1]}")
 
 
-def camlog_calibration(dataset: Dataset, folder: Path, work: Path) -> CamlogResult:
+def camlog_calibration(dataset: Dataset, folder: Path, work: Path, *,
+                       auto_order: bool = False) -> CamlogResult:
     """Import ``folder`` and calibrate it with camlog; the numbers of calibration.json."""
     log = work / f"{dataset.name}.mcap"
     topic = "/corpus" if dataset.stereo else "/corpus/image_raw"
     _camlog("import", str(folder), "-o", str(log), "--topic", topic, "--rate", "1",
             "--overwrite", "--no-progress", *(["--stereo"] if dataset.stereo else []))
     out = work / f"{dataset.name}_calibration"
-    _camlog("calibrate", str(log), *camlog_args(dataset), "-o", str(out), "--overwrite",
+    _camlog("calibrate", str(log), *camlog_args(dataset, auto_order=auto_order), "-o",
+            str(out), "--overwrite",
             "--no-report", "--no-progress")
     summary = json.loads((out / "calibration.json").read_text())
     cameras = []
@@ -75,7 +84,8 @@ def camlog_calibration(dataset: Dataset, folder: Path, work: Path) -> CamlogResu
         cameras.append(CameraResult(camera["used_views"], camera["rms_px"], values["fx"],
                                     values["fy"], values["cx"], values["cy"]))
     stereo = summary.get("stereo")
-    return CamlogResult(cameras, stereo["baseline_m"] if stereo else None)
+    orders = [c["lens_order"]["chosen"] for c in summary["cameras"] if "lens_order" in c]
+    return CamlogResult(cameras, stereo["baseline_m"] if stereo else None, orders)
 
 
 def _published(dataset: Dataset, camlog: CamlogResult) -> str:
@@ -97,6 +107,8 @@ def row(dataset: Dataset, opencv: ReferenceResult | str, camlog: CamlogResult | 
     kind = f"{dataset.model}{' stereo' if dataset.stereo else ''}, {dataset.board.pattern}"
     ocv = opencv if isinstance(opencv, ReferenceResult) else None
     cam = camlog if isinstance(camlog, CamlogResult) else None
+    if cam is not None and cam.orders:
+        kind += f" (-k auto: {', '.join(o.split(' ', 1)[1] for o in cam.orders)})"
     views = (f"{ocv.cameras[0].views if ocv else '—'} / {cam.cameras[0].views if cam else '—'}")
     rms = " / ".join("+".join(f"{c.rms_px:.3f}" for c in r.cameras) if r else "—"
                      for r in (ocv, cam))
@@ -113,7 +125,8 @@ def row(dataset: Dataset, opencv: ReferenceResult | str, camlog: CamlogResult | 
     return f"| {dataset.name} | {kind} | {views} | {rms} | {dfx} | {dcx} | {published} |"
 
 
-def run(cache: Path, only: list[str] | None, keep: Path | None) -> list[str]:
+def run(cache: Path, only: list[str] | None, keep: Path | None, *,
+        auto_order: bool = False) -> list[str]:
     """The table's lines, one calibration at a time."""
     lines = [HEADER, "| " + " | ".join("---" for _ in range(7)) + " |"]
     with tempfile.TemporaryDirectory(prefix="camlog-corpus-") as temporary:
@@ -134,7 +147,7 @@ def run(cache: Path, only: list[str] | None, keep: Path | None) -> list[str]:
             except (CorpusError, cv2.error) as error:
                 opencv = str(error).strip().splitlines()[-1]
             try:
-                camlog = camlog_calibration(dataset, folder, work)
+                camlog = camlog_calibration(dataset, folder, work, auto_order=auto_order)
             except (CorpusError, KeyError, OSError) as error:
                 camlog = str(error)
             lines.append(row(dataset, opencv, camlog))
@@ -148,8 +161,10 @@ def main() -> int:
     parser.add_argument("--cache", type=Path, default=default_cache())
     parser.add_argument("--only", nargs="+", metavar="NAME")
     parser.add_argument("--keep", type=Path, help="keep logs and calibrations in this folder")
+    parser.add_argument("--auto-order", action="store_true",
+                        help="calibrate the pinhole datasets with -k auto")
     args = parser.parse_args()
-    print("\n".join(run(args.cache, args.only, args.keep)))
+    print("\n".join(run(args.cache, args.only, args.keep, auto_order=args.auto_order)))
     return 0
 
 

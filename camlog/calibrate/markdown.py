@@ -43,9 +43,10 @@ def _camera_lines(camera: CameraSummary) -> list[str]:
         f"Reprojection RMS {camera.rms_px:.4f} px.", "",
         *_parameter_lines(camera), "",
     ]
-    if camera.tangential.summary is not None:
-        text = camera.tangential.summary
-        lines.append(text[0].upper() + text[1:] + ".")
+    for text in (camera.lens_order.summary if camera.lens_order is not None else None,
+                 camera.tangential.summary):
+        if text is not None:
+            lines.append(text[0].upper() + text[1:] + ".")
     if camera.evidence is not None:
         e = camera.evidence
         held = f" ({e.held_views} of them held poses, their frames averaged)" \
@@ -189,8 +190,11 @@ def markdown_report(summary: CalibrationSummary, figures: list[str]) -> str:
         "# Calibration report", "",
         f"Board: {board.pattern} {board.cols}x{board.rows} points, {board.square_m:g} m "
         f"spacing. {circles}"
-        f"Model: {options.distortion_model} with {options.k_coefficients} radial "
-        f"coefficients; options: {flags or 'none'}; tangential distortion: "
+        + ("Model: radial order chosen per camera by cross-validation over its views; "
+           if options.choose_order else
+           f"Model: {options.distortion_model} with {options.k_coefficients} radial "
+           "coefficients; ")
+        + f"options: {flags or 'none'}; tangential distortion: "
         f"{options.tangential}.", "",
     ]
     for camera in summary.cameras:

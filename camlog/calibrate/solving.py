@@ -26,6 +26,7 @@ from processors.calibration.joint import (
     camera_views,
     check_view_counts,
 )
+from processors.calibration.model_order import OrderChoice, choose_orders
 from processors.calibration.mono import MonoResult, mono_camera_info
 from processors.calibration.options import CalibrationOptions
 from processors.calibration.robust import seed_camera
@@ -63,6 +64,7 @@ class CameraSolution:
     frames_in_view: dict[int, int]  # view name -> how many frames it averages
     coverage: Coverage  # of the used views
     statistics: Future[CameraStatistics]  # computed beside the evidence pass (solve_rig)
+    order: OrderChoice | None = None  # the radial order's cross-validation, when chosen
 
     @property
     def uncertainty(self) -> UncertaintyMap:
@@ -260,7 +262,9 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
               as_rig: bool = False) -> RigSolution:
     """Calibrate every camera, and for two the stereo rig (with ``as_rig``, or for three or
     more cameras: every pair of the rig), from every view; a circle grid's
-    circles are ``diameter_m`` across, or as the views measure them. ``remeasure`` gives the
+    circles are ``diameter_m`` across, or as the views measure them; with ``choose_order``
+    options each camera's radial order is chosen first, by cross-validation over its views
+    (:mod:`processors.calibration.model_order`). ``remeasure`` gives the
     views measured again through a first solution (:mod:`.remeasure`), which are then solved
     again from it. With ``background`` the cameras' :class:`~.statistics.CameraStatistics`
     (most of the work) of a short log are computed on a thread of their own while the caller
@@ -271,13 +275,18 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
     rig, seeds, sizes = _prepared(cameras, board, options, approximate_s=approximate_s,
                                   stereo_note=len(cameras) > 1)
     points = board.points_in_board()
-    joint = calibrate_cameras(points, rig.views, sizes, options, seeds=seeds,
+    orders = choose_orders(points, rig.views, sizes, options)
+    chosen = [options if o is None else o.options for o in orders]
+    seeds = [s if o.distortion_model == options.distortion_model
+             else seed_camera(points, rig.views, camera, sizes[camera], o)
+             for camera, (s, o) in enumerate(zip(seeds, chosen, strict=True))]
+    joint = calibrate_cameras(points, rig.views, sizes, chosen, seeds=seeds,
                               disc_diameter_m=disc_diameter_m)
     again = None
     if remeasure is not None:
         first, before = joint, rig
         rig = remeasure(rig, joint)
-        joint = calibrate_cameras(points, rig.views, sizes, options, seeds=joint.models,
+        joint = calibrate_cameras(points, rig.views, sizes, chosen, seeds=joint.models,
                                   disc_diameter_m=disc_diameter_m)
         again = [measured_again_text(before, rig, first, joint, c) for c in range(len(cameras))]
     statistics = camera_statistics(joint, rig.views, points, sizes,
@@ -294,7 +303,7 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
             views, rig.candidates[index], sorted(view_of), result, view_of,
             {rig.frames_of[i][0]: len(rig.frames_of[i]) for i in mine},
             coverage(params, [c for c, _ in used], views.size),
-            statistics[index]))
+            statistics[index], orders[index]))
     stereo, pairs = None, []
     if as_rig or len(cameras) > 2:
         pairs = rig_pairs(joint, rig, points_in_board=points, square_m=board.square_m)

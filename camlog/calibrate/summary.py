@@ -10,6 +10,7 @@ import numpy as np
 
 from processors.calibration.board import Board
 from processors.calibration.joint import camera_views
+from processors.calibration.model_order import OrderChoice, order_label
 from processors.calibration.mono import (
     CalibrationOptions,
     MonoResult,
@@ -51,6 +52,14 @@ def _tangential(result: MonoResult) -> records.TangentialSummary:
     if test is None:
         return records.TangentialSummary(estimated)
     return records.TangentialSummary(estimated, test.chi2, test.p_value, test.describe())
+
+
+def _lens_order(order: OrderChoice | None) -> records.LensOrderSummary | None:
+    if order is None:
+        return None
+    return records.LensOrderSummary(
+        [order_label(c) for c in order.candidates], order.held_out_rms_px,
+        order_label(order.options), order.views, order.folds, order.describe())
 
 
 def _rejected(camera: CalibratedCamera) -> list[records.RejectedView]:
@@ -150,6 +159,7 @@ def _camera(camera: CalibratedCamera, index: int, solved: RigSolution,
         **differences,
         evidence=_evidence(camera, index, solved),
         uncertainty=_uncertainty(camera, index, solved, truth),
+        lens_order=_lens_order(solution.order),
     )
 
 
@@ -225,7 +235,7 @@ def build_summary(cameras: list[CalibratedCamera], solved: RigSolution, *,
             circles.measured if circles is not None else None),
         options=records.OptionsSummary(options.fix_principal_point, options.fix_aspect_ratio,
                                options.tangential, options.radial_count,
-                               options.distortion_model),
+                               options.distortion_model, options.choose_order or None),
         cameras=[_camera(c, i, solved, truth) for i, c in enumerate(cameras)],
         ground_truth=scenario is not None,
         stereo=_stereo(cameras, stereo) if stereo is not None else None,

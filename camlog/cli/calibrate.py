@@ -68,6 +68,8 @@ def run(args: argparse.Namespace) -> int:
               f"RMS {camera.rms_px:.4f} px")
         print("  " + "  ".join(f"{name} {p[name].value:.3f} ± {p[name].std:.3f}"
                                for name in ("fx", "fy", "cx", "cy")))
+        if camera.lens_order is not None:
+            print(f"  {camera.lens_order.summary}")
         if camera.tangential.summary is not None:
             print(f"  {camera.tangential.summary}")
         if camera.uncertainty is not None:

@@ -3,6 +3,7 @@ camera_calibration's spellings accepted as aliases)."""
 
 from __future__ import annotations
 
+import argparse
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, ClassVar
@@ -23,6 +24,20 @@ __all__ = ["CalibrateRequest"]
 
 #: ROS distortion_model names (and OpenCV's "fisheye" for equidistant)
 MODELS = (*CAMERA_MODELS, *MODEL_ALIASES)
+#: ``-k``'s word for a radial order chosen by cross-validation
+AUTO_ORDER = "auto"
+
+
+def radial_count(text: str) -> int | str:
+    """A type: a number of radial coefficients (its range checked with the lens model), or
+    ``auto``."""
+    if text.strip().lower() == AUTO_ORDER:
+        return AUTO_ORDER
+    try:
+        return int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected an integer or '{AUTO_ORDER}', got {text!r}") from None
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -97,11 +112,14 @@ class CalibrateRequest:
     dictionary: str | None = option(
         None, "--dictionary", metavar="NAME",
         help=f"--pattern charuco: OpenCV ArUco dictionary (default {DEFAULT_DICTIONARY})")
-    k_coefficients: int | None = option(
-        None, "-k", "--k-coefficients", type=int, metavar="N",
-        help="radial coefficients to estimate (default: 2 plumb_bob, 6 rational_polynomial, 4 "
-             "equidistant); without --model, > 3 selects rational_polynomial as "
-             "camera_calibration does")
+    k_coefficients: int | str | None = option(
+        None, "-k", "--k-coefficients", type=radial_count, metavar="N|auto",
+        help="radial coefficients to estimate (default without --model: chosen per camera "
+             "by cross-validation over the views among plumb_bob's k1 k2, k1 k2 k3 and "
+             "rational_polynomial's k1..k6; with --model: 2 plumb_bob, 6 "
+             "rational_polynomial, 4 equidistant); without --model, > 3 selects "
+             "rational_polynomial as camera_calibration does; 'auto' chooses with --model "
+             "plumb_bob too (k1 k2 or k1 k2 k3)")
     camera_name: str | None = option(None, "-c", "--camera-name", "--camera_name",
                                      help="camera_name written in the YAML files")
     max_chessboard_speed: float | None = option(
@@ -170,11 +188,17 @@ class CalibrateRequest:
         return board
 
     def options(self) -> CalibrationOptions:
-        """The solver's options: lens model and what is held fixed."""
+        """The solver's options: lens model and what is held fixed; the radial order is
+        chosen by cross-validation (``choose_order``) unless ``-k N`` or ``--model`` is
+        given, or with ``-k auto``."""
         from processors.calibration.options import CalibrationOptions, tangential_mode
 
+        auto = self.k_coefficients == AUTO_ORDER or (self.k_coefficients is None
+                                                    and self.model is None)
         return CalibrationOptions(
             fix_principal_point=self.fix_principal_point,
             fix_aspect_ratio=self.fix_aspect_ratio,
             tangential=tangential_mode(self.zero_tangent_dist, self.tangent_dist),
-            k_coefficients=self.k_coefficients, model=self.model)
+            k_coefficients=None if auto or self.k_coefficients is None
+            else int(self.k_coefficients),
+            model=self.model, choose_order=auto)

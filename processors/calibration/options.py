@@ -5,7 +5,9 @@ image centre, ``fix_aspect_ratio`` forces fx = fy, and ``k_coefficients`` radial
 estimated. The lens ``model`` is a ROS ``distortion_model``: ``plumb_bob`` (k1 k2 p1 p2 k3),
 ``rational_polynomial`` (k1..k6 with p1 p2) or ``equidistant`` (fisheye k1..k4, no tangential
 terms); ``fisheye`` is accepted for equidistant. Without a model, ``k_coefficients`` > 3
-selects rational_polynomial, as camera_calibration's ``-k`` does.
+selects rational_polynomial, as camera_calibration's ``-k`` does. With ``choose_order``
+the radial order (plumb_bob k1 k2 or k1 k2 k3, rational_polynomial k1..k6 unless plumb_bob
+is named) is chosen per camera by cross-validation over the views (:mod:`.model_order`).
 
 Tangential distortion (p1, p2) is held at zero (``"zero"``), always estimated
 (``"estimate"``) or, by default (``"auto"``), estimated only when the views show it: a
@@ -54,8 +56,14 @@ class CalibrationOptions:
     tangential: str = "auto"
     k_coefficients: int | None = None
     model: str | None = None
+    choose_order: bool = False
 
     def __post_init__(self) -> None:
+        if self.choose_order and (self.k_coefficients is not None
+                                  or self.model not in (None, "plumb_bob")):
+            raise ProcessorError("the radial order is chosen among plumb_bob's and "
+                                 "rational_polynomial's: give no number of radial "
+                                 "coefficients and no lens model other than plumb_bob")
         if self.model is not None:
             model = canonical_model(self.model)
             if model not in MODELS:

@@ -73,14 +73,14 @@ def _without_stopping_views(points: list[F64], corners: list[F64], pick: list[in
     pose on the way, which OpenCV asserts against), that view, found by solving without one
     view at a time, is left out."""
     try:
-        return pick, _opencv_calibration([points[i] for i in pick],
+        return pick, opencv_calibration([points[i] for i in pick],
                                          [corners[i] for i in pick], size, options)
     except ProcessorError as err:
         failure = err
     for i in pick:
         rest = [j for j in pick if j != i]
         try:
-            return rest, _opencv_calibration([points[j] for j in rest],
+            return rest, opencv_calibration([points[j] for j in rest],
                                              [corners[j] for j in rest], size, options)
         except ProcessorError:
             continue
@@ -120,8 +120,10 @@ def one_opencv_thread() -> Iterator[None]:
                 cv2.setNumThreads(_serial_users[1])
 
 
-def _opencv_calibration(points: list[F64], corners: list[F64], size: tuple[int, int],
-                        options: CalibrationOptions) -> CameraModel:
+def opencv_calibration(points: list[F64], corners: list[F64], size: tuple[int, int],
+                       options: CalibrationOptions) -> CameraModel:
+    """OpenCV's calibration of every view given, on one thread (ProcessorError when it
+    stops)."""
     model = options.distortion_model
     try:
         with one_opencv_thread():

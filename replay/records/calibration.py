@@ -23,6 +23,7 @@ __all__ = [
     "CameraSummary",
     "CoverageSummary",
     "EvidenceSummary",
+    "LensOrderSummary",
     "OptionsSummary",
     "ParameterEstimate",
     "RangeProgress",
@@ -77,13 +78,16 @@ class BoardSummary:
 
 @dataclass(frozen=True)
 class OptionsSummary:
-    """The solver options (camera_calibration's meaning)."""
+    """The solver options (camera_calibration's meaning); with ``choose_order`` the model
+    and radial count are where the choice of each camera's radial order starts (its
+    ``lens_order`` says what was chosen)."""
 
     fix_principal_point: bool
     fix_aspect_ratio: bool
     tangential: str
     k_coefficients: int
     distortion_model: str
+    choose_order: bool | None = field(default=None, metadata=OMIT_NONE)
 
 
 @dataclass(frozen=True)
@@ -113,6 +117,20 @@ class TangentialSummary:
     chi2: float | None = field(default=None, metadata=OMIT_NONE)
     p_value: float | None = field(default=None, metadata=OMIT_NONE)
     summary: str | None = field(default=None, metadata=OMIT_NONE)
+
+
+@dataclass(frozen=True)
+class LensOrderSummary:
+    """The radial order chosen by cross-validation over the views: every candidate tried
+    (``plumb_bob k1 k2``, ...) with its held-out RMS reprojection error (px; none when too
+    few views left no choice), the one chosen and the choice in words."""
+
+    candidates: list[str]
+    held_out_rms_px: list[float]
+    chosen: str
+    views: int
+    folds: int
+    summary: str
 
 
 @dataclass(frozen=True)
@@ -235,6 +253,7 @@ class CameraSummary:
         default=None, metadata=OMIT_NONE)
     evidence: EvidenceSummary | None = field(default=None, metadata=OMIT_NONE)
     uncertainty: UncertaintySummary | None = field(default=None, metadata=OMIT_NONE)
+    lens_order: LensOrderSummary | None = field(default=None, metadata=OMIT_NONE)
 
     @property
     def has_truth(self) -> bool:

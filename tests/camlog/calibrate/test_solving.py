@@ -1,0 +1,56 @@
+"""The radial order in the flow: by default (or with ``-k auto``) it is chosen per camera and
+every output says so; an order given (``-k N``, ``--model``) is solved as given, without a
+choice."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import pytest
+
+from camlog.calibrate.flow import calibrate_log
+from camlog.cli import build_parser
+from camlog.requests.arguments import request_from_args
+from camlog.requests.calibrate import CalibrateRequest
+from processors.calibration.model_order import order_label
+
+
+def request(log: Path, out: Path, *flags: str) -> CalibrateRequest:
+    parser = build_parser(["calibrate"])
+    args: argparse.Namespace = parser.parse_args(
+        ["calibrate", str(log), "-s", "7x6", "-q", "0.01", "--camera", "/simple_camera",
+         "-o", str(out), "--no-progress", "--no-report", *flags])
+    return request_from_args(CalibrateRequest, args)
+
+
+@pytest.mark.parametrize("flags", [(), ("-k", "auto")])
+def test_the_order_is_chosen_and_reported(mono_calibration_log: Path, tmp_path: Path,
+                                          flags: tuple[str, ...]) -> None:
+    log = mono_calibration_log.parent.parent / "mono.mcap"  # 320x240, an ideal lens
+    run = calibrate_log(request(log, tmp_path / "auto", *flags))
+    order = run.cameras[0].solution.order
+    assert order is not None and order.folds == 5 and order.views >= 10
+    assert order_label(order.options) == "plumb_bob k1 k2"  # the lens has no k3
+    assert run.cameras[0].solution.result.options.radial_count == 2
+    written = json.loads((tmp_path / "auto" / "calibration.json").read_text())
+    camera = written["cameras"][0]
+    assert camera["lens_order"]["chosen"] == "plumb_bob k1 k2"
+    # k3 not taken: the ladder stops below rational_polynomial
+    assert camera["lens_order"]["candidates"] == ["plumb_bob k1 k2", "plumb_bob k1 k2 k3"]
+    assert len(camera["lens_order"]["held_out_rms_px"]) == 2
+    assert written["options"]["choose_order"] is True
+
+
+@pytest.mark.parametrize(("flags", "radial"), [(("-k", "3"), 3), (("-k", "2"), 2),
+                                              (("--model", "plumb_bob"), 2)])
+def test_an_order_given_is_not_chosen(mono_calibration_log: Path, tmp_path: Path,
+                                      flags: tuple[str, ...], radial: int) -> None:
+    log = mono_calibration_log.parent.parent / "mono.mcap"
+    run = calibrate_log(request(log, tmp_path / "given", *flags))
+    assert run.cameras[0].solution.order is None
+    assert run.cameras[0].solution.result.options.radial_count == radial
+    written = json.loads((tmp_path / "given" / "calibration.json").read_text())
+    assert "lens_order" not in written["cameras"][0]
+    assert "choose_order" not in written["options"]
