@@ -26,7 +26,7 @@ from recorder.scenario import load_scenario
 from rerun_export import view_logs
 
 from .calibrate.flow import calibrate_log
-from .cli.lean import pandas_hidden, without_pandas
+from .lean import pandas_hidden, without_pandas
 from .processing.process_log import process_log
 from .processing.resync_log import resync_log
 from .requests.calibrate import CalibrateRequest

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 __all__ = ["CalibrationError", "CamlogError", "ClusterError", "GoldenError", "InputError",
-           "PipelineError", "ProcessingError", "RequestError", "SyncError",
+           "PipelineError", "ProcessingError", "SyncError",
            "UsageError"]
 
 
@@ -17,25 +17,6 @@ class InputError(CamlogError):
 
 class UsageError(CamlogError):
     """Options are missing, out of range or contradict each other."""
-
-
-class RequestError(UsageError):
-    """A command's request is invalid: ``template`` names its options as ``{field}``, which
-    read as flags (``--left``) on the command line and as keys (``left``) in a pipeline."""
-
-    def __init__(self, request: type, template: str) -> None:
-        self.request = request
-        self.template = template
-        super().__init__(template)
-
-    def worded(self, word: dict[str, str]) -> str:
-        """The message with each ``{field}`` given as ``word[field]``."""
-        return self.template.format_map(word)
-
-    def __str__(self) -> str:
-        from .requests.fields import flag_words
-
-        return self.worded(flag_words(self.request))
 
 
 class CalibrationError(CamlogError):

@@ -61,8 +61,8 @@ from typing import Any
 from replay.bounded import read_text, toml_loads, yaml_load
 from replay.storage import Location
 
-from ..errors import PipelineError, RequestError
-from ..requests.fields import batch_keys
+from ..errors import PipelineError
+from ..requests.fields import RequestError, batch_keys
 from ..requests.table import keyed, request_from_table
 from .steps import STEPS, StepKind, StepOutcome, keys_worded, step_processors
 

@@ -205,10 +205,10 @@ def _info(request: InfoRequest, o: dict[str, Any], out: Path, workers: int) -> S
 
 
 def _check(request: CheckRequest, o: dict[str, Any], out: Path, workers: int) -> StepOutcome:
-    from ..check.flow import check_log
+    from ..check.flow import check_log, options_of
     from ..check.report import write_report
 
-    checked = check_log(request.logs[0], request.options())
+    checked = check_log(request.logs[0], options_of(request))
     flagged = [s for s in checked.series if any(s.flagged)]
     figures: dict[str, Any] = {
         "flagged_windows": int(sum(sum(s.flagged) for s in checked.series))}

@@ -26,9 +26,10 @@ from replay.formats.background import BackgroundWriter
 from replay.records import CalibrationSummary, Scenario
 from replay.storage import Location, local_paths
 
-from ..errors import InputError, RequestError, UsageError
+from ..errors import InputError, UsageError
 from ..processing.cameras import cameras_in, find_camera
 from ..requests.calibrate import CalibrateRequest
+from ..requests.fields import RequestError
 from .evidence import write_evidence, write_summary
 from .instants import ViewsOfRig
 from .remeasure import remeasured_rig

@@ -30,12 +30,13 @@ from replay.camera import CameraModel
 from replay.formats import open_reader
 
 from ..errors import InputError
+from ..requests.check import CheckRequest
 from .cameras import Checkable, Unchecked, checkable
 from .samples import samples
 from .series import NOISE_SIGMAS, CheckOptions, Series, board_series, stereo_series
 
 __all__ = ["EXIT_DRIFTED", "EXIT_NOT_JUDGED", "NOISE_SIGMAS", "CheckOptions", "LogCheck",
-           "Series", "check_log", "exit_status"]
+           "Series", "check_log", "exit_status", "options_of"]
 
 #: exit status of ``camlog check`` when a log drifted (errors exit with 1, usage with 2)
 EXIT_DRIFTED = 3
@@ -178,3 +179,15 @@ def _board_view(window: _Window, gray: np.ndarray, check: Checkable, board: Boar
     fit = fit_view(detection.corners_px, model, board.points_in_board()[detection.ids])
     if fit is not None:
         window.reprojection_px.append(fit.rms_px)
+
+
+def options_of(request: CheckRequest) -> CheckOptions:
+    """The check's options a request asks for (the board made from ``size``, ``square``,
+    ``pattern``)."""
+    from processors.calibration.board import make_board
+
+    board = make_board(request.size, request.square, request.pattern) \
+        if request.size is not None and request.square is not None else None
+    return CheckOptions(window_s=request.window, rate_hz=request.rate, board=board,
+                        calibration=request.calibration, cameras=list(request.camera),
+                        threshold=request.threshold)

@@ -163,7 +163,7 @@ def _run(argv: list[str], command: str | None, where: str, *, as_program: bool) 
             os.environ.setdefault("OPENCV_LOG_LEVEL", "ERROR")
             filter_decoder_messages()
         args = build_parser([command] if command else []).parse_args(argv)
-        args.as_program = as_program  # the process is camlog's own (see camlog.cli.lean)
+        args.as_program = as_program  # the process is camlog's own (see camlog.lean)
         if as_program:
             keep_freed_memory()
         return int(args.run(args))

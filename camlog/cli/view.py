@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import argparse
 
+from ..lean import without_pandas
 from ..requests.arguments import request_from_args
 from ..requests.play import ViewRequest
 from .args import add_request, print_warnings
-from .lean import without_pandas
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -15,16 +15,14 @@ from processors.spec import Configured
 from replay.msgtypes import COMPRESSED_IMAGE, IMAGE
 
 from ..errors import UsageError
+from ..requests.processing import CHAPTER_NS, COMPRESSIONS
 
 if TYPE_CHECKING:  # the command line imports this module: records load numpy
     from replay.records import ProcessedOutput
 
+
 __all__ = ["CHAPTER_NS", "COMPRESSIONS", "input_namespace", "output_namespace", "plan_outputs"]
 
-#: the namespace of the chapter's nodes (``/image_converter/edges`` ...)
-CHAPTER_NS = "/image_converter"
-#: formats image outputs may be compressed to
-COMPRESSIONS = ("jpeg", "png")
 
 
 def input_namespace(topic: str) -> str:

@@ -11,9 +11,8 @@ from typing import TYPE_CHECKING, ClassVar
 from processors.calibration.patterns import DEFAULT_DICTIONARY, PATTERNS
 from replay.format_names import CAMERA_MODELS, MODEL_ALIASES
 
-from ..errors import RequestError
 from . import fields as common
-from .fields import option, required
+from .fields import RequestError, option, required
 from .values import name, namespaces, non_negative, positive
 
 if TYPE_CHECKING:

@@ -5,16 +5,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, ClassVar
+from typing import ClassVar
 
 from processors.calibration.patterns import PATTERNS
 
-from ..errors import RequestError
-from .fields import option
+from .fields import RequestError, option
 from .values import number, positive
-
-if TYPE_CHECKING:
-    from ..check.flow import CheckOptions
 
 __all__ = ["CheckRequest"]
 
@@ -66,15 +62,3 @@ class CheckRequest:
     def __post_init__(self) -> None:
         if (self.size is None) != (self.square is None):
             raise RequestError(CheckRequest, "a board needs both {size} and {square}")
-
-    def options(self) -> CheckOptions:
-        """The check's options (the board made from ``size``, ``square``, ``pattern``)."""
-        from processors.calibration.board import make_board
-
-        from ..check.flow import CheckOptions
-
-        board = make_board(self.size, self.square, self.pattern) \
-            if self.size is not None and self.square is not None else None
-        return CheckOptions(window_s=self.window, rate_hz=self.rate, board=board,
-                            calibration=self.calibration, cameras=list(self.camera),
-                            threshold=self.threshold)

@@ -17,11 +17,12 @@ from typing import Any
 
 from replay.format_names import WRITE_FORMATS
 
+from ..errors import UsageError
 from .values import bounded_int, name, non_negative, output_path
 
-__all__ = ["Arg", "arg_of", "batch_keys", "bind", "connect", "end", "flag_words", "input_log",
-           "log_format", "option", "output", "overwrite", "port", "progress", "recover",
-           "request_fields", "required", "spawn", "start", "topics", "viewer_output",
+__all__ = ["Arg", "RequestError", "arg_of", "batch_keys", "bind", "connect", "end", "flag_words",
+           "input_log", "log_format", "option", "output", "overwrite", "port", "progress",
+           "recover", "request_fields", "required", "spawn", "start", "topics", "viewer_output",
            "workers"]
 
 #: the metadata key of a field's :class:`Arg`
@@ -86,6 +87,23 @@ def request_fields(request: type) -> tuple[dataclasses.Field[Any], ...]:
 def batch_keys(request: type) -> frozenset[str]:
     """The keys a pipeline step of ``request`` takes: its fields the runner does not set."""
     return frozenset(f.name for f in request_fields(request) if arg_of(f).batch)
+
+
+class RequestError(UsageError):
+    """A command's request is invalid: ``template`` names its options as ``{field}``, which
+    read as flags (``--left``) on the command line and as keys (``left``) in a pipeline."""
+
+    def __init__(self, request: type, template: str) -> None:
+        self.request = request
+        self.template = template
+        super().__init__(template)
+
+    def worded(self, word: dict[str, str]) -> str:
+        """The message with each ``{field}`` given as ``word[field]``."""
+        return self.template.format_map(word)
+
+    def __str__(self) -> str:
+        return self.worded(flag_words(self.request))
 
 
 def flag_words(request: type) -> dict[str, str]:

@@ -15,12 +15,16 @@ from processors.spec import Configured
 from replay.storage import Location
 from replay.topics import RESYNC_PREFIX
 
-from ..processing.outputs import CHAPTER_NS, COMPRESSIONS
 from . import fields as common
 from .fields import option, required
 from .values import bounded_int, name, number
 
-__all__ = ["ProcessRequest", "ResyncRequest", "ThrottleRequest"]
+__all__ = ["CHAPTER_NS", "COMPRESSIONS", "ProcessRequest", "ResyncRequest", "ThrottleRequest"]
+
+#: the namespace of the chapter's nodes (``/image_converter/edges`` ...)
+CHAPTER_NS = "/image_converter"
+#: formats image outputs may be compressed to
+COMPRESSIONS = ("jpeg", "png")
 
 @dataclass(frozen=True, kw_only=True)
 class ResyncRequest:

@@ -8,8 +8,8 @@ import dataclasses
 from collections.abc import Mapping
 from typing import Any, TypeVar
 
-from ..errors import PipelineError, RequestError
-from .fields import Arg, arg_of, batch_keys, request_fields
+from ..errors import PipelineError
+from .fields import Arg, RequestError, arg_of, batch_keys, request_fields
 
 __all__ = ["keyed", "request_from_table", "table_value"]
 

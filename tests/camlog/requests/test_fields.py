@@ -173,7 +173,8 @@ def test_a_golden_job_takes_the_field(command: str, field: Field[Any]) -> None:
     assert getattr(job.request, field.name) == value
 
 def test_a_request_error_is_worded_for_each_place() -> None:
-    from camlog.errors import PipelineError, RequestError
+    from camlog.errors import PipelineError
+    from camlog.requests.fields import RequestError
 
     with pytest.raises(RequestError) as cli:
         CalibrateRequest(size="7x6", square=0.01, left="/a")
