@@ -32,6 +32,9 @@ CONNECT_TIMEOUT_S = 5.0
 #: tries to start a local Ray instance (its servers may miss Ray's start-up deadline on a
 #: loaded machine)
 LOCAL_START_ATTEMPTS = 2
+#: how long a local Ray instance's GCS server may take to start (s; unless the user set
+#: RAY_gcs_server_port_wait_time_s)
+GCS_START_WAIT_S = 120
 
 
 def run_on_ray(jobs: list[Job], *, address: str | None, jobs_at_once: int | None,
@@ -93,6 +96,8 @@ def _start_local(ray: Any, cpus: float) -> None:
     saved = getattr(ray_constants, "ENABLE_RAY_CLUSTER", None)
     if saved is not None:
         ray_constants.ENABLE_RAY_CLUSTER = False
+    # Ray waits 30 s for its GCS server to bind its port, which a loaded machine can miss
+    os.environ.setdefault("RAY_gcs_server_port_wait_time_s", str(GCS_START_WAIT_S))
     try:
         for attempt in range(1, LOCAL_START_ATTEMPTS + 1):
             try:

@@ -8,6 +8,7 @@ import pytest
 
 from camlog import errors
 from camlog.cli import main
+from camlog.requests.fields import RequestError
 
 
 @pytest.mark.parametrize(("argv", "needle"), [
@@ -32,7 +33,8 @@ def test_one_line_per_error_tree(tmp_path: Path, capsys: pytest.CaptureFixture[s
 def test_camlog_errors_form_one_tree() -> None:
     leaves = [errors.InputError, errors.UsageError, errors.CalibrationError,
               errors.ProcessingError, errors.SyncError, errors.PipelineError,
-              errors.GoldenError, errors.ClusterError, errors.RequestError]
+              errors.GoldenError, errors.ClusterError]
     assert all(issubclass(leaf, errors.CamlogError) for leaf in leaves)
     assert sorted(errors.__all__) == sorted([errors.CamlogError.__name__,
                                              *(leaf.__name__ for leaf in leaves)])
+    assert issubclass(RequestError, errors.UsageError)  # declared with the requests
