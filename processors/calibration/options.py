@@ -29,9 +29,9 @@ from replay.camera import canonical_model
 from replay.lens_models import LENS_MODELS, MODEL_ALIASES, lens_model
 
 from ..errors import ProcessorError
+from .patterns import WARP_MODES
 
 TANGENTIAL_MODES = ("auto", "estimate", "zero")
-WARP_MODES = ("auto", "on", "off")
 MODELS = tuple(LENS_MODELS)
 #: radial coefficients estimated when -k is not given, and at most (the lens-model table)
 DEFAULT_K = {name: m.default_radial for name, m in LENS_MODELS.items()}

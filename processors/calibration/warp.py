@@ -14,7 +14,7 @@ import numpy as np
 
 from replay.messages import F64
 
-__all__ = ["WARP_NAMES", "warp_shapes", "warped"]
+__all__ = ["WARP_NAMES", "warp_shapes", "warp_text", "warped"]
 
 WARP_NAMES = ("wx", "wy")
 
@@ -28,6 +28,13 @@ def warp_shapes(points_in_board: F64) -> F64:
     half = (high - low) / 2.0
     scaled = np.divide(xy - (low + half), half, out=np.ones_like(xy), where=half > 0)
     return np.asarray(1.0 - scaled ** 2, dtype=np.float64)
+
+
+def warp_text(warp_m: F64, std_m: F64) -> str:
+    """``board warp 1.50 ± 0.01 mm along x, -1.00 ± 0.01 mm along y``."""
+    return "board warp " + ", ".join(
+        f"{1000 * w:.3f} ± {1000 * s:.3f} mm along {axis}"
+        for w, s, axis in zip(warp_m, std_m, "xy", strict=True))
 
 
 def warped(points_in_board: F64, warp_m: F64) -> F64:

@@ -27,10 +27,9 @@ from replay.messages import F64
 from . import bundle
 from .model_order import MAX_P_VALUE, MIN_CORNERS, MIN_GAIN, MIN_ORDER_VIEWS, signed_rank_p
 from .normal import refine
-from .options import WARP_MODES
 from .robust import Problem
 
-__all__ = ["WARP_FOLDS", "WARP_MODES", "WarpChoice", "choose_warp"]
+__all__ = ["WARP_FOLDS", "WarpChoice", "choose_warp"]
 
 WARP_FOLDS = 5
 
