@@ -67,14 +67,15 @@ def _camlog(*args: str) -> None:
 
 
 def camlog_calibration(dataset: Dataset, folder: Path, work: Path, *,
-                       auto_order: bool = False) -> CamlogResult:
-    """Import ``folder`` and calibrate it with camlog; the numbers of calibration.json."""
+                       auto_order: bool = False, extra: tuple[str, ...] = ()) -> CamlogResult:
+    """Import ``folder`` and calibrate it with camlog (``extra``: more options); the numbers
+    of calibration.json (kept in ``work``/NAME_calibration)."""
     log = work / f"{dataset.name}.mcap"
     topic = "/corpus" if dataset.stereo else "/corpus/image_raw"
     _camlog("import", str(folder), "-o", str(log), "--topic", topic, "--rate", "1",
             "--overwrite", "--no-progress", *(["--stereo"] if dataset.stereo else []))
     out = work / f"{dataset.name}_calibration"
-    _camlog("calibrate", str(log), *camlog_args(dataset, auto_order=auto_order), "-o",
+    _camlog("calibrate", str(log), *camlog_args(dataset, auto_order=auto_order), *extra, "-o",
             str(out), "--overwrite",
             "--no-report", "--no-progress")
     summary = json.loads((out / "calibration.json").read_text())

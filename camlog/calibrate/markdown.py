@@ -197,6 +197,9 @@ def markdown_report(summary: CalibrationSummary, figures: list[str]) -> str:
         + f"options: {flags or 'none'}; tangential distortion: "
         f"{options.tangential}.", "",
     ]
+    if summary.board_warp is not None:
+        text = summary.board_warp.summary
+        lines += [text[0].upper() + text[1:] + ".", ""]
     for camera in summary.cameras:
         lines += _camera_lines(camera)
     if summary.stereo is not None:

@@ -11,6 +11,7 @@ which is what every later step (summary, evidence, report) speaks.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from concurrent.futures import Future
 from dataclasses import dataclass, field
@@ -250,7 +251,8 @@ def guiding_models(cameras: list[CameraViews], board: Board, options: Calibratio
         return {}
     rig, seeds, sizes = _prepared(cameras, board, options, approximate_s=approximate_s,
                                   stereo_note=False)
-    joint = calibrate_cameras(board.points_in_board(), rig.views, sizes, options, seeds=seeds)
+    joint = calibrate_cameras(board.points_in_board(), rig.views, sizes,
+                              dataclasses.replace(options, board_warp="off"), seeds=seeds)
     return {views.source.namespace: model
             for views, model in zip(cameras, joint.models, strict=True)}
 
@@ -264,7 +266,9 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
     more cameras: every pair of the rig), from every view; a circle grid's
     circles are ``diameter_m`` across, or as the views measure them; with ``choose_order``
     options each camera's radial order is chosen first, by cross-validation over its views
-    (:mod:`processors.calibration.model_order`). ``remeasure`` gives the
+    (:mod:`processors.calibration.model_order`), and with ``board_warp="auto"`` the board's
+    warp after the flat solve (:mod:`processors.calibration.warp_choice`; the guiding
+    models of a ChArUco detection are solved flat). ``remeasure`` gives the
     views measured again through a first solution (:mod:`.remeasure`), which are then solved
     again from it. With ``background`` the cameras' :class:`~.statistics.CameraStatistics`
     (most of the work) of a short log are computed on a thread of their own while the caller

@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from processors.calibration.board import Board
-from processors.calibration.joint import camera_views
+from processors.calibration.joint import JointResult, camera_views
 from processors.calibration.model_order import OrderChoice, order_label
 from processors.calibration.mono import (
     CalibrationOptions,
@@ -20,6 +20,7 @@ from processors.calibration.rig import angle_deg
 from processors.calibration.rotation import rotation_vectors
 from processors.calibration.uncertainty import error_against
 from processors.calibration.validation import projection_difference
+from processors.calibration.warp import warp_text
 from replay.geometry import invert
 from replay.messages import F64
 from replay.records import calibration as records
@@ -60,6 +61,21 @@ def _lens_order(order: OrderChoice | None) -> records.LensOrderSummary | None:
     return records.LensOrderSummary(
         [order_label(c) for c in order.candidates], order.held_out_rms_px,
         order_label(order.options), order.views, order.folds, order.describe())
+
+
+def _board_warp(joint: JointResult, mode: str) -> records.BoardWarpSummary | None:
+    """The board's warp and, with ``auto``, its cross-validation (None: held flat, ``off``)."""
+    if mode == "off":
+        return None
+    choice, estimate = joint.warp_choice, joint.board_warp_m
+    words = [warp_text(*estimate)] if estimate is not None else []
+    words.append(choice.describe() if choice is not None else "estimated (--board-warp on)")
+    numbers = {} if estimate is None else {
+        "warp_mm": (1000 * estimate[0]).tolist(), "warp_std_mm": (1000 * estimate[1]).tolist()}
+    if choice is not None and choice.why_not is None:
+        numbers |= {"held_out_rms_px": list(choice.held_out_rms_px), "gain": choice.gain,
+                    "p_value": choice.p_value, "views": choice.views, "folds": choice.folds}
+    return records.BoardWarpSummary(mode, estimate is not None, "; ".join(words), **numbers)
 
 
 def _rejected(camera: CalibratedCamera) -> list[records.RejectedView]:
@@ -240,4 +256,5 @@ def build_summary(cameras: list[CalibratedCamera], solved: RigSolution, *,
         ground_truth=scenario is not None,
         stereo=_stereo(cameras, stereo) if stereo is not None else None,
         rig=_rig(cameras, solved) if stereo is None and len(cameras) > 1 else None,
+        board_warp=_board_warp(solved.joint, options.board_warp),
     )

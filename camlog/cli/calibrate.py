@@ -83,6 +83,8 @@ def run(args: argparse.Namespace) -> int:
                   "where corners were seen, "
                   f"{camera.max_projection_difference_vs_truth_aligned_px:.3f} px over the "
                   "whole image (camera frames aligned by a rotation)")
+    if run_.summary.board_warp is not None:
+        print(run_.summary.board_warp.summary)
     if run_.summary.rig is not None:
         print("\n".join(rig_lines(run_.summary.rig)))
     if run_.summary.stereo is not None:

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING, ClassVar
 
-from processors.calibration.patterns import DEFAULT_DICTIONARY, PATTERNS
+from processors.calibration.patterns import DEFAULT_DICTIONARY, PATTERNS, WARP_MODES
 from replay.format_names import CAMERA_MODELS, MODEL_ALIASES
 
 from . import fields as common
@@ -119,6 +119,12 @@ class CalibrateRequest:
              "rational_polynomial, 4 equidistant); without --model, > 3 selects "
              "rational_polynomial as camera_calibration does; 'auto' chooses with --model "
              "plumb_bob too (k1 k2 or k1 k2 k3)")
+    board_warp: str = option(
+        "auto", "--board-warp", choices=WARP_MODES,
+        help="the board's bow out of its plane (two parameters, a parabola along its x and "
+             "along its y, as mrcal's calobject_warp): 'auto' (default) estimates it when "
+             "cross-validation over the views shows it, 'on' always, 'off' holds the board "
+             "flat")
     camera_name: str | None = option(None, "-c", "--camera-name", "--camera_name",
                                      help="camera_name written in the YAML files")
     max_chessboard_speed: float | None = option(
@@ -200,4 +206,4 @@ class CalibrateRequest:
             tangential=tangential_mode(self.zero_tangent_dist, self.tangent_dist),
             k_coefficients=None if auto or self.k_coefficients is None
             else int(self.k_coefficients),
-            model=self.model, choose_order=auto)
+            model=self.model, choose_order=auto, board_warp=self.board_warp)

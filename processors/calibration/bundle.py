@@ -2,7 +2,8 @@
 
 The unknowns are the free intrinsics of each camera, ``camera_from_reference`` of every camera
 but the first (the reference, camera 0; stereo is N = 2) and ``reference_from_board`` of every
-instant the board was seen. A view is one camera's corners at one instant; views of the same
+instant the board was seen, and with ``warp`` the board's bow (:mod:`.warp`, two unknowns
+shared by every view). A view is one camera's corners at one instant; views of the same
 instant share its board pose, which ties the cameras together. The residual of a corner is
 ``weight * (projected - observed)`` in pixels.
 
@@ -30,6 +31,7 @@ from replay.messages import F64
 from ..errors import ProcessorError
 from . import prior, rotation
 from .lens import INTRINSIC_NAMES, project
+from .warp import warp_shapes, warped
 
 I64 = npt.NDArray[np.int64]
 B8 = npt.NDArray[np.bool_]
@@ -75,19 +77,21 @@ class CameraSetup:
 class RigState:
     """Intrinsic vectors per camera; ``camera_from_reference`` rotations ``(N, 3, 3)`` and
     translations ``(N, 3)`` (camera 0 is the reference: identity); ``reference_from_board``
-    rotations ``(P, 3, 3)`` and translations ``(P, 3)`` per instant."""
+    rotations ``(P, 3, 3)`` and translations ``(P, 3)`` per instant; the board's bow
+    ``board_warp_m`` ``(2,)`` (:mod:`.warp`)."""
 
     intrinsics: list[F64]
     rig_rotation: F64
     rig_translation: F64
     board_rotation: F64
     board_translation: F64
+    board_warp_m: F64 = field(default_factory=lambda: np.zeros(2))
 
     def copy(self) -> RigState:
         """An independent copy (arrays copied)."""
         return RigState([i.copy() for i in self.intrinsics], self.rig_rotation.copy(),
                         self.rig_translation.copy(), self.board_rotation.copy(),
-                        self.board_translation.copy())
+                        self.board_translation.copy(), self.board_warp_m.copy())
 
     def camera_from_reference(self, camera: int) -> F64:
         """``(4, 4)`` transform of one camera."""
@@ -149,8 +153,8 @@ class Observations:
 @dataclass
 class Layout:
     """Where each unknown sits: the global block (each camera's free intrinsics, then the rig
-    rotation and translation of cameras 1..N-1), then 6 per board pose (rotation, then
-    translation, as increments)."""
+    rotation and translation of cameras 1..N-1, then the board's warp when estimated), then 6
+    per board pose (rotation, then translation, as increments)."""
 
     setups: list[CameraSetup]
     bases: list[F64]
@@ -159,6 +163,7 @@ class Layout:
     rig_columns: list[I64]  # (6,) per camera; empty for the reference
     global_count: int
     prior_px: F64 = field(default_factory=lambda: np.zeros(0))  # (G,) see .prior
+    warp_columns: I64 = field(default_factory=lambda: np.zeros(0, np.int64))  # (2,) or none
 
     def prior_residual(self, state: RigState) -> F64:
         """``(G,)`` the prior's residuals (px): ``prior_px`` times the parameter's value."""
@@ -173,8 +178,9 @@ class Layout:
         return out
 
     @classmethod
-    def of(cls, setups: list[CameraSetup], seed: RigState) -> Layout:
-        """The layout of cameras ``setups`` around ``seed`` (its fx / fy ratios)."""
+    def of(cls, setups: list[CameraSetup], seed: RigState, *, warp: bool = False) -> Layout:
+        """The layout of cameras ``setups`` around ``seed`` (its fx / fy ratios); with
+        ``warp`` the board's warp is estimated (else held at ``seed``'s)."""
         bases, names, intrinsic_columns, rig_columns = [], [], [], []
         at = 0
         for setup, intrinsics in zip(setups, seed.intrinsics, strict=True):
@@ -186,13 +192,18 @@ class Layout:
         for camera in range(len(setups)):
             rig_columns.append(np.arange(at, at + 6) if camera else np.zeros(0, np.int64))
             at += 6 if camera else 0
+        warp_columns = np.arange(at, at + 2) if warp else np.zeros(0, np.int64)
+        at += len(warp_columns)
         weights = prior.weights([s.distortion_model for s in setups], names,
                                 intrinsic_columns, at)
-        return cls(setups, bases, names, intrinsic_columns, rig_columns, at, weights)
+        return cls(setups, bases, names, intrinsic_columns, rig_columns, at, weights,
+                   warp_columns)
 
     def global_columns(self, camera: int) -> I64:
-        """Columns of one camera's intrinsics and rig transform in the global block."""
-        return np.concatenate([self.intrinsic_columns[camera], self.rig_columns[camera]])
+        """Columns of one camera's intrinsics, rig transform and the board's warp in the
+        global block."""
+        return np.concatenate([self.intrinsic_columns[camera], self.rig_columns[camera],
+                               self.warp_columns])
 
     def step(self, state: RigState, d_global: F64, d_pose: F64) -> RigState:
         """``state`` moved by increments of the global unknowns ``(G,)`` and poses ``(P, 6)``."""
@@ -207,6 +218,8 @@ class Layout:
                 out.rig_translation[camera] = state.rig_translation[camera] + d[3:]
         out.board_rotation = rotation.matrices(d_pose[:, :3]) @ state.board_rotation
         out.board_translation = state.board_translation + d_pose[:, 3:]
+        out.board_warp_m = state.board_warp_m + d_global[self.warp_columns] \
+            if len(self.warp_columns) else state.board_warp_m.copy()
         return out
 
 
@@ -277,6 +290,8 @@ def _linearize(state: RigState, layout: Layout, obs: Observations, points_in_boa
                jacobian: bool) -> Linearization:
     v_count, n = obs.mask.shape
     rotations = state.board_rotation[obs.instant]  # (V, 3, 3)
+    points_in_board = warped(points_in_board, state.board_warp_m)
+    shapes = warp_shapes(points_in_board) if len(layout.warp_columns) else np.zeros((n, 0))
     # board points turned into the reference frame (before the translation), (V, N, 3)
     turned = np.stack([rotations[:, i, 0, None] * points_in_board[:, 0]
                        + rotations[:, i, 1, None] * points_in_board[:, 1]
@@ -291,7 +306,7 @@ def _linearize(state: RigState, layout: Layout, obs: Observations, points_in_boa
                                                 obs.slices_of(len(layout.setups)),
                                                 strict=True)):
         count = views.stop - views.start
-        width = layout.bases[camera].shape[1] + (6 if camera else 0)
+        width = layout.bases[camera].shape[1] + (6 if camera else 0) + shapes.shape[1]
         if not count or not jacobian:
             blocks.append(np.zeros((count, 2 * n, width if jacobian else 0)))
             if not count:
@@ -315,7 +330,13 @@ def _linearize(state: RigState, layout: Layout, obs: Observations, points_in_boa
         block[:, :, :free] = times(d_intrinsics * s[:, :, None], layout.bases[camera])
         if camera:
             block[:, :, free:free + 3] = cross(turned_c.reshape(-1, 1, 3), d_point)
-            block[:, :, free + 3:] = d_point
+            block[:, :, free + 3:free + 6] = d_point
+        if shapes.shape[1]:
+            # the warp moves a point along its board's z axis, R_p e_z, in the reference
+            along_z = np.einsum("vnik,vk->vni", e.reshape(count, n, 2, 3),
+                                rotations[views, :, 2])
+            block[:, :, width - 2:] = (along_z[..., None] * shapes[None, :, None, :]
+                                       ).reshape(-1, 2, 2)
         blocks.append(block.reshape(count, 2 * n, -1))
     return Linearization(residuals, pose.reshape(len(pose), 2 * n, 6), blocks,
                          layout.prior_residual(state))

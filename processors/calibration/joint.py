@@ -6,11 +6,14 @@ one least-squares problem (:mod:`.bundle`) refines every camera's intrinsics, th
 every board pose from every view, leaving out outlier corners and weighting blurred views
 down (:mod:`.robust`). With ``tangential="auto"`` each camera's p1, p2 are then tested: the
 problem is solved again without them, and they stay only when that raises the residual more
-than noise would (a likelihood ratio, chi-square with 2 degrees of freedom).
+than noise would (a likelihood ratio, chi-square with 2 degrees of freedom). With
+``board_warp="auto"`` the board's warp is then cross-validated (:mod:`.warp_choice`) and,
+when chosen, the problem solved again with it.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -34,6 +37,7 @@ from .robust import (
     robust_solve,
     threshold_sigma,
 )
+from .warp_choice import WarpChoice, choose_warp
 
 __all__ = ["MIN_VIEWS", "BoardView", "JointResult", "Problem", "calibrate_cameras",
            "camera_views", "check_view_counts", "threshold_sigma"]
@@ -68,6 +72,18 @@ class JointResult:
     blur: BlurModel | None = None
     blurred_views: int = 0
     rounds: int = 0
+    warp_choice: WarpChoice | None = None  # the warp's cross-validation (board_warp "auto")
+
+    @property
+    def board_warp_m(self) -> tuple[F64, F64] | None:
+        """The board's warp ``(wx, wy)`` (m, :mod:`.warp`) and its standard deviations, when
+        estimated (None: held flat)."""
+        columns = self.problem.layout.warp_columns
+        if not len(columns):
+            return None
+        covariance = self.problem.global_covariance()[np.ix_(columns, columns)]
+        return (self.problem.state.board_warp_m.copy(),
+                np.sqrt(np.maximum(np.diag(covariance), 0.0)))
 
     @property
     def rms_px(self) -> float:
@@ -118,21 +134,24 @@ def calibrate_cameras(points_in_board: F64, views: list[BoardView],
     every camera, or one each; ``seeds`` (one model per camera) replace OpenCV's seed
     calibration; without ``reject_outliers`` every corner counts. With ``disc_diameter_m``
     the points are the centres of circles that diameter across, seen as the centroids of
-    their images (see :mod:`.discs`)."""
+    their images (see :mod:`.discs`). The first camera's ``board_warp`` says whether the
+    board's warp is estimated (the board is shared)."""
     cameras = len(sizes)
     wanted = options if isinstance(options, list) else [options] * cameras
     check_view_counts(views, cameras)
     data = BoardViews(points_in_board, views, sizes, disc_diameter_m)
     auto = [o.tangential == "auto" and o.has_tangential for o in wanted]
     final = [o.with_tangential("estimate") if a else o for o, a in zip(wanted, auto, strict=True)]
-    problem, evidence, rounds = robust_solve(data, final, seeds=seeds, reject=reject_outliers)
+    warp = wanted[0].board_warp == "on"
+    problem, evidence, rounds = robust_solve(data, final, seeds=seeds, reject=reject_outliers,
+                                             warp=warp)
     tests: list[TangentialTest | None] = [None] * cameras
     for camera in (c for c in range(cameras) if auto[c]):
         trial = list(final)
         trial[camera] = wanted[camera].with_tangential("zero")
         without, _e, _r = robust_solve(data, trial,
                                        state=_without_tangential(problem.state, camera),
-                                       evidence=evidence)
+                                       evidence=evidence, warp=warp)
         chi2 = (without.cost - problem.cost) / problem.sigma_px ** 2
         tests[camera] = TangentialTest(chi2, math.exp(-max(chi2, 0.0) / 2) < TANGENTIAL_P_VALUE)
     if any(t is not None and not t.estimated for t in tests):
@@ -141,9 +160,18 @@ def calibrate_cameras(points_in_board: F64, views: list[BoardView],
             if test is not None and not test.estimated:
                 final[camera] = wanted[camera].with_tangential("zero")
                 state = _without_tangential(state, camera)
-        problem, _e, more = robust_solve(data, final, state=state, evidence=evidence)
+        problem, _e, more = robust_solve(data, final, state=state, evidence=evidence,
+                                         warp=warp)
         rounds += more
-    return _result(problem, views, evidence, options=final, tests=tests, rounds=rounds)
+    choice = choose_warp(problem) if wanted[0].board_warp == "auto" else None
+    if choice is not None and choice.chosen:
+        warp = True
+        problem, _e, more = robust_solve(data, final, state=problem.state, evidence=evidence,
+                                         warp=True)
+        rounds += more
+    final = [dataclasses.replace(o, board_warp="on" if warp else "off") for o in final]
+    return _result(problem, views, evidence, options=final, tests=tests, rounds=rounds,
+                   warp_choice=choice)
 
 
 def _without_tangential(state: bundle.RigState, camera: int) -> bundle.RigState:
@@ -155,7 +183,7 @@ def _without_tangential(state: bundle.RigState, camera: int) -> bundle.RigState:
 
 def _result(problem: Problem, views: list[BoardView], evidence: Evidence, *,
             options: list[CalibrationOptions], tests: list[TangentialTest | None],
-            rounds: int) -> JointResult:
+            rounds: int, warp_choice: WarpChoice | None) -> JointResult:
     state, layout, obs = problem.state, problem.layout, problem.observations
     models = [model_of(s.distortion_model, i, s.size)
               for s, i in zip(layout.setups, state.intrinsics, strict=True)]
@@ -184,4 +212,5 @@ def _result(problem: Problem, views: list[BoardView], evidence: Evidence, *,
                               for p in range(len(problem.instants))},
         sigma_px=problem.sigma_px, residuals_px=residuals, inliers=inliers,
         rejected=dict(evidence.rejected), std=std, rig_covariance=rig_covariance,
-        problem=problem, blur=evidence.blur, blurred_views=evidence.blurred, rounds=rounds)
+        problem=problem, blur=evidence.blur, blurred_views=evidence.blurred, rounds=rounds,
+        warp_choice=warp_choice)

@@ -14,6 +14,9 @@ Tangential distortion (p1, p2) is held at zero (``"zero"``), always estimated
 likelihood-ratio test of the two fits. At a narrow field of view p1, p2 trade almost freely
 against the principal point and a small turn of the camera, so estimating them when the lens
 has none costs principal point accuracy.
+
+The board's warp (:mod:`.warp`) is held flat (``board_warp="off"``), estimated (``"on"``) or
+estimated when cross-validation over the views shows it (``"auto"``, :mod:`.warp_choice`).
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ from replay.camera import canonical_model
 from replay.lens_models import LENS_MODELS, MODEL_ALIASES, lens_model
 
 from ..errors import ProcessorError
+from .patterns import WARP_MODES
 
 TANGENTIAL_MODES = ("auto", "estimate", "zero")
 MODELS = tuple(LENS_MODELS)
@@ -57,6 +61,7 @@ class CalibrationOptions:
     k_coefficients: int | None = None
     model: str | None = None
     choose_order: bool = False
+    board_warp: str = "off"
 
     def __post_init__(self) -> None:
         if self.choose_order and (self.k_coefficients is not None
@@ -78,6 +83,9 @@ class CalibrationOptions:
         if self.tangential not in TANGENTIAL_MODES:
             raise ProcessorError(f"tangential distortion must be one of "
                                  f"{', '.join(TANGENTIAL_MODES)}, got {self.tangential!r}")
+        if self.board_warp not in WARP_MODES:
+            raise ProcessorError(f"the board warp must be one of {', '.join(WARP_MODES)}, "
+                                 f"got {self.board_warp!r}")
 
     def with_tangential(self, mode: str) -> CalibrationOptions:
         """The same options with another tangential mode."""

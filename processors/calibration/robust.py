@@ -167,10 +167,10 @@ def seed_camera(points_in_board: F64, views: list[BoardView], camera: int,
 
 def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
                  seeds: list[CameraModel] | None = None, state: bundle.RigState | None = None,
-                 evidence: Evidence | None = None, reject: bool = True
+                 evidence: Evidence | None = None, reject: bool = True, warp: bool = False
                  ) -> tuple[Problem, Evidence, int]:
     """Seed (from ``seeds`` or OpenCV, or start at a previous solve's ``state``) and refine
-    one camera's ``options`` each.
+    one camera's ``options`` each; with ``warp`` the board's warp too (:mod:`.warp`).
 
     Without ``evidence`` outliers and blur are decided here (unless ``reject`` is off); with
     a previous solve's ``evidence`` its inliers and weights are kept.
@@ -186,7 +186,7 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
         state = _seed_state(points_in_board, obs, models, len(evidence.instants))
     setups = [bundle.CameraSetup(o.distortion_model, s, o.free, o.fix_aspect_ratio)
               for o, s in zip(options, sizes, strict=True)]
-    layout = bundle.Layout.of(setups, state)
+    layout = bundle.Layout.of(setups, state, warp=warp)
 
     def shift_at(at: bundle.RigState) -> F64:
         """What moves the observations onto the points' projections at ``at``."""

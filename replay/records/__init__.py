@@ -3,6 +3,7 @@
 from .base import JsonRecord, from_json, to_json
 from .calibration import (
     BoardSummary,
+    BoardWarpSummary,
     CalibrationSummary,
     CameraSummary,
     CoverageSummary,
@@ -26,6 +27,7 @@ from .scenario import RenderView, Scenario, ScenarioCamera, ScenarioDrift, Scena
 
 __all__ = [
     "BoardSummary",
+    "BoardWarpSummary",
     "CalibrationSummary",
     "CameraSummary",
     "CoverageSummary",

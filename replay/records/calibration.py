@@ -19,6 +19,7 @@ from .rig import RigSummary
 
 __all__ = [
     "BoardSummary",
+    "BoardWarpSummary",
     "CalibrationSummary",
     "CameraSummary",
     "CoverageSummary",
@@ -74,6 +75,26 @@ class BoardSummary:
     square_m: float
     diameter_m: float | None = field(default=None, metadata=OMIT_NONE)
     diameter_measured: bool | None = field(default=None, metadata=OMIT_NONE)
+
+
+@dataclass(frozen=True)
+class BoardWarpSummary:
+    """The board's warp (``mode`` auto, on): whether it was ``estimated``, the bow of the
+    board's middle out of the plane of its edges along its x and y ``warp_mm`` with
+    standard deviations ``warp_std_mm``; with ``auto`` the cross-validation over the views
+    that decided: held-out RMS reprojection error flat and warped (px), the relative
+    ``gain``, the signed-rank ``p_value``; the choice in words."""
+
+    mode: str
+    estimated: bool
+    summary: str
+    warp_mm: list[float] | None = field(default=None, metadata=OMIT_NONE)
+    warp_std_mm: list[float] | None = field(default=None, metadata=OMIT_NONE)
+    held_out_rms_px: list[float] | None = field(default=None, metadata=OMIT_NONE)
+    gain: float | None = field(default=None, metadata=OMIT_NONE)
+    p_value: float | None = field(default=None, metadata=OMIT_NONE)
+    views: int | None = field(default=None, metadata=OMIT_NONE)
+    folds: int | None = field(default=None, metadata=OMIT_NONE)
 
 
 @dataclass(frozen=True)
@@ -310,6 +331,7 @@ class CalibrationSummary(JsonRecord):
     ground_truth: bool
     stereo: StereoSummary | None = field(default=None, metadata=OMIT_NONE)
     rig: RigSummary | None = field(default=None, metadata=OMIT_NONE)
+    board_warp: BoardWarpSummary | None = field(default=None, metadata=OMIT_NONE)
 
     def rejected_stamps(self) -> dict[str, dict[int, str]]:
         """Camera namespace -> stamp of every rejected frame -> why."""

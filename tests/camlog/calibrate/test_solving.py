@@ -1,6 +1,6 @@
 """The radial order in the flow: by default (or with ``-k auto``) it is chosen per camera and
 every output says so; an order given (``-k N``, ``--model``) is solved as given, without a
-choice."""
+choice. The board's warp likewise: cross-validated by default, as given with --board-warp."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import argparse
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from camlog.calibrate.flow import calibrate_log
@@ -54,3 +55,35 @@ def test_an_order_given_is_not_chosen(mono_calibration_log: Path, tmp_path: Path
     written = json.loads((tmp_path / "given" / "calibration.json").read_text())
     assert "lens_order" not in written["cameras"][0]
     assert "choose_order" not in written["options"]
+
+
+def test_the_board_warp_is_cross_validated_and_reported(mono_calibration_log: Path,
+                                                        tmp_path: Path) -> None:
+    log = mono_calibration_log.parent.parent / "mono.mcap"  # a simulated, flat board
+    run = calibrate_log(request(log, tmp_path / "auto"))
+    choice = run.solved.joint.warp_choice
+    assert choice is not None and choice.folds == 5 and not choice.chosen
+    assert run.solved.joint.board_warp_m is None
+    written = json.loads((tmp_path / "auto" / "calibration.json").read_text())
+    warp = written["board_warp"]
+    assert warp["mode"] == "auto" and warp["estimated"] is False and "warp_mm" not in warp
+    assert len(warp["held_out_rms_px"]) == 2 and warp["views"] == choice.views
+    assert warp["summary"].startswith("board held flat by cross-validation")
+
+
+@pytest.mark.parametrize("mode", ["on", "off"])
+def test_a_board_warp_given_is_not_chosen(mono_calibration_log: Path, tmp_path: Path,
+                                          mode: str) -> None:
+    log = mono_calibration_log.parent.parent / "mono.mcap"
+    run = calibrate_log(request(log, tmp_path / mode, "--board-warp", mode))
+    assert run.solved.joint.warp_choice is None
+    written = json.loads((tmp_path / mode / "calibration.json").read_text())
+    if mode == "off":
+        assert run.solved.joint.board_warp_m is None and "board_warp" not in written
+        return
+    estimate = run.solved.joint.board_warp_m
+    assert estimate is not None
+    warp_m, std_m = estimate
+    assert np.all(np.abs(warp_m) < 4 * std_m)  # the simulated board is flat
+    assert written["board_warp"]["warp_std_mm"] == pytest.approx((1000 * std_m).tolist())
+    assert written["board_warp"]["summary"].startswith("board warp ")

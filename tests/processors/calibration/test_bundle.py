@@ -17,9 +17,11 @@ FISHEYE = CameraModel(W, H, np.array([[260.0, 0, 318], [0, 262, 242], [0, 0, 1]]
                       np.array([0.03, -0.01, 0.004, -0.001]))
 
 
-def rig_problem(models: list[CameraModel], count: int, noise_px: float, seed: int
+def rig_problem(models: list[CameraModel], count: int, noise_px: float, seed: int, *,
+                warp: bool = False
                 ) -> tuple[bundle.RigState, bundle.Layout, bundle.Observations]:
-    """Two cameras seeing ``count`` board poses; the true state and the observations."""
+    """Two cameras seeing ``count`` board poses; the true state and the observations (with
+    ``warp`` the board's warp is estimated, at a state where the board bows)."""
     placements = [np.eye(4), RIGHT_FROM_LEFT]
     poses = random_poses(np.random.default_rng(seed), count, models,
                          camera_from_reference=placements)
@@ -37,13 +39,17 @@ def rig_problem(models: list[CameraModel], count: int, noise_px: float, seed: in
         camera=np.repeat([0, 1], count), instant=np.tile(np.arange(count), 2),
         observed=np.concatenate([np.stack(o) for o in observed]),
         mask=np.ones((2 * count, BOARD.corner_count), bool), weight=np.full(2 * count, 1.5))
-    return state, bundle.Layout.of(setups, state), obs
+    if warp:
+        state.board_warp_m = np.array([0.002, -0.0015])
+    return state, bundle.Layout.of(setups, state, warp=warp), obs
 
 
-@pytest.mark.parametrize("second", ["plumb_bob", "equidistant"])
-def test_jacobian_matches_finite_differences(second: str) -> None:
+@pytest.mark.parametrize(("second", "warp"), [("plumb_bob", False), ("equidistant", False),
+                                              ("plumb_bob", True)])
+def test_jacobian_matches_finite_differences(second: str, warp: bool) -> None:
     models = [true_model(), true_model() if second == "plumb_bob" else FISHEYE]
-    state, layout, obs = rig_problem(models, 4, 0.1, seed=3)
+    state, layout, obs = rig_problem(models, 4, 0.1, seed=3, warp=warp)
+    assert len(layout.warp_columns) == (2 if warp else 0)
     obs.mask[1, 5] = False  # a masked corner has no residual and no derivative
     points = BOARD.points_in_board()
     lin = bundle.linearize(state, layout, obs, points)
