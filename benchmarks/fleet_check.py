@@ -142,17 +142,22 @@ class Found:
 
 
 def check_fleet(paths: list[Path], out: Path, engine: str) -> dict[str, str]:
-    """Run the batch ``check`` step over the logs on ``engine``: each log's check.csv."""
-    from camlog.batch.pipeline import load_pipeline
-    from camlog.batch.run import Engine, log_name, run_batch
+    """Run ``camlog batch`` with the ``check`` step over the logs on ``engine``, in a process
+    of its own as a user would (a Ray instance lives and dies with it): each log's
+    check.csv."""
+    import subprocess
+
+    from camlog.batch.run import log_name
 
     pipeline = out.parent / "fleet_check.toml"
     pipeline.parent.mkdir(parents=True, exist_ok=True)
     pipeline.write_text(PIPELINE)
-    result = run_batch(load_pipeline(pipeline), paths, out, jobs=2, engine=Engine(engine),
-                       progress=False)
-    if result.failed:
-        raise RuntimeError(f"{engine}: {result.failed[0]['log']}: {result.failed[0]['error']}")
+    done = subprocess.run([sys.executable, "-m", "camlog", "batch", str(pipeline),
+                           *map(str, paths), "-o", str(out), "-j", "2", "--engine", engine,
+                           "--no-progress"], capture_output=True, text=True, check=False)
+    if done.returncode != 0:
+        raise RuntimeError(f"{engine}: camlog batch exited {done.returncode}: "
+                           f"{(done.stderr.strip() or done.stdout.strip())[-2000:]}")
     return {p.name: next((out / log_name(p)).rglob("check.csv")).read_text() for p in paths}
 
 
