@@ -30,7 +30,7 @@ from ..errors import InputError, UsageError
 from ..processing.cameras import cameras_in, find_camera
 from ..requests.calibrate import CalibrateRequest
 from ..requests.fields import RequestError
-from .evidence import write_evidence, write_summary
+from .evidence import EVIDENCE_ZSTD_LEVEL, write_evidence, write_summary
 from .instants import ViewsOfRig
 from .remeasure import remeasured_rig
 from .report import output_names, write_files
@@ -105,7 +105,8 @@ def _write_report(reader: LogReader, folder: Path, calibrated: list[CalibratedCa
     calibration.mcap is compressed and written on a thread of its own while this one
     annotates the frames and draws the figures (and another one may still compute the
     statistics); it is complete, or its error raised, when this returns."""
-    with BackgroundWriter(partial(open_writer, folder / "calibration.mcap")) as log:
+    with BackgroundWriter(partial(open_writer, folder / "calibration.mcap",
+                                  compression_level=EVIDENCE_ZSTD_LEVEL)) as log:
         evidence = write_evidence(reader, log, calibrated, board=board, stereo=solved.stereo,
                                   progress=progress)
         summary = build_summary(calibrated, solved, board=board, options=options,

@@ -30,7 +30,9 @@ views' noise raises it. The bigger model is chosen when both
 Views far off under the smallest order (:data:`FAR_VIEW_FACTOR` times the median view's
 error: not the board, or blurred) are left out of the comparison, and each fold's fit sees
 an even sample of at most :data:`FOLD_VIEWS` training views (the cost stays that of a few
-seed calibrations however long the log).
+seed calibrations however long the log). The folds are fitted on threads (OpenCV's solver
+releases the GIL; each fit alone on one thread, see :func:`~.seed.one_opencv_thread`), and the
+cameras climb their ladders at the same time: the same fits, in less time on several cores.
 The folds' models share most of their views, so the views' differences are not quite
 independent; the thresholds are strict for that reason. OpenCV's solver fits the
 folds (rational_polynomial without the joint solve's light prior on k4..k6): the choice
@@ -41,6 +43,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import os
+from collections.abc import Callable, Iterable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -73,6 +78,11 @@ MIN_CORNERS = 6
 FAR_VIEW_FACTOR = 10.0
 #: fewer views than this: no choice, the smallest order is kept
 MIN_ORDER_VIEWS = 2 * ORDER_FOLDS
+
+#: how the folds of one rung are fitted: a ``map`` that keeps their order (the builtin, or a
+#: thread pool's)
+FoldMap = Callable[[Callable[[np.ndarray], F64 | None], Iterable[np.ndarray]],
+                   Iterator[F64 | None]]
 
 
 def order_candidates(options: CalibrationOptions) -> list[CalibrationOptions]:
@@ -165,10 +175,11 @@ class OrderChoice:
 
 def choose_order(points_in_board: F64, views: list[tuple[npt.NDArray[np.int64], F64]],
                  size: tuple[int, int], candidates: list[CalibrationOptions], *,
-                 folds: int = ORDER_FOLDS) -> OrderChoice:
+                 folds: int = ORDER_FOLDS, fold_map: FoldMap = map) -> OrderChoice:
     """Choose among ``candidates`` (smallest first, see :func:`order_candidates`) from one
     camera's ``views`` in time order: each ``(point_ids (M,), corners_px (M, 2))`` of the
-    board points ``points_in_board`` ``(N, 3)`` (see the module docstring)."""
+    board points ``points_in_board`` ``(N, 3)`` (see the module docstring); ``fold_map``
+    fits a rung's folds (e.g. a thread pool's ``map``)."""
     usable = [(points_in_board[ids], np.asarray(c, dtype=np.float64)) for ids, c in views
               if len(ids) >= MIN_CORNERS]
     if len(candidates) == 1 or len(usable) < MIN_ORDER_VIEWS:
@@ -176,12 +187,12 @@ def choose_order(points_in_board: F64, views: list[tuple[npt.NDArray[np.int64], 
             f"{len(usable)} views, fewer than {MIN_ORDER_VIEWS}"
         return OrderChoice(candidates[:1], [], [], 0, 0, why)
     blocks = np.array_split(np.arange(len(usable)), folds)
-    smallest = _held_out_px2(usable, blocks, size, candidates[0])
+    smallest = _held_out_px2(usable, blocks, size, candidates[0], fold_map)
     far = _far_views(smallest)
     held_out = [np.where(far, math.inf, smallest)]
     steps: list[OrderStep] = []
     while len(held_out) < len(candidates) and all(s.taken for s in steps):
-        bigger = _held_out_px2(usable, blocks, size, candidates[len(held_out)])
+        bigger = _held_out_px2(usable, blocks, size, candidates[len(held_out)], fold_map)
         held_out.append(np.where(far, math.inf, bigger))
         steps.append(_compare(held_out[-2], held_out[-1], len(held_out) - 2,
                               len(held_out) - 1))
@@ -200,14 +211,21 @@ def _far_views(smallest_px2: F64) -> npt.NDArray[np.bool_]:
 def choose_orders(points_in_board: F64, views: list[BoardView], sizes: list[tuple[int, int]],
                   options: CalibrationOptions) -> list[OrderChoice | None]:
     """Each camera's choice (:func:`choose_order` on its views) when ``options`` ask for
-    one (``choose_order``), else None for every camera."""
+    one (``choose_order``), else None for every camera. The cameras climb at once, and the
+    folds are fitted on as many threads as there are cores."""
     if not options.choose_order:
         return [None] * len(sizes)
     candidates = order_candidates(options)
-    return [choose_order(points_in_board,
-                         [(views[i].point_ids, views[i].corners_px)
-                          for i in camera_views(views, camera)], size, candidates)
-            for camera, size in enumerate(sizes)]
+    with ThreadPoolExecutor(max_workers=os.cpu_count() or 1,
+                            thread_name_prefix="camlog-folds") as folds, \
+            ThreadPoolExecutor(max_workers=len(sizes),
+                               thread_name_prefix="camlog-order") as cameras:
+        chosen = [cameras.submit(choose_order, points_in_board,
+                                 [(views[i].point_ids, views[i].corners_px)
+                                  for i in camera_views(views, camera)], size, candidates,
+                                 fold_map=folds.map)
+                  for camera, size in enumerate(sizes)]
+        return [future.result() for future in chosen]
 
 
 def _compare(small: F64, big: F64, smaller: int, bigger: int) -> OrderStep:
@@ -242,23 +260,32 @@ def signed_rank_p(difference: F64) -> float:
 
 
 def _held_out_px2(views: list[tuple[F64, F64]], blocks: list[np.ndarray],
-                  size: tuple[int, int], options: CalibrationOptions) -> F64:
+                  size: tuple[int, int], options: CalibrationOptions,
+                  fold_map: FoldMap = map) -> F64:
     """Every view's mean squared error (px²) under the model fitted without its block (inf
-    for a block whose fit fails)."""
+    for a block whose fit fails); ``fold_map`` fits the blocks."""
     errors = np.full(len(views), math.inf)
-    for block in blocks:
-        held = set(block.tolist())
-        training = [v for i, v in enumerate(views) if i not in held]
-        pick = spread(len(training), FOLD_VIEWS)
-        try:
-            model = opencv_calibration([training[i][0] for i in pick],
-                                       [training[i][1] for i in pick], size, options)
-        except ProcessorError:
-            continue
-        for i in block:
-            points, corners_px = views[i]
-            errors[i] = _view_px2(points, corners_px, model)
+    fitted = fold_map(lambda block: _fold_px2(views, block, size, options), blocks)
+    for block, block_px2 in zip(blocks, fitted, strict=True):
+        if block_px2 is not None:
+            errors[block] = block_px2
     return errors
+
+
+def _fold_px2(views: list[tuple[F64, F64]], block: np.ndarray, size: tuple[int, int],
+              options: CalibrationOptions) -> F64 | None:
+    """The held-out errors (px²) of ``block``'s views under the model fitted without them
+    (None when that fit fails)."""
+    held = set(block.tolist())
+    training = [v for i, v in enumerate(views) if i not in held]
+    pick = spread(len(training), FOLD_VIEWS)
+    try:
+        model = opencv_calibration([training[i][0] for i in pick],
+                                   [training[i][1] for i in pick], size, options)
+    except ProcessorError:
+        return None
+    return np.array([_view_px2(views[i][0], views[i][1], model) for i in block],
+                    dtype=np.float64)
 
 
 def _view_px2(points: F64, corners_px: F64, model: CameraModel) -> float:

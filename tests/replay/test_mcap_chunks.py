@@ -19,6 +19,7 @@ from rosbags.typesys import Stores, get_typestore
 from camlog.logs.convert import convert_log
 from camlog.requests.logs import ConvertRequest
 from replay import LogWriteError, open_reader
+from replay.formats.base import RawMessage
 from replay.formats.chunk_worker import OrderedWorker
 from replay.formats.mcap.chunks import McapChunkWriter
 from replay.formats.mcap.writer import McapLogWriter
@@ -86,6 +87,30 @@ def test_chunks_indexes_and_crcs_read_back_in_order() -> None:
     in_time = [m.log_time for _, _, m in reader.iter_messages(log_time_order=True)]
     assert in_time == sorted(t for _, t in written)
     assert [m.name for m in reader.iter_metadata()] == ["before", "after"]
+
+
+@pytest.mark.parametrize(("name", "fast", "small"), [("zstd", 1, 19), ("lz4", 0, 12)])
+def test_a_compression_level_changes_the_chunks_not_the_messages(tmp_path: Path, name: str,
+                                                                 fast: int, small: int) -> None:
+    rng = random.Random(3)
+    # text-like payloads: every level compresses them, a higher one more tightly
+    payloads = [" ".join(rng.choice(["left", "right", "corner", "board", "view", str(i)])
+                         for _ in range(400)).encode() for i in range(300)]
+    sizes = {}
+    for level in (fast, small):
+        path = tmp_path / f"{name}_{level}.mcap"
+        writer = McapLogWriter(path, compression=name, compression_level=level,
+                               chunk_size=64 * 1024)
+        for index, data in enumerate(payloads):
+            writer.write_raw(RawMessage(topic="/text", msgtype="std_msgs/msg/String",
+                                        log_time_ns=1_000 + index, data=data,
+                                        serialization="cdr"))
+        writer.close()
+        sizes[level] = path.stat().st_size
+        with path.open("rb") as file:
+            reader = SeekingReader(file, validate_crcs=True)
+            assert [bytes(m.data) for _, _, m in reader.iter_messages()] == payloads
+    assert sizes[small] < 0.95 * sizes[fast]
 
 
 def test_worker_runs_jobs_in_order_and_reports_a_failure() -> None:

@@ -15,6 +15,7 @@ import struct
 import zlib
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
+from functools import partial
 from typing import IO, Any
 
 from mcap.data_stream import RecordBuilder
@@ -51,28 +52,33 @@ _U64 = struct.Struct("<Q")
 _OP_MESSAGE = int(Opcode.MESSAGE)
 
 
-def _zstd() -> Callable[[bytes | bytearray], bytes]:
+def _zstd(level: int | None) -> Callable[[bytes | bytearray], bytes]:
     import zstandard
 
     # one compressor for every chunk: creating one per chunk costs as much as compressing
-    return zstandard.ZstdCompressor().compress
+    compressor = zstandard.ZstdCompressor() if level is None else \
+        zstandard.ZstdCompressor(level=level)
+    return compressor.compress
 
 
-def _lz4() -> Callable[[bytes | bytearray], bytes]:
+def _lz4(level: int | None) -> Callable[[bytes | bytearray], bytes]:
     import lz4.frame
 
-    return lz4.frame.compress  # type: ignore[no-any-return]
+    if level is None:
+        return lz4.frame.compress  # type: ignore[no-any-return]
+    return partial(lz4.frame.compress, compression_level=level)
 
 
-#: compression name in the chunk record -> factory of the compressing function
-CHUNK_COMPRESSIONS: dict[str, Callable[[], Callable[[bytes | bytearray], bytes]] | None] = {
-    "zstd": _zstd, "lz4": _lz4, "": None,
-}
+#: compression name in the chunk record -> factory of the compressing function, given the
+#: level (None: the library's default, as ``mcap.writer.Writer`` compresses)
+CHUNK_COMPRESSIONS: dict[str, Callable[[int | None], Callable[[bytes | bytearray], bytes]]
+                         | None] = {"zstd": _zstd, "lz4": _lz4, "": None}
 
 
 class McapChunkWriter:
     """An MCAP file written to ``file`` in chunks of about ``chunk_size`` bytes, compressed
-    with ``compression`` (``zstd``, ``lz4`` or ``""``), finished on a worker thread.
+    with ``compression`` (``zstd``, ``lz4`` or ``""``) at ``level`` (None: the library's
+    default), finished on a worker thread.
 
     The calls are those of ``mcap.writer.Writer``; :meth:`abort` stops the worker without
     finishing the file. Errors of the worker (a full disk) are raised by a later call.
@@ -80,9 +86,10 @@ class McapChunkWriter:
     """
 
     def __init__(self, file: IO[bytes], *, chunk_size: int = 1024 * 1024,
-                 compression: str = "zstd", close_file: bool = False) -> None:
+                 compression: str = "zstd", level: int | None = None,
+                 close_file: bool = False) -> None:
         factory = CHUNK_COMPRESSIONS[compression]
-        self._compress = None if factory is None else factory()
+        self._compress = None if factory is None else factory(level)
         self._compression = compression
         self._compression_field = _U32.pack(len(compression)) + compression.encode()
         self._file = file

@@ -24,7 +24,9 @@ COMPRESSION = {"zstd": "zstd", "lz4": "lz4", "none": ""}
 
 
 class McapLogWriter(LogWriter):
-    """Writer for one MCAP file with ``ros2msg`` schemas and CDR messages."""
+    """Writer for one MCAP file with ``ros2msg`` schemas and CDR messages; its chunks
+    compressed with ``compression`` at ``compression_level`` (None: the compressor's
+    default)."""
 
     format_name = "mcap"
     serialization = CDR
@@ -37,6 +39,7 @@ class McapLogWriter(LogWriter):
         overwrite: bool = False,
         inputs: Iterable[Path] = (),
         compression: str | None = None,
+        compression_level: int | None = None,
         chunk_size: int = 4 * 1024 * 1024,
         profile: str = "ros2",
     ) -> None:
@@ -56,7 +59,7 @@ class McapLogWriter(LogWriter):
         try:  # every chunk carries the CRC of its content
             self._writer = McapChunkWriter(self._file, chunk_size=chunk_size,
                                            compression=COMPRESSION[compression],
-                                           close_file=True)
+                                           level=compression_level, close_file=True)
             self._writer.start(profile="ros2" if profile == "ros2" else "",
                                library=f"camlog {VERSION}")
         except BaseException:  # e.g. Ctrl-C: no temporary file stays behind

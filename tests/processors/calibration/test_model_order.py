@@ -132,6 +132,21 @@ def test_every_camera_chooses_from_its_own_views() -> None:
     assert choose_orders(POINTS, views, [(s.W, s.H)] * 2, CalibrationOptions()) == [None, None]
 
 
+def test_the_cameras_and_folds_on_threads_choose_as_one_after_another() -> None:
+    per_camera = [board_views(WITH_K3, 2, count=20), board_views(WITHOUT_K3, 3, count=20)]
+    views = [BoardView(camera, i, IDS, c) for camera, corners in enumerate(per_camera)
+             for i, c in enumerate(corners)]
+    options = CalibrationOptions(choose_order=True)
+    threaded = choose_orders(POINTS, views, [(s.W, s.H)] * 2, options)
+    for choice, corners in zip(threaded, per_camera, strict=True):
+        alone = choose_order(POINTS, [(IDS, c) for c in corners], (s.W, s.H),
+                             order_candidates(options), fold_map=map)
+        assert choice is not None and choice.steps == alone.steps
+        assert choice.chosen == alone.chosen and len(choice.held_out_px2) > 1
+        for mine, theirs in zip(choice.held_out_px2, alone.held_out_px2, strict=True):
+            np.testing.assert_array_equal(mine, theirs)  # the same fits, bit for bit
+
+
 def test_the_ladder_follows_the_model_named() -> None:
     labels = [order_label(o) for o in order_candidates(CalibrationOptions(choose_order=True))]
     assert labels == ["plumb_bob k1 k2", "plumb_bob k1 k2 k3", "rational_polynomial k1..k6"]
