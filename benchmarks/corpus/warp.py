@@ -44,7 +44,7 @@ def warp_row(dataset: Dataset, folder: Path, work: Path) -> str:
     if "held_out_rms_px" in choice:
         flat_px, warped_px = choice["held_out_rms_px"]
         evidence = (f"{flat_px:.4f} / {warped_px:.4f}, {100 * choice['gain']:+.1f} %, "
-                    f"p = {choice['p_value']:.2g} ({choice['views']} views)")
+                    f"p = {choice['p_value']:.2g} ({choice['views']} board poses)")
     else:
         evidence = choice["summary"]
     flat = _rms(_summary(dataset, folder, work, "off")) if choice["estimated"] else _rms(auto)

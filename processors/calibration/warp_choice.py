@@ -6,10 +6,11 @@ the flat solution without the block's views, once with the board held flat and o
 warp estimated (the project's own bundle: OpenCV cannot fit a warp); each held-out view's
 pose alone is then solved with the fitted intrinsics, rig and warp, and its mean squared
 reprojection error ``e(v)`` (px²) measured. The warp is chosen when its held-out error is
-lower by at least :data:`~.model_order.MIN_GAIN` and the views' paired differences
-``e_flat(v) - e_warped(v)`` favour it with an exact one-sided signed-rank p below
-:data:`~.model_order.MAX_P_VALUE`. Views are the units, so an error a view's corners share
-(blur, a pose they pull together) counts once per view, not once per corner.
+lower by at least :data:`~.model_order.MIN_GAIN` and the board poses' paired differences
+``e_flat(p) - e_warped(p)`` (a pose's views pooled) favour it with an exact one-sided
+signed-rank p below :data:`~.model_order.MAX_P_VALUE`. Board poses are the units, so an
+error a view's corners share (blur, a pose they pull together) counts once per pose, not
+once per corner, and the views a rig's cameras take of one pose count once together.
 
 The folds start at the flat solution with its inliers and weights: each costs two
 Levenberg-Marquardt refinements from nearby, a few solves of the whole problem in all.
@@ -36,7 +37,7 @@ WARP_FOLDS = 5
 
 @dataclass(frozen=True)
 class WarpChoice:
-    """The held-out error per view ``(V,)`` (px²) with the board flat and warped, the
+    """The held-out error per board pose ``(P,)`` (px²) with the board flat and warped, the
     relative fall ``gain`` of their sums, the signed-rank ``p_value`` and the outcome;
     without a choice (``why_not``), no errors."""
 
@@ -55,7 +56,8 @@ class WarpChoice:
 
     @property
     def views(self) -> int:
-        """How many held-out views were compared."""
+        """How many held-out board poses were compared (a pose seen by several cameras of
+        a rig counts once)."""
         return len(self.flat_px2)
 
     @property
@@ -71,7 +73,7 @@ class WarpChoice:
         flat, warped = self.held_out_rms_px
         verdict = "estimated" if self.chosen else "held flat"
         return (f"board {verdict} by cross-validation over {self.folds} folds of {self.views} "
-                f"views: held-out RMS flat {flat:.4f} px, warped {warped:.4f} px; gain "
+                f"board poses: held-out RMS flat {flat:.4f} px, warped {warped:.4f} px; gain "
                 f"{100 * self.gain:+.1f} %, p = {self.p_value:.2g} (the warp needs a gain ≥ "
                 f"{100 * MIN_GAIN:g} % and p < {MAX_P_VALUE:g})")
 
@@ -95,12 +97,23 @@ def choose_warp(problem: Problem, *, folds: int = WARP_FOLDS) -> WarpChoice:
             errors[int(warp), rows] = _held_out_px2(fit, layout, obs, rows,
                                                     problem.points_in_board)
     measured = usable[np.isfinite(errors[:, usable]).all(axis=0)]
-    flat, warped = errors[0, measured], errors[1, measured]
-    if len(measured) < MIN_ORDER_VIEWS:
+    flat, warped = _per_pose(errors[:, measured], obs.instant[measured],
+                             obs.mask[measured].sum(axis=1))
+    if len(flat) < MIN_ORDER_VIEWS:
         return WarpChoice(flat, warped, math.nan, math.nan, folds,
-                          f"{len(measured)} views measured, fewer than {MIN_ORDER_VIEWS}")
+                          f"{len(flat)} board poses measured, fewer than {MIN_ORDER_VIEWS}")
     gain = float(1.0 - warped.sum() / flat.sum())
     return WarpChoice(flat, warped, gain, signed_rank_p(flat - warped), folds)
+
+
+def _per_pose(errors_px2: F64, instants: np.ndarray, corners: np.ndarray) -> tuple[F64, F64]:
+    """The views' held-out errors ``(2, V)`` (flat, warped) as one mean squared error per
+    board pose (its views' corners pooled): the views a rig's cameras take of one pose share
+    that pose's error, so the pose is the unit the signed-rank test counts."""
+    _poses, unit = np.unique(instants, return_inverse=True)
+    weight = np.bincount(unit, corners.astype(np.float64))
+    flat, warped = (np.bincount(unit, e * corners) / weight for e in errors_px2)
+    return flat, warped
 
 
 def _held_out_px2(fit: bundle.RigState, layout: bundle.Layout, obs: bundle.Observations,

@@ -106,3 +106,13 @@ def test_too_few_views_hold_the_board_flat() -> None:
 def test_an_unknown_mode_is_refused() -> None:
     with pytest.raises(ProcessorError, match="board warp"):
         CalibrationOptions(board_warp="maybe")
+
+
+def test_the_views_of_one_board_pose_count_once_their_corners_pooled() -> None:
+    from processors.calibration.warp_choice import _per_pose
+
+    # views 0 and 1: one pose seen by two cameras (40 and 10 corners); view 2 another pose
+    errors = np.array([[1.0, 3.0, 2.0], [0.5, 1.0, 2.5]])
+    flat, warped = _per_pose(errors, np.array([7, 7, 9]), np.array([40, 10, 30]))
+    assert flat == pytest.approx([(40 * 1.0 + 10 * 3.0) / 50, 2.0])
+    assert warped == pytest.approx([(40 * 0.5 + 10 * 1.0) / 50, 2.5])
