@@ -29,9 +29,6 @@ from .jobs import Job, run_job
 
 PROBE_TIMEOUT_S = 120.0
 CONNECT_TIMEOUT_S = 5.0
-#: tries to start a local Ray instance (its servers may miss Ray's start-up deadline on a
-#: loaded machine)
-LOCAL_START_ATTEMPTS = 2
 #: how long a local Ray instance's GCS server may take to start (s; unless the user set
 #: RAY_gcs_server_port_wait_time_s)
 GCS_START_WAIT_S = 120
@@ -99,18 +96,12 @@ def _start_local(ray: Any, cpus: float) -> None:
     # Ray waits 30 s for its GCS server to bind its port, which a loaded machine can miss
     os.environ.setdefault("RAY_gcs_server_port_wait_time_s", str(GCS_START_WAIT_S))
     try:
-        for attempt in range(1, LOCAL_START_ATTEMPTS + 1):
-            try:
-                ray.init(num_cpus=max(1, round(cpus)), include_dashboard=False,
-                         log_to_driver=False, configure_logging=False,
-                         _node_ip_address="127.0.0.1")
-                return
-            except Exception as err:  # a server that did not come up in Ray's own time
-                ray.shutdown()  # stops what did start: no server outlives the failure
-                if attempt == LOCAL_START_ATTEMPTS:
-                    reason = str(err).splitlines()[0] if str(err) else type(err).__name__
-                    raise ClusterError(f"cannot start a local Ray instance "
-                                       f"({LOCAL_START_ATTEMPTS} tries): {reason}") from None
+        ray.init(num_cpus=max(1, round(cpus)), include_dashboard=False, log_to_driver=False,
+                 configure_logging=False, _node_ip_address="127.0.0.1")
+    except Exception as err:  # a server that did not come up in Ray's own time
+        ray.shutdown()  # stops what did start: no server outlives the failure
+        reason = str(err).splitlines()[0] if str(err) else type(err).__name__
+        raise ClusterError(f"cannot start a local Ray instance: {reason}") from None
     finally:
         if saved is not None:
             ray_constants.ENABLE_RAY_CLUSTER = saved
