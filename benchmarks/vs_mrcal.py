@@ -26,18 +26,20 @@ Seeds run in turn over every case, so ``--minutes`` (stop starting seeds after t
 leaves every case with about as many seeds.
 
     python -m benchmarks.vs_mrcal [--seeds 40] [--cases heldout,stereo,...] [--cache DIR]
-        [--mrcal-python PATH] [--minutes M]
+        [--mrcal-python PATH] [--minutes M] [--keep FILE]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import tempfile
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from pathlib import Path
+from typing import Any
 
 import cv2
 
@@ -57,6 +59,8 @@ from .calibration_truth import (
 from .mrcal_run import DEFAULT_VENV, MrcalError, mrcal_available, run_mrcal
 from .spread import TOOLS, Results, table
 
+#: the moving board seen through a distorted lens whose k3 is not zero (k1 k2 p1 p2 k3)
+MOVING_BLUR_K3_LENS = (-0.25, 0.1, 0.0, 0.0, -0.018)
 #: 10 s of each scenario (half its default: 20-40 held poses) at its 30 Hz; the fisheye, which
 #: renders up to 26 views a frame, as benchmarks.calibrate_speed records it: 30 s at 4 Hz
 CASES = [
@@ -71,6 +75,10 @@ CASES = [
          {"duration_s": 10.0}),
     Case("moving_blur", "mono_moving_blur",
          "--camera /simple_camera -s 7x6 -q 0.01 -k 3 --tangent-dist", {"duration_s": 10.0}),
+    Case("moving_blur_k3", "mono_moving_blur",
+         "--camera /simple_camera -s 7x6 -q 0.01 -k 3 --tangent-dist",
+         {"duration_s": 10.0, "distortion_model": "plumb_bob",
+          "distortion": list(MOVING_BLUR_K3_LENS)}),
     Case("fisheye", "mono_fisheye", "--camera /fisheye_camera -s 7x6 -q 0.015 --model fisheye",
          {"duration_s": 30.0, "rate_hz": 4.0}),
 ]
@@ -80,19 +88,54 @@ DEFAULT_CACHE = Path.home() / ".cache" / "camlog" / "vs_mrcal"
 
 @dataclass
 class Progress:
-    """Every tool's accuracy per case, and the seeds each tool failed on."""
+    """Every tool's accuracy per case, and the seeds each tool failed on; with ``kept``, each
+    case's seed is appended there as one JSON line once it is done, and a later run given
+    the same file reads those back instead of running them again."""
 
     results: Results = field(default_factory=dict)
     failures: dict[tuple[str, str], list[str]] = field(default_factory=dict)
+    kept: Path | None = None
+    done: set[tuple[str, int]] = field(default_factory=set)
+    _seed: dict[str, Any] = field(default_factory=dict)
 
     def add(self, case: str, tool: str, a: Accuracy) -> None:
         """Keep one result."""
         self.results.setdefault(case, {}).setdefault(tool, []).append(a)
+        self._seed.setdefault("results", {})[tool] = asdict(a)
 
     def fail(self, case: str, tool: str, seed: int, why: str) -> None:
         """Note a failure (printed at once, counted in the table)."""
         self.failures.setdefault((case, tool), []).append(f"seed {seed}: {why}")
+        self._seed.setdefault("failures", {})[tool] = why
         print(f"  {case} seed {seed}: {tool} failed: {why}", flush=True)
+
+    def finish(self, case: str, seed: int) -> None:
+        """A case's seed is done: append it to the kept file."""
+        line, self._seed = {"case": case, "seed": seed, **self._seed}, {}
+        self.done.add((case, seed))
+        if self.kept is not None:
+            with self.kept.open("a", encoding="utf-8") as out:
+                out.write(json.dumps(line) + "\n")
+
+    @classmethod
+    def resumed(cls, kept: Path | None) -> Progress:
+        """The progress kept in ``kept`` by earlier runs (a line cut short by a killed run is
+        left out: that seed runs again)."""
+        progress = cls(kept=kept)
+        if kept is None or not kept.exists():
+            return progress
+        for text in kept.read_text(encoding="utf-8").splitlines():
+            try:
+                line = json.loads(text)
+            except json.JSONDecodeError:
+                continue
+            case, seed = line["case"], int(line["seed"])
+            for tool, a in line.get("results", {}).items():
+                progress.results.setdefault(case, {}).setdefault(tool, []).append(Accuracy(**a))
+            for tool, why in line.get("failures", {}).items():
+                progress.failures.setdefault((case, tool), []).append(f"seed {seed}: {why}")
+            progress.done.add((case, seed))
+        return progress
 
 
 def recording(case: Case, seed: int, cache: Path, duration_s: float | None) -> Path:
@@ -101,7 +144,8 @@ def recording(case: Case, seed: int, cache: Path, duration_s: float | None) -> P
     if duration_s is not None:
         overrides["duration_s"] = duration_s
     rate = f"_{overrides['rate_hz']:g}hz" if "rate_hz" in overrides else ""
-    path = cache / f"{case.scenario}_{seed}_{overrides['duration_s']:g}s{rate}.mcap"
+    stem = case.scenario if "distortion" not in overrides else f"{case.scenario}-{case.name}"
+    path = cache / f"{stem}_{seed}_{overrides['duration_s']:g}s{rate}.mcap"
     if not path.exists():
         partial = path.with_suffix(".partial.mcap")  # an interrupted run's is rendered again
         partial.unlink(missing_ok=True)
@@ -123,6 +167,7 @@ def one_seed(case: Case, seed: int, path: Path, *, mrcal_python: Path | None, tm
         run = calibrate(path, case.flags, tmp / "out", report=False)
     except CalibrationError as err:
         progress.fail(case.name, "camlog", seed, str(err))
+        progress.finish(case.name, seed)
         return
     got = {"camlog": camlog_accuracy(run)}
     if (defaults := default_flags(case.flags)) != case.flags:
@@ -147,6 +192,7 @@ def one_seed(case: Case, seed: int, path: Path, *, mrcal_python: Path | None, tm
             progress.fail(case.name, "mrcal", seed, str(err))
     for tool, a in got.items():
         progress.add(case.name, tool, a)
+    progress.finish(case.name, seed)
     print(f"  {case.name} seed {seed}: max projection difference px "
           + ", ".join(f"{t} {max(a.max_difference_px):.3f}" for t, a in got.items()),
           flush=True)
@@ -168,10 +214,12 @@ def models_line(case: Case, mrcal: bool) -> str:
 
 
 def compare(cases: list[Case], seeds: range, *, cache: Path, duration_s: float | None,
-            mrcal_python: Path | None, minutes: float | None) -> Progress:
+            mrcal_python: Path | None, minutes: float | None, kept: Path | None) -> Progress:
     """Record, calibrate and compare every case over the seeds (seed by seed); stop starting
-    seeds after ``minutes``."""
-    progress = Progress()
+    seeds after ``minutes``; seeds already in ``kept`` are read from it, not run again."""
+    progress = Progress.resumed(kept)
+    if progress.done:
+        print(f"{len(progress.done)} case seeds read from {kept}", flush=True)
     started = time.monotonic()
     with tempfile.TemporaryDirectory() as tmp_name:
         for seed in seeds:
@@ -179,6 +227,8 @@ def compare(cases: list[Case], seeds: range, *, cache: Path, duration_s: float |
                 print(f"stopped before seed {seed}: over {minutes:g} minutes", flush=True)
                 break
             for case in cases:
+                if (case.name, seed) in progress.done:
+                    continue
                 path = recording(case, seed, cache, duration_s)
                 one_seed(case, seed, path, mrcal_python=mrcal_python, tmp=Path(tmp_name),
                          progress=progress)
@@ -218,6 +268,9 @@ def parse_arguments(argv: Sequence[str] | None) -> argparse.Namespace:
                              f"{DEFAULT_VENV}/bin/python)")
     parser.add_argument("--minutes", type=float, default=None,
                         help="start no seed after this many minutes (default: run them all)")
+    parser.add_argument("--keep", type=Path, default=None, metavar="FILE",
+                        help="append each case's seed to this JSON-lines file when done; seeds "
+                             "already in it are read back, not run again (resumes a run)")
     args = parser.parse_args(argv)
     check_seed_arguments(parser, args, CASE_NAMES)
     if args.duration is not None and args.duration <= 0:
@@ -238,7 +291,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     for case in cases:
         print(models_line(case, mrcal_python is not None), flush=True)
     progress = compare(cases, range(args.seeds), cache=args.cache, duration_s=args.duration,
-                       mrcal_python=mrcal_python, minutes=args.minutes)
+                       mrcal_python=mrcal_python, minutes=args.minutes, kept=args.keep)
     print(f"load average {os.getloadavg()[0]:.1f} at the end", flush=True)
     failed = {key: len(v) for key, v in progress.failures.items()}
     tools = [t for t in TOOLS if mrcal_python is not None or t != "mrcal"]

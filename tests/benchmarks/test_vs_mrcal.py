@@ -13,7 +13,14 @@ from benchmarks.calibration_truth import Accuracy, accuracy
 from benchmarks.mrcal_run import MrcalError, mrcal_available, parse_answer
 from benchmarks.mrcal_solve import corners_vnl
 from benchmarks.spread import spread, table
-from benchmarks.vs_mrcal import CASES, default_flags, models_line, parse_arguments, recording
+from benchmarks.vs_mrcal import (
+    CASES,
+    Progress,
+    default_flags,
+    models_line,
+    parse_arguments,
+    recording,
+)
 from replay.camera import CameraModel
 
 
@@ -117,6 +124,34 @@ def test_a_cached_recording_is_reused(tmp_path: Path) -> None:
     assert kept.read_bytes() == b"kept"
 
 
+def test_a_distorted_variant_of_a_scenario_has_its_own_recording(tmp_path: Path) -> None:
+    by_name = {c.name: c for c in CASES}
+    plain = tmp_path / "mono_moving_blur_2_10s.mcap"
+    variant = tmp_path / "mono_moving_blur-moving_blur_k3_2_10s.mcap"
+    plain.write_bytes(b"plain")
+    variant.write_bytes(b"k3")
+    assert recording(by_name["moving_blur"], 2, tmp_path, None) == plain
+    assert recording(by_name["moving_blur_k3"], 2, tmp_path, None) == variant
+    assert by_name["moving_blur_k3"].overrides["distortion"][4] != 0.0
+
+
+def test_kept_seeds_are_read_back_and_a_cut_line_runs_again(tmp_path: Path) -> None:
+    kept = tmp_path / "kept.jsonl"
+    first = Progress(kept=kept)
+    first.add("heldout", "camlog", mono(0.01, 0.1))
+    first.fail("heldout", "OpenCV", 0, "no convergence")
+    first.finish("heldout", 0)
+    first.add("heldout", "camlog", mono(-0.03, 0.3))
+    first.finish("heldout", 1)
+    with kept.open("a", encoding="utf-8") as out:
+        out.write('{"case": "heldout", "seed": 2, "resu')  # a run killed while writing
+    again = Progress.resumed(kept)
+    assert again.done == {("heldout", 0), ("heldout", 1)}
+    assert again.results["heldout"]["camlog"] == [mono(0.01, 0.1), mono(-0.03, 0.3)]
+    assert again.failures[("heldout", "OpenCV")] == ["seed 0: no convergence"]
+    assert Progress.resumed(tmp_path / "absent.jsonl").done == set()
+
+
 @pytest.mark.parametrize(("argv", "message"), [
     (["--cases", "heldout,nope"], "unknown cases nope"),
     (["--seeds", "0"], "--seeds must be at least 1"),
@@ -133,4 +168,6 @@ def test_argument_errors_are_one_line(argv: list[str], message: str,
 def test_defaults() -> None:
     args = parse_arguments([])
     assert args.seeds == 40
-    assert args.cases.split(",") == ["heldout", "stereo", "charuco", "moving_blur", "fisheye"]
+    assert args.cases.split(",") == ["heldout", "stereo", "charuco", "moving_blur",
+                                     "moving_blur_k3", "fisheye"]
+    assert args.keep is None
