@@ -5,7 +5,10 @@ beyond ``t`` sigma is left out and the problem solved again, until the set of ou
 stable. ``t`` makes a false rejection unlikely over the whole data set (``n exp(-t^2 / 2) =
 1/2`` for ``n`` corners: 4.9 sigma at 75 000 corners). A view that loses most of its corners
 was not the board (a wrong detection, or two frames of a stereo pair that show the board at
-different poses) and is dropped whole. Views of a moving board carry their speed; after the
+different poses) and is dropped whole. Once the solve has settled, such views are given one
+more chance: posed afresh through the solution's lens and solved with the others, a view that
+only the seed could not explain (a board at the edge of a fisheye the seed got wrong there)
+fits and stays; one that is not the board is dropped again. Views of a moving board carry their speed; after the
 first solve the blur law of :mod:`.motion` is fitted to their residuals, weights them and
 leaves out views too blurred to help. The centres of a circle grid's circles are measured as
 the centroids of their images; each round moves them by the shift :mod:`.discs` computes at
@@ -27,7 +30,7 @@ from replay.messages import F64
 from ..errors import ProcessorError
 from . import bundle, normal
 from .discs import centroid_shifts
-from .lens import intrinsics_of
+from .lens import intrinsics_of, model_of
 from .motion import BlurModel, fit_blur
 from .options import CalibrationOptions
 from .seed import board_pose, rig_transform, seed_model
@@ -44,6 +47,8 @@ MIN_THRESHOLD_SIGMA = 3.0
 SEED_FLOOR_PX = 1.0
 #: the circle centres' shifts of two rounds agree within this (px): the fixed point is reached
 SHIFT_TOLERANCE_PX = 1e-4
+#: views taken back in are kept only if the noise estimate grows by at most this factor
+RETRY_SIGMA_GROWTH = 1.25
 
 
 @dataclass(frozen=True)
@@ -74,6 +79,7 @@ class Evidence:
     rejected: dict[int, str] = field(default_factory=dict)  # view index -> why
     blur: BlurModel | None = None
     blurred: int = 0  # views left out as too blurred
+    outlying: set[int] = field(default_factory=set)  # views left out as not the board
 
     @classmethod
     def of(cls, views: list[BoardView], points_in_board: F64) -> Evidence:
@@ -100,6 +106,13 @@ class Evidence:
         """Leave one view out."""
         self.inliers[row] = False
         self.rejected[int(self.order[row])] = why
+
+    def restore(self, row: int) -> None:
+        """Take a view left out as not the board back in, every corner it shows an inlier."""
+        view = int(self.order[row])
+        self.rejected.pop(view, None)
+        self.outlying.discard(view)
+        self.inliers[row] = self.observations.mask[row]
 
     @property
     def dropped(self) -> B8:
@@ -202,7 +215,7 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
         limit = max(threshold_sigma(int(evidence.inliers.sum())) * robust_sigma, SEED_FLOOR_PX)
         evidence.inliers &= norm <= limit / obs.weight[:, None]
     speeds = np.array([views[i].speed_px for i in evidence.order])
-    rounds = 0
+    rounds, trial = 0, None
     while True:
         rounds += 1
         refinement = normal.refine(state, layout,
@@ -213,7 +226,7 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
         settled = float(np.abs(shift - previous).max(initial=0.0)) <= SHIFT_TOLERANCE_PX
         norm = _residual_norms(state, layout, _moved(obs, shift), points_in_board)
         sigma = _sigma(norm * obs.weight[:, None], evidence.inliers, layout)
-        if rounds >= MAX_ROUNDS:
+        if rounds >= MAX_ROUNDS * (1 if trial is None else 2):
             break
         if not (fresh and reject):
             if settled:
@@ -222,7 +235,18 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
         if rounds == 1 and np.any(speeds > 0) and _weigh_blur(evidence, norm, speeds):
             continue
         if not _reject_outliers(evidence, norm, sigma) and settled:
-            break
+            if trial is not None or not evidence.outlying:
+                break
+            trial = _Trial.before(state, refinement, sigma, shift, evidence)
+            state, restored = _retry_outlying(evidence, state, _moved(obs, shift),
+                                              points_in_board,
+                                              [(o.distortion_model, s) for o, s in
+                                               zip(options, sizes, strict=True)])
+            if not restored:
+                trial = None
+                break
+    if trial is not None and not trial.holds(evidence, state, sigma):
+        state, refinement, sigma, shift = trial.undo(evidence)
     problem = Problem(state, layout, _moved(obs, shift).with_mask(evidence.inliers),
                       refinement.normal, points_in_board, sigma, evidence.instants,
                       evidence.order)
@@ -252,7 +276,75 @@ def _reject_outliers(evidence: Evidence, norm: F64, sigma: float) -> bool:
         evidence.drop(int(row), f"{int((seen[row] & ~new[row]).sum())} of "
                       f"{int(seen[row].sum())} corners beyond the outlier threshold: not the "
                       "board at one pose")
+        evidence.outlying.add(int(evidence.order[row]))
     return changed
+
+
+@dataclass
+class _Trial:
+    """The solve before the views left out as not the board were taken back in: kept only
+    if those views still fit once solved with the others, every view used before is still
+    used and the noise estimate grows by at most :data:`RETRY_SIGMA_GROWTH`."""
+
+    state: bundle.RigState
+    refinement: normal.Refinement
+    sigma: float
+    shift: F64
+    inliers: B8
+    rejected: dict[int, str]
+    outlying: set[int]
+
+    @classmethod
+    def before(cls, state: bundle.RigState, refinement: normal.Refinement, sigma: float,
+               shift: F64, evidence: Evidence) -> _Trial:
+        return cls(state, refinement, sigma, shift, evidence.inliers.copy(),
+                   dict(evidence.rejected), set(evidence.outlying))
+
+    def holds(self, evidence: Evidence, state: bundle.RigState, sigma: float) -> bool:
+        """Whether the solve with the views taken back in is kept."""
+        used_before = [view for view in evidence.order.tolist() if view not in self.rejected]
+        return bool(self.outlying - evidence.outlying) \
+            and not any(view in evidence.rejected for view in used_before) \
+            and sigma <= RETRY_SIGMA_GROWTH * self.sigma \
+            and all(np.isfinite(i).all() for i in state.intrinsics)
+
+    def undo(self, evidence: Evidence) -> tuple[bundle.RigState, normal.Refinement, float, F64]:
+        """Back to the solve before the trial; its state, refinement, sigma and shift."""
+        evidence.inliers, evidence.rejected = self.inliers, self.rejected
+        evidence.outlying = self.outlying
+        return self.state, self.refinement, self.sigma, self.shift
+
+
+def _retry_outlying(evidence: Evidence, state: bundle.RigState, obs: bundle.Observations,
+                    points_in_board: F64, lenses: list[tuple[str, tuple[int, int]]]
+                    ) -> tuple[bundle.RigState, int]:
+    """Take the views left out as not the board back in (see the module's text); a board
+    pose that no view in use holds is found afresh by PnP through the solution's lens
+    ``(distortion model, image size)`` of the view's camera, and a view whose corners that
+    pose does not put in front of the camera stays out. The state to solve from, and how
+    many views were taken back in."""
+    state = state.copy()
+    in_use = ~evidence.dropped
+    restored = 0
+    for row in np.flatnonzero(np.isin(evidence.order, list(evidence.outlying))):
+        instant, camera = int(obs.instant[row]), int(obs.camera[row])
+        if not np.any(in_use & (obs.instant == instant)):
+            ids = np.flatnonzero(obs.mask[row])
+            distortion_model, size = lenses[camera]
+            camera_from_board = board_pose(
+                points_in_board[ids], obs.observed[row, ids],
+                model_of(distortion_model, state.intrinsics[camera], size))
+            if camera_from_board is None or np.any(
+                    points_in_board @ camera_from_board[2, :3] + camera_from_board[2, 3] <= 0):
+                continue
+            reference_from_board = np.linalg.inv(state.camera_from_reference(camera)) \
+                @ camera_from_board
+            state.board_rotation[instant] = reference_from_board[:3, :3]
+            state.board_translation[instant] = reference_from_board[:3, 3]
+        evidence.restore(int(row))
+        in_use[row] = True
+        restored += 1
+    return state, restored
 
 
 def _weigh_blur(evidence: Evidence, norm: F64, speeds: F64) -> bool:
