@@ -24,7 +24,9 @@ class CorpusError(Exception):
 
 @dataclass(frozen=True)
 class Board:
-    """The target in a dataset; ``size`` in inner corners (circles: centres) COLSxROWS."""
+    """The target in a dataset; ``size`` in inner corners (circles: centres; ChArUco:
+    squares) COLSxROWS; a ChArUco board's ``legacy_pattern``: its markers laid out as OpenCV
+    before 4.6 did."""
 
     pattern: str
     size: str
@@ -34,6 +36,7 @@ class Board:
     diameter_m: float | None = None
     marker_m: float | None = None
     dictionary: str | None = None
+    legacy_pattern: bool = False
 
     @property
     def cols_rows(self) -> tuple[int, int]:

@@ -89,6 +89,7 @@ def _detect_charuco(gray: NDArray[np.uint8], board: Board) -> tuple[Points, Poin
     cols, rows = board.cols_rows  # squares
     dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, board.dictionary))
     charuco = cv2.aruco.CharucoBoard((cols, rows), board.square_m, board.marker_m, dictionary)
+    charuco.setLegacyPattern(board.legacy_pattern)
     corners, ids, _markers, _marker_ids = cv2.aruco.CharucoDetector(charuco).detectBoard(gray)
     if ids is None or len(ids) < 6:
         return None

@@ -53,6 +53,8 @@ def camlog_args(dataset: Dataset, *, auto_order: bool = False) -> list[str]:
         args += ["--marker", str(board.marker_m)]
     if board.dictionary is not None:
         args += ["--dictionary", board.dictionary]
+    if board.legacy_pattern:
+        args += ["--legacy-pattern"]
     cameras = ["--left", "/corpus/left", "--right", "/corpus/right"] if dataset.stereo else [
         "--camera", "/corpus"]
     return args + cameras

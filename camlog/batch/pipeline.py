@@ -33,8 +33,8 @@ one (throttle) gives its options as keys (``every = 3``). The keys of each step:
 
 - resync: left, out_prefix, recover, right, slop
 - calibrate: approximate, board_warp, calibration, camera, camera_name, check, diameter,
-  dictionary, fix_aspect_ratio, fix_principal_point, k_coefficients, left, marker,
-  max_chessboard_speed, model, pattern, recover, report, rig, right, size, square,
+  dictionary, fix_aspect_ratio, fix_principal_point, k_coefficients, left, legacy_pattern,
+  marker, max_chessboard_speed, model, pattern, recover, report, rig, right, size, square,
   tangent_dist, zero_tangent_dist
 - process: compress, drop_input, max_frames, output_ns, recover, topic; processor keys:
   edges, every, rate, rectify, red_pixels, resize, undistort

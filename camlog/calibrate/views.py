@@ -325,9 +325,10 @@ def with_speed_limit(views: CameraViews, max_speed_px: float) -> CameraViews:
 
 
 def size_hint(views: CameraViews, board: Board) -> str:
-    """A hint when another point count would have matched the frames."""
+    """A hint when another point count (a ChArUco board: the other marker layout) would have
+    matched the frames."""
     if board.pattern == "charuco":
-        return ""
+        return _layout_hint(views, board)
     c, r = board.cols, board.rows
     for cols, rows in ((r, c), (c + 1, r), (c, r + 1), (c + 1, r + 1), (c - 1, r), (c, r - 1),
                        (c - 1, r - 1)):
@@ -339,4 +340,19 @@ def size_hint(views: CameraViews, board: Board) -> str:
             if found is not None and found.accepted:
                 return (f"; the frames show a {cols}x{rows} board: --size counts inner "
                         "corners (squares minus one) per row x per column")
+    return ""
+
+
+def _layout_hint(views: CameraViews, board: Board) -> str:
+    """A hint when the ChArUco board's other marker layout (OpenCV's before 4.6 or today's;
+    they differ with an even number of rows of squares) would have matched the frames."""
+    if (board.rows + 1) % 2:
+        return ""
+    other = dataclasses.replace(board, legacy_pattern=not board.legacy_pattern)
+    for gray in views.samples:
+        found = find_board(gray, other)
+        if found is not None and found.accepted:
+            return ("; the frames show the board's markers laid out as OpenCV "
+                    + ("today does: leave out --legacy-pattern" if board.legacy_pattern
+                       else "before 4.6 did: add --legacy-pattern"))
     return ""

@@ -111,6 +111,10 @@ class CalibrateRequest:
     dictionary: str | None = option(
         None, "--dictionary", metavar="NAME",
         help=f"--pattern charuco: OpenCV ArUco dictionary (default {DEFAULT_DICTIONARY})")
+    legacy_pattern: bool = option(
+        False, "--legacy-pattern", action="store_true",
+        help="--pattern charuco: the markers laid out as OpenCV before 4.6 did (it differs "
+             "from today's layout when the board has an even number of rows of squares)")
     k_coefficients: int | str | None = option(
         None, "-k", "--k-coefficients", type=radial_count, metavar="N|auto",
         help="radial coefficients to estimate (default without --model: chosen per camera "
@@ -180,7 +184,7 @@ class CalibrateRequest:
         from processors.calibration.board import make_board
 
         board = make_board(self.size, self.square, self.pattern, marker_m=self.marker,
-                           dictionary=self.dictionary)
+                           dictionary=self.dictionary, legacy_pattern=self.legacy_pattern)
         if self.diameter is not None:
             if not board.circle_grid:
                 raise RequestError(CalibrateRequest, "{diameter} belongs to circle grids "

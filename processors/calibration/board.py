@@ -2,7 +2,9 @@
 
 ``--size`` counts what ROS camera_calibration counts: a chessboard's inner corners, a
 ChArUco board's squares (its inner corners are one fewer each way) and a circle grid's
-circles. ``--square`` is the square side, or the circle spacing of a grid. Points are
+circles. ``--square`` is the square side, or the circle spacing of a grid. A ChArUco board
+printed by OpenCV before 4.6 with an even number of rows of squares has its markers in other
+squares than today's layout (``legacy_pattern``, OpenCV's ``setLegacyPattern``). Points are
 numbered row by row (x fastest) as OpenCV reports them; the board frame has its origin at the
 first point, x along a row, y along a column, z into the board. An asymmetric circle grid
 shifts every other row by half a step: point (c, r) sits at ((2c + r mod 2) s, r s), as in
@@ -31,7 +33,7 @@ from .patterns import DEFAULT_DICTIONARY, PATTERNS
 class Board:
     """``cols`` x ``rows`` points (chessboard and ChArUco: inner corners; circle grids:
     circles), ``square_m`` apart; ChArUco boards also have ``marker_m`` markers from
-    ``dictionary``."""
+    ``dictionary``, laid out as OpenCV before 4.6 did with ``legacy_pattern``."""
 
     cols: int
     rows: int
@@ -39,6 +41,7 @@ class Board:
     pattern: str = "chessboard"
     marker_m: float = 0.0
     dictionary: str = DEFAULT_DICTIONARY
+    legacy_pattern: bool = False
 
     @property
     def corner_count(self) -> int:
@@ -91,15 +94,18 @@ class Board:
         import cv2
 
         dictionary = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, self.dictionary))
-        return cv2.aruco.CharucoBoard((self.cols + 1, self.rows + 1), self.square_m,
-                                      self.marker_m, dictionary)
+        board = cv2.aruco.CharucoBoard((self.cols + 1, self.rows + 1), self.square_m,
+                                       self.marker_m, dictionary)
+        board.setLegacyPattern(self.legacy_pattern)
+        return board
 
     def describe(self) -> str:
         """The board in words, e.g. ``7x6 inner corners, 0.01 m squares``."""
         if self.pattern == "charuco":
+            layout = ", legacy layout" if self.legacy_pattern else ""
             return (f"{self.cols + 1}x{self.rows + 1} squares ChArUco ({self.cols}x{self.rows} "
                     f"inner corners), {self.square_m:g} m squares, {self.marker_m:g} m "
-                    f"{self.dictionary} markers")
+                    f"{self.dictionary} markers{layout}")
         if self.circle_grid:
             kind = "asymmetric " if self.pattern == "acircles" else ""
             return f"{self.cols}x{self.rows} {kind}circle grid, {self.square_m:g} m spacing"
@@ -118,7 +124,8 @@ def parse_size(text: str) -> tuple[int, int]:
 
 
 def make_board(size: str, square_m: float, pattern: str = "chessboard", *,
-               marker_m: float | None = None, dictionary: str | None = None) -> Board:
+               marker_m: float | None = None, dictionary: str | None = None,
+               legacy_pattern: bool = False) -> Board:
     """The board of camera_calibration-style options (see the module docstring)."""
     if pattern not in PATTERNS:
         raise ProcessorError(f"unsupported pattern {pattern!r} (supported: {', '.join(PATTERNS)})")
@@ -138,14 +145,14 @@ def make_board(size: str, square_m: float, pattern: str = "chessboard", *,
             known = sorted(n for n in dir(cv2.aruco) if n.startswith("DICT_"))
             raise ProcessorError(f"unknown ArUco dictionary {name!r} (OpenCV's: "
                                  f"{', '.join(known)})")
-        board = Board(cols - 1, rows - 1, square_m, pattern, marker_m, name)
+        board = Board(cols - 1, rows - 1, square_m, pattern, marker_m, name, legacy_pattern)
         markers = len(board.charuco().getIds())
         available = cv2.aruco.getPredefinedDictionary(getattr(cv2.aruco, name)).bytesList.shape[0]
         if markers > available:
             raise ProcessorError(f"a {cols}x{rows} ChArUco board needs {markers} markers, "
                                  f"{name} has {available}")
         return board
-    if dictionary is not None or marker_m is not None:
-        raise ProcessorError("a marker size and an ArUco dictionary belong to the charuco "
-                             "pattern only")
+    if dictionary is not None or marker_m is not None or legacy_pattern:
+        raise ProcessorError("a marker size, an ArUco dictionary and the legacy layout belong "
+                             "to the charuco pattern only")
     return Board(cols, rows, square_m, pattern)

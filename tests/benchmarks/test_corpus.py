@@ -14,7 +14,7 @@ from benchmarks.corpus.manifest import (
     load_manifest,
 )
 from benchmarks.corpus.reference import reference_calibration
-from benchmarks.corpus.run import camlog_args
+from benchmarks.corpus.run import camlog_args, camlog_calibration
 from camlog.cli import main
 
 SMALL = "boofcv_sony_chess"
@@ -30,7 +30,7 @@ def cached(name: str) -> Path:
 
 def test_every_entry_has_provenance_licence_and_board() -> None:
     datasets = load_manifest()
-    assert len(datasets) >= 8
+    assert len(datasets) >= 10
     for dataset in datasets:
         assert dataset.licence in LICENCES and dataset.licence_source
         assert dataset.board.square_m > 0 and dataset.board.note
@@ -38,7 +38,7 @@ def test_every_entry_has_provenance_licence_and_board() -> None:
     kinds = {(d.model, d.stereo, d.board.pattern) for d in datasets}
     assert {m for m, _s, _p in kinds} >= {"plumb_bob", "equidistant"}
     assert {s for _m, s, _p in kinds} == {False, True}
-    assert {p for _m, _s, p in kinds} >= {"chessboard", "circles"}
+    assert {p for _m, _s, p in kinds} >= {"chessboard", "circles", "charuco"}
 
 
 def test_a_broken_entry_names_its_field(tmp_path: Path) -> None:
@@ -54,6 +54,12 @@ def test_camlog_options_follow_the_board() -> None:
     args = camlog_args(circles)
     assert args[:6] == ["--size", "8x10", "--square", "0.025", "--pattern", "circles"]
     assert "--diameter" in args and args[-2:] == ["--camera", "/corpus"]
+    charuco = next(d for d in load_manifest() if d.board.pattern == "charuco")
+    args = camlog_args(charuco)
+    assert args[:6] == ["--size", "5x10", "--square", "0.055", "--pattern", "charuco"]
+    assert args[args.index("--marker") + 1] == "0.043"
+    assert args[args.index("--dictionary") + 1] == "DICT_4X4_50"
+    assert "--legacy-pattern" in args
 
 
 def test_opencv_reference_on_a_small_dataset() -> None:
@@ -83,3 +89,15 @@ def test_fisheye_photos_calibrate_at_any_import_rate(tmp_path: Path) -> None:
     assert camera["boards_found"] == 15
     assert camera["used_views"] >= 14
     assert camera["rms_px"] < 0.5
+
+
+def test_a_legacy_charuco_board_calibrates_as_well_as_opencv(tmp_path: Path) -> None:
+    # 13 photos of a 5x10-square board printed in OpenCV's layout before 4.6 (an even number
+    # of rows moves its markers): every photo gives its 36 corners to both
+    dataset = next(d for d in load_manifest() if d.name == "mono3d_charuco")
+    folder = cached(dataset.name)
+    (opencv,) = reference_calibration(dataset, folder).cameras
+    (camera,) = camlog_calibration(dataset, folder, tmp_path).cameras
+    assert opencv.views == camera.views == 13
+    assert camera.rms_px <= opencv.rms_px
+    assert abs(camera.fx - opencv.fx) / opencv.fx < 0.01

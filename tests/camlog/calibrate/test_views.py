@@ -11,7 +11,7 @@ import pytest
 
 from camlog.calibrate import views as views_module
 from camlog.calibrate.solving import guiding_models
-from camlog.calibrate.views import detect_views
+from camlog.calibrate.views import detect_views, size_hint
 from camlog.processing.cameras import find_camera
 from processors.calibration.board import make_board
 from processors.calibration.options import CalibrationOptions
@@ -114,6 +114,32 @@ def test_the_frames_kept_for_detection_and_size_hints_are_copies(
     samples = found.cameras[0].samples
     assert len(samples) > 1 and len(waiting) == 40
     assert all(gray.base is None and gray.shape == (48, 64) for gray in [*samples, *waiting])
+
+
+@pytest.mark.parametrize("legacy_pattern", [False, True])
+def test_a_charuco_board_of_the_other_layout_is_named_in_the_hint(
+        tmp_path: Path, legacy_pattern: bool) -> None:
+    # 8x6 squares (an even number of rows): the frames show the other layout's board, whose
+    # markers are found but whose corners are not
+    shown = make_board("8x6", 0.02, "charuco", marker_m=0.015,
+                       legacy_pattern=not legacy_pattern)
+    asked = make_board("8x6", 0.02, "charuco", marker_m=0.015, legacy_pattern=legacy_pattern)
+    gray = shown.charuco().generateImage((640, 480), marginSize=40)
+    path = tmp_path / "board.mcap"
+    with open_writer(path) as writer:
+        for i in range(3):
+            stamp = (i + 1) * 1_000_000_000
+            writer.write("/cam/image_raw", Image(stamp, "cam", "mono8", gray),
+                         log_time_ns=stamp)
+    with open_reader(path) as reader:
+        found = detect_views(reader, [find_camera(reader, "/cam")], asked, workers=1,
+                             progress=False)
+    camera = found.cameras[0]
+    assert all(frame.detection is None for frame in camera.frames)
+    expected = ("leave out --legacy-pattern" if legacy_pattern
+                else "before 4.6 did: add --legacy-pattern")
+    assert expected in size_hint(camera, asked)
+    assert size_hint(camera, shown) == ""
 
 
 def test_true_poses_are_kept_only_where_a_view_can_read_them(charuco_log: Path) -> None:

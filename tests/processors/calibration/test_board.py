@@ -65,6 +65,21 @@ def test_charuco_counts_squares() -> None:
     assert "12x9 squares ChArUco" in board.describe()
 
 
+def test_charuco_legacy_layout_moves_the_markers_not_the_corners() -> None:
+    today = make_board("6x4", 0.02, "charuco", marker_m=0.015, dictionary="DICT_4X4_50")
+    legacy = make_board("6x4", 0.02, "charuco", marker_m=0.015, dictionary="DICT_4X4_50",
+                        legacy_pattern=True)
+    assert legacy.charuco().getLegacyPattern() and not today.charuco().getLegacyPattern()
+    np.testing.assert_array_equal(legacy.points_in_board(), today.points_in_board())
+    # 4 rows of squares (even): the same marker ids sit in other squares
+    today_markers = np.asarray(today.charuco().getObjPoints())
+    legacy_markers = np.asarray(legacy.charuco().getObjPoints())
+    assert not np.allclose(today_markers, legacy_markers)
+    assert "legacy layout" in legacy.describe() and "legacy" not in today.describe()
+    with pytest.raises(ProcessorError, match="legacy layout belong to the charuco pattern"):
+        make_board("7x6", 0.01, legacy_pattern=True)
+
+
 def test_charuco_checks_markers_and_dictionary() -> None:
     with pytest.raises(ProcessorError, match="needs a marker size between 0 and the square"):
         make_board("6x5", 0.02, "charuco")

@@ -3,10 +3,12 @@ ChArUco views included."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
-from processors.calibration.board import make_board
+from processors.calibration.board import Board, make_board
 from processors.calibration.targets import find_board
 from processors.errors import ProcessorError
 from replay.camera import CameraModel
@@ -17,15 +19,16 @@ CHARUCO = make_board("8x6", 0.02, "charuco", marker_m=0.015)
 PX_PER_M = 4000.0  # texture resolution: 80 px per square
 
 
-def charuco_view(camera_from_board: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def charuco_view(camera_from_board: np.ndarray, board: Board = CHARUCO
+                 ) -> tuple[np.ndarray, np.ndarray]:
     """Image of the ChArUco board and the true pixels of its inner corners."""
-    squares = (CHARUCO.cols + 1, CHARUCO.rows + 1)
-    side = CHARUCO.square_m * PX_PER_M
-    texture = CHARUCO.charuco().generateImage((round(squares[0] * side),
-                                               round(squares[1] * side)), marginSize=0)
+    squares = (board.cols + 1, board.rows + 1)
+    side = board.square_m * PX_PER_M
+    texture = board.charuco().generateImage((round(squares[0] * side),
+                                             round(squares[1] * side)), marginSize=0)
     # the first inner corner is one square in from the board's outer corner
     image = warp_texture(texture, PX_PER_M, (side - 0.5, side - 0.5), K_TRUE, camera_from_board)
-    points = CHARUCO.points_in_board()
+    points = board.points_in_board()
     in_camera = points @ camera_from_board[:3, :3].T + camera_from_board[:3, 3]
     truth = in_camera[:, :2] / in_camera[:, 2:] * np.diag(K_TRUE)[:2] + K_TRUE[:2, 2]
     return image, truth
@@ -51,6 +54,19 @@ def test_a_charuco_board_cut_by_the_border_gives_the_corners_it_shows() -> None:
     assert 6 <= len(found.ids) < CHARUCO.corner_count
     assert set(found.ids.tolist()) <= set(np.flatnonzero(inside).tolist())
     assert np.linalg.norm(found.corners_px - truth[found.ids], axis=1).max() < 0.15
+
+
+def test_a_legacy_charuco_board_is_found_only_in_its_own_layout() -> None:
+    # 8x6 squares: an even number of rows, where OpenCV before 4.6 put the markers in the
+    # other squares; the markers are found either way, the corners only in the legacy layout
+    legacy = dataclasses.replace(CHARUCO, legacy_pattern=True)
+    camera_from_board = pose(np.array([0.3, -0.2, 0.1]), np.array([-0.07, -0.05, 0.45]))
+    image, truth = charuco_view(camera_from_board, legacy)
+    found = find_board(image, legacy)
+    assert found is not None and found.accepted
+    assert found.ids.tolist() == list(range(legacy.corner_count))
+    assert np.linalg.norm(found.corners_px - truth, axis=1).max() < 0.15
+    assert find_board(image, CHARUCO) is None
 
 
 def test_no_charuco_board_in_a_blank_image() -> None:
