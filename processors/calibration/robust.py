@@ -7,8 +7,9 @@ stable. ``t`` makes a false rejection unlikely over the whole data set (``n exp(
 was not the board (a wrong detection, or two frames of a stereo pair that show the board at
 different poses) and is dropped whole. Once the solve has settled, such views are given one
 more chance: posed afresh through the solution's lens and solved with the others, a view that
-only the seed could not explain (a board at the edge of a fisheye the seed got wrong there)
-fits and stays; one that is not the board is dropped again. Views of a moving board carry their speed; after the
+only its seed pose could not explain (PnP through a seed lens can pick the wrong one of a
+planar board's two poses) fits and stays; one that is not the board is dropped again, and
+the solve before the trial stands. Views of a moving board carry their speed; after the
 first solve the blur law of :mod:`.motion` is fitted to their residuals, weights them and
 leaves out views too blurred to help. The centres of a circle grid's circles are measured as
 the centroids of their images; each round moves them by the shift :mod:`.discs` computes at
@@ -214,6 +215,9 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
         robust_sigma = float(np.median(norm[evidence.inliers])) / math.sqrt(2 * math.log(2))
         limit = max(threshold_sigma(int(evidence.inliers.sum())) * robust_sigma, SEED_FLOOR_PX)
         evidence.inliers &= norm <= limit / obs.weight[:, None]
+        # a view left with too few corners cannot hold its pose in the first solve (a single
+        # corner leaves it singular): it sits that solve out and is judged after it
+        evidence.inliers[evidence.inliers.sum(axis=1) < MIN_VIEW_POINTS] = False
     speeds = np.array([views[i].speed_px for i in evidence.order])
     rounds, trial = 0, None
     while True:

@@ -10,7 +10,7 @@ from processors.calibration.lens import intrinsics_of
 from processors.calibration.options import CalibrationOptions
 from processors.calibration.robust import BoardViews, robust_solve
 
-from .synthetic import BOARD, H, K_TRUE, W, pose, project, true_model
+from .synthetic import BOARD, K_TRUE, H, W, pose, project, true_model
 
 NOISE_PX = 0.05
 POINTS = BOARD.points_in_board()
@@ -51,6 +51,30 @@ def test_a_view_whose_seed_pose_was_wrong_is_taken_back_in() -> None:
     back = problem.state.reference_from_board(5)
     assert np.linalg.norm(back[:3, 3] - poses[5][:3, 3]) < 1e-3
     assert abs(problem.state.intrinsics[0][0] - K_TRUE[0, 0]) < 1.0
+
+
+def test_a_view_with_one_corner_where_its_seed_pose_puts_it_sits_the_first_solve_out() -> None:
+    # the seed pose turned about the board's first corner: that corner alone lands where it is
+    # seen, and one corner cannot hold a pose (its block of the normal equations is singular)
+    rng = np.random.default_rng(3)
+    poses = [board_at([*rng.uniform(-0.5, 0.5, 2), rng.uniform(-np.pi, np.pi)],
+                      [*rng.uniform(-0.1, 0.1, 2), rng.uniform(0.45, 0.7)]) for _ in range(12)]
+    model = true_model()
+    views = [BoardView(0, i, ALL, project(model, p) + rng.normal(0, NOISE_PX, (len(ALL), 2)))
+             for i, p in enumerate(poses)]
+    turned = poses[7] @ pose(np.array([0.0, 0.0, 0.5]), np.zeros(3))
+    off_px = np.linalg.norm(project(model, turned) - views[7].corners_px, axis=1)
+    assert off_px[0] < 0.3 and np.sort(off_px)[1] > 10
+    seeded = [turned if i == 7 else p for i, p in enumerate(poses)]
+    state = bundle.RigState([intrinsics_of(model)], np.eye(3)[None], np.zeros((1, 3)),
+                            np.stack([p[:3, :3] for p in seeded]),
+                            np.stack([p[:3, 3] for p in seeded]))
+
+    problem, evidence, _rounds = robust_solve(BoardViews(POINTS, views, [(W, H)]),
+                                              [CalibrationOptions()], state=state)
+
+    assert evidence.rejected == {}
+    assert problem.sigma_px < 1.3 * NOISE_PX
 
 
 def test_a_pair_showing_two_poses_stays_out_and_changes_nothing() -> None:
