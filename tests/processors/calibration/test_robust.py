@@ -8,7 +8,7 @@ from processors.calibration import bundle
 from processors.calibration.joint import BoardView, calibrate_cameras
 from processors.calibration.lens import intrinsics_of
 from processors.calibration.options import CalibrationOptions
-from processors.calibration.robust import BoardViews, robust_solve
+from processors.calibration.robust import BoardViews, Evidence, Problem, robust_solve
 
 from .synthetic import BOARD, K_TRUE, H, W, pose, project, true_model
 
@@ -25,26 +25,38 @@ def board_at(rvec: list[float], xyz: list[float]) -> np.ndarray:
     return pose(np.array(rvec), np.array(xyz)) @ CENTRED
 
 
+def mono_views(seed: int, count: int) -> tuple[list[np.ndarray], list[BoardView]]:
+    """``count`` board poses around the middle of the image and their noisy views."""
+    rng = np.random.default_rng(seed)
+    poses = [board_at([*rng.uniform(-0.5, 0.5, 2), rng.uniform(-np.pi, np.pi)],
+                      [*rng.uniform(-0.1, 0.1, 2), rng.uniform(0.45, 0.7)])
+             for _ in range(count)]
+    views = [BoardView(0, i, ALL, project(true_model(), p)
+                       + rng.normal(0, NOISE_PX, (len(ALL), 2))) for i, p in enumerate(poses)]
+    return poses, views
+
+
+def solve_from(poses: list[np.ndarray], views: list[BoardView]) -> tuple[Problem, Evidence]:
+    """The robust solve started at the true lens and the board poses ``poses``."""
+    state = bundle.RigState([intrinsics_of(true_model())], np.eye(3)[None], np.zeros((1, 3)),
+                            np.stack([p[:3, :3] for p in poses]),
+                            np.stack([p[:3, 3] for p in poses]))
+    problem, evidence, _rounds = robust_solve(BoardViews(POINTS, views, [(W, H)]),
+                                              [CalibrationOptions()], state=state)
+    return problem, evidence
+
+
 def test_a_view_whose_seed_pose_was_wrong_is_taken_back_in() -> None:
     # PnP through a seed lens can pick the wrong one of a planar board's two poses: the
     # view's corners are then all far from where the seed puts them, it is left out of the
     # first solve, and only a fresh pose at the solution shows it was the board all along
-    rng = np.random.default_rng(2)
-    poses = [board_at([*rng.uniform(-0.5, 0.5, 2), rng.uniform(-np.pi, np.pi)],
-                      [*rng.uniform(-0.1, 0.1, 2), rng.uniform(0.45, 0.7)]) for _ in range(15)]
-    model = true_model()
-    views = [BoardView(0, i, ALL, project(model, p) + rng.normal(0, NOISE_PX, (len(ALL), 2)))
-             for i, p in enumerate(poses)]
+    poses, views = mono_views(2, 15)
     wrong = poses[5] @ np.linalg.inv(CENTRED) @ pose(np.array([0.6, 0.0, 0.0]), np.zeros(3)) \
         @ CENTRED
-    assert np.median(np.linalg.norm(project(model, wrong) - views[5].corners_px, axis=1)) > 5
-    seeded = [wrong if i == 5 else p for i, p in enumerate(poses)]
-    state = bundle.RigState([intrinsics_of(model)], np.eye(3)[None], np.zeros((1, 3)),
-                            np.stack([p[:3, :3] for p in seeded]),
-                            np.stack([p[:3, 3] for p in seeded]))
+    assert np.median(np.linalg.norm(project(true_model(), wrong) - views[5].corners_px,
+                                    axis=1)) > 5
 
-    problem, evidence, _rounds = robust_solve(BoardViews(POINTS, views, [(W, H)]),
-                                              [CalibrationOptions()], state=state)
+    problem, evidence = solve_from([wrong if i == 5 else p for i, p in enumerate(poses)], views)
 
     assert evidence.rejected == {}
     assert problem.sigma_px < 1.3 * NOISE_PX
@@ -56,22 +68,13 @@ def test_a_view_whose_seed_pose_was_wrong_is_taken_back_in() -> None:
 def test_a_view_with_one_corner_where_its_seed_pose_puts_it_sits_the_first_solve_out() -> None:
     # the seed pose turned about the board's first corner: that corner alone lands where it is
     # seen, and one corner cannot hold a pose (its block of the normal equations is singular)
-    rng = np.random.default_rng(3)
-    poses = [board_at([*rng.uniform(-0.5, 0.5, 2), rng.uniform(-np.pi, np.pi)],
-                      [*rng.uniform(-0.1, 0.1, 2), rng.uniform(0.45, 0.7)]) for _ in range(12)]
-    model = true_model()
-    views = [BoardView(0, i, ALL, project(model, p) + rng.normal(0, NOISE_PX, (len(ALL), 2)))
-             for i, p in enumerate(poses)]
+    poses, views = mono_views(3, 12)
     turned = poses[7] @ pose(np.array([0.0, 0.0, 0.5]), np.zeros(3))
-    off_px = np.linalg.norm(project(model, turned) - views[7].corners_px, axis=1)
+    off_px = np.linalg.norm(project(true_model(), turned) - views[7].corners_px, axis=1)
     assert off_px[0] < 0.3 and np.sort(off_px)[1] > 10
-    seeded = [turned if i == 7 else p for i, p in enumerate(poses)]
-    state = bundle.RigState([intrinsics_of(model)], np.eye(3)[None], np.zeros((1, 3)),
-                            np.stack([p[:3, :3] for p in seeded]),
-                            np.stack([p[:3, 3] for p in seeded]))
 
-    problem, evidence, _rounds = robust_solve(BoardViews(POINTS, views, [(W, H)]),
-                                              [CalibrationOptions()], state=state)
+    problem, evidence = solve_from([turned if i == 7 else p for i, p in enumerate(poses)],
+                                   views)
 
     assert evidence.rejected == {}
     assert problem.sigma_px < 1.3 * NOISE_PX
