@@ -16,6 +16,8 @@ from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 
+import numpy as np
+
 from processors.calibration.board import Board
 from processors.calibration.corners import remeasures
 from processors.calibration.joint import JointResult
@@ -26,7 +28,7 @@ from replay.formats.background import BackgroundWriter
 from replay.records import CalibrationSummary, Scenario
 from replay.storage import Location, local_paths
 
-from ..errors import InputError, UsageError
+from ..errors import CalibrationError, InputError, UsageError
 from ..processing.cameras import cameras_in, find_camera
 from ..requests.calibrate import CalibrateRequest
 from ..requests.fields import RequestError
@@ -183,9 +185,15 @@ def calibrate_log(request: CalibrateRequest, *, workers: int | None = None,
             remeasure = partial(remeasured_rig, reader, cameras_views, board=board,
                                 workers=workers, progress=progress)
         # with the report, a short log's statistics are computed while the evidence pass runs
-        solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s,
-                           diameter_m=diameter_m, background=report, remeasure=remeasure,
-                           as_rig=as_rig)
+        try:
+            solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s,
+                               diameter_m=diameter_m, background=report, remeasure=remeasure,
+                               as_rig=as_rig)
+        except np.linalg.LinAlgError as err:
+            raise CalibrationError(
+                f"the views leave the calibration's equations singular ({err}): some unknown "
+                "is not held by them (e.g. every view of a camera shows the board alike)"
+                ) from None
         solutions, stereo = solved.cameras, solved.stereo
         scenario = found.scenario
         truth = [scenario.camera_for(s.views.source.namespace,

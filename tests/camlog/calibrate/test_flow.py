@@ -12,6 +12,7 @@ import pytest
 from camlog.calibrate.flow import calibrate_log
 from camlog.calibrate.instants import ViewsOfRig
 from camlog.calibrate.views import CameraViews
+from camlog.errors import CalibrationError
 from camlog.requests.calibrate import CalibrateRequest
 from processors.calibration.joint import JointResult
 
@@ -58,3 +59,20 @@ def test_a_pinhole_chessboard_is_measured_once(mono_calibration_log: Path,
     assert run.solved.measured_again is None
     evidence = run.summary.cameras[0].evidence
     assert evidence is not None and evidence.measured_again is None
+
+
+def test_singular_equations_are_one_calibration_error(mono_calibration_log: Path,
+                                                      tmp_path: Path) -> None:
+    log = mono_calibration_log.parent.parent / "mono.mcap"
+
+    def singular(cameras: list[CameraViews], rig: ViewsOfRig, joint: JointResult
+                 ) -> ViewsOfRig:
+        raise np.linalg.LinAlgError("Singular matrix")
+
+    with pytest.raises(CalibrationError, match=r"^the views leave the calibration's equations "
+                                               r"singular \(Singular matrix\)"):
+        calibrate_log(CalibrateRequest(log=log, size="7x6", square=0.01,
+                                       camera=("/simple_camera",), output=tmp_path / "cal",
+                                       progress=False, report=False),
+                      measure_again=singular)
+    assert not (tmp_path / "cal").exists()
