@@ -28,13 +28,12 @@ import numpy.typing as npt
 from replay.camera import CameraModel
 from replay.messages import F64
 
-from ..errors import ProcessorError
 from . import bundle, normal
 from .discs import centroid_shifts
-from .lens import intrinsics_of, model_of
+from .lens import model_of
 from .motion import BlurModel, fit_blur
 from .options import CalibrationOptions
-from .seed import board_pose, rig_transform, seed_model
+from .seed import board_pose, seed_model, seed_state
 
 I64 = npt.NDArray[np.int64]
 B8 = npt.NDArray[np.bool_]
@@ -197,7 +196,8 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
     if state is None:
         models = seeds or [seed_camera(points_in_board, views, c, sizes[c], options[c])
                            for c in range(len(sizes))]
-        state = _seed_state(points_in_board, obs, models, len(evidence.instants))
+        state = seed_state(points_in_board, obs, models, len(evidence.instants),
+                           min_points=MIN_VIEW_POINTS)
     setups = [bundle.CameraSetup(o.distortion_model, s, o.free, o.fix_aspect_ratio)
               for o, s in zip(options, sizes, strict=True)]
     layout = bundle.Layout.of(setups, state, warp=warp)
@@ -381,57 +381,3 @@ def _residual_norms(state: bundle.RigState, layout: bundle.Layout, obs: bundle.O
     """Length ``(V, N)`` of every seen corner's unweighted residual (px)."""
     residual = bundle.linearize(state, layout, obs, points_in_board, jacobian=False).residuals
     return np.asarray(np.linalg.norm(residual, axis=2) / obs.weight[:, None])
-
-
-def _seed_state(points_in_board: F64, obs: bundle.Observations, models: list[CameraModel],
-                instant_count: int) -> bundle.RigState:
-    """Board poses by PnP; each instant from the lowest-numbered camera that saw it; rig
-    transforms by consensus over the instants a camera shares with the reference, or with a
-    camera already placed (:func:`_chained_rig`)."""
-    poses: dict[tuple[int, int], F64] = {}
-    for row in range(obs.view_count):
-        ids = np.flatnonzero(obs.mask[row])
-        if len(ids) < MIN_VIEW_POINTS:
-            continue
-        pose = board_pose(points_in_board[ids], obs.observed[row, ids],
-                          models[int(obs.camera[row])])
-        if pose is not None:
-            poses[(int(obs.camera[row]), int(obs.instant[row]))] = pose
-    cameras = len(models)
-    rig = _chained_rig(poses, cameras)
-    board = np.tile(np.eye(4), (instant_count, 1, 1))
-    for instant in range(instant_count):
-        for camera in range(cameras):
-            if (camera, instant) in poses:
-                board[instant] = np.linalg.inv(rig[camera]) @ poses[(camera, instant)]
-                break
-    return bundle.RigState([intrinsics_of(m) for m in models],
-                           np.stack([r[:3, :3] for r in rig]), np.stack([r[:3, 3] for r in rig]),
-                           board[:, :3, :3].copy(), board[:, :3, 3].copy())
-
-
-def _chained_rig(poses: dict[tuple[int, int], F64], cameras: int) -> list[F64]:
-    """Every camera's ``camera_from_reference`` ``(4, 4)`` from the board poses ``(camera,
-    instant) -> camera_from_board``: by consensus over the instants it shares with camera 0,
-    or else with the placed camera it shares most instants with (a chain of cameras)."""
-    rig: list[F64 | None] = [np.eye(4)] + [None] * (cameras - 1)
-
-    def shared(camera: int, other: int) -> list[int]:
-        return [i for (c, i) in poses if c == camera and (other, i) in poses]
-
-    while unplaced := [c for c in range(cameras) if rig[c] is None]:
-        direct = [c for c in unplaced if shared(c, 0)]
-        links = [(0, c, 0) for c in direct[:1]] or sorted(
-            (-len(shared(c, p)), c, p) for c in unplaced for p in range(cameras)
-             if rig[p] is not None and shared(c, p))
-        if not links:
-            raise ProcessorError("a camera never sees the board at the same time as the "
-                                 "first one, directly or through another camera")
-        _count, camera, placed = links[0]
-        instants = shared(camera, placed)
-        camera_from_placed = rig_transform([poses[(camera, i)] for i in instants],
-                                           [poses[(placed, i)] for i in instants])
-        placed_from_reference = rig[placed]
-        rig[camera] = camera_from_placed if placed_from_reference is None or placed == 0 \
-            else camera_from_placed @ placed_from_reference
-    return [r for r in rig if r is not None]

@@ -21,7 +21,8 @@ from replay.lens_models import lens_model
 from replay.messages import F64
 
 from ..errors import ProcessorError
-from . import rotation
+from . import bundle, rotation
+from .lens import intrinsics_of
 from .opencv_lens import opencv_lens
 from .options import CalibrationOptions
 
@@ -172,3 +173,58 @@ def rig_transform(camera_from_board: list[F64], reference_from_board: list[F64])
     out[:3, :3] = mean if np.all(np.isfinite(mean)) else rotation.matrices(rvecs[best:best + 1])[0]
     out[:3, 3] = np.median(candidates[agree, :3, 3], axis=0)
     return out
+
+
+def seed_state(points_in_board: F64, obs: bundle.Observations, models: list[CameraModel],
+               instant_count: int, *, min_points: int) -> bundle.RigState:
+    """The solve's start: board poses by PnP through ``models`` (views with at least
+    ``min_points`` corners); each instant from the lowest-numbered camera that saw it; rig
+    transforms by consensus over the instants a camera shares with the reference, or with a
+    camera already placed (:func:`chained_rig`)."""
+    poses: dict[tuple[int, int], F64] = {}
+    for row in range(obs.view_count):
+        ids = np.flatnonzero(obs.mask[row])
+        if len(ids) < min_points:
+            continue
+        pose = board_pose(points_in_board[ids], obs.observed[row, ids],
+                          models[int(obs.camera[row])])
+        if pose is not None:
+            poses[(int(obs.camera[row]), int(obs.instant[row]))] = pose
+    cameras = len(models)
+    rig = chained_rig(poses, cameras)
+    board = np.tile(np.eye(4), (instant_count, 1, 1))
+    for instant in range(instant_count):
+        for camera in range(cameras):
+            if (camera, instant) in poses:
+                board[instant] = np.linalg.inv(rig[camera]) @ poses[(camera, instant)]
+                break
+    return bundle.RigState([intrinsics_of(m) for m in models],
+                           np.stack([r[:3, :3] for r in rig]), np.stack([r[:3, 3] for r in rig]),
+                           board[:, :3, :3].copy(), board[:, :3, 3].copy())
+
+
+def chained_rig(poses: dict[tuple[int, int], F64], cameras: int) -> list[F64]:
+    """Every camera's ``camera_from_reference`` ``(4, 4)`` from the board poses ``(camera,
+    instant) -> camera_from_board``: by consensus over the instants it shares with camera 0,
+    or else with the placed camera it shares most instants with (a chain of cameras)."""
+    rig: list[F64 | None] = [np.eye(4)] + [None] * (cameras - 1)
+
+    def shared(camera: int, other: int) -> list[int]:
+        return [i for (c, i) in poses if c == camera and (other, i) in poses]
+
+    while unplaced := [c for c in range(cameras) if rig[c] is None]:
+        direct = [c for c in unplaced if shared(c, 0)]
+        links = [(0, c, 0) for c in direct[:1]] or sorted(
+            (-len(shared(c, p)), c, p) for c in unplaced for p in range(cameras)
+             if rig[p] is not None and shared(c, p))
+        if not links:
+            raise ProcessorError("a camera never sees the board at the same time as the "
+                                 "first one, directly or through another camera")
+        _count, camera, placed = links[0]
+        instants = shared(camera, placed)
+        camera_from_placed = rig_transform([poses[(camera, i)] for i in instants],
+                                           [poses[(placed, i)] for i in instants])
+        placed_from_reference = rig[placed]
+        rig[camera] = camera_from_placed if placed_from_reference is None or placed == 0 \
+            else camera_from_placed @ placed_from_reference
+    return [r for r in rig if r is not None]

@@ -53,17 +53,22 @@ def test_propagate_predicts_the_change_of_a_new_solve() -> None:
     result = solve(0.0, 0)
     problem = result.problem  # type: ignore[attr-defined]
     obs = problem.observations
-    shift = np.random.default_rng(1).normal(0.0, 0.02, obs.observed.shape)
+    # small enough for the linear model: the radial prior's pull makes the solve bend (at
+    # 0.02 px the intrinsics' change departs 3 % from it, at 0.002 px 0.3 %)
+    shift = np.random.default_rng(1).normal(0.0, 0.002, obs.observed.shape)
     predicted, kept = propagate(problem, shift)
     moved = dataclasses.replace(obs, observed=obs.observed + shift)
     again = normal.refine(problem.state, problem.layout, moved, POINTS)
     change = np.concatenate(again.state.intrinsics) - np.concatenate(problem.state.intrinsics)
     columns = problem.layout.intrinsic_columns[0]
     expected = problem.layout.bases[0] @ predicted[columns]
-    np.testing.assert_allclose(change, expected, rtol=0.02, atol=1e-6 * np.abs(change).max())
+    np.testing.assert_allclose(change, expected, rtol=0.02, atol=1e-3 * np.abs(change).max())
+    # the residuals' change: at the solution before the shift the prior leaves some
+    before = -bundle.linearize(problem.state, problem.layout, obs, POINTS,
+                               jacobian=False).residuals
     residuals = -bundle.linearize(again.state, problem.layout, moved, POINTS,
                                   jacobian=False).residuals
-    np.testing.assert_allclose(kept, residuals, atol=1e-4)
+    np.testing.assert_allclose(kept, residuals - before, atol=1e-5)
 
 
 def test_robust_covariance_agrees_with_the_plain_one_for_independent_noise() -> None:
