@@ -316,6 +316,10 @@ def _linearize(state: RigState, layout: Layout, obs: Observations, points_in_boa
         uv, d_point, d_intrinsics = project(setup.distortion_model, state.intrinsics[camera],
                                             turned_c + t_c)
         s = scale[views].reshape(-1, 1)
+        counted = s[:, 0] != 0
+        if not counted.all():  # a board point not seen may not project (NaN): 0 * NaN is NaN
+            uv = np.where(counted[:, None], uv, 0.0)
+            d_point[~counted], d_intrinsics[~counted] = 0.0, 0.0
         residuals[views] = (s * (uv - obs.observed[views].reshape(-1, 2))).reshape(-1, n, 2)
         if not jacobian:
             continue

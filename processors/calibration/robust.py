@@ -212,8 +212,12 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
     if fresh and reject:
         # gross outliers would drag the first solve away: judge the seed robustly first
         norm = _residual_norms(state, layout, _moved(obs, shift), points_in_board)
-        robust_sigma = float(np.median(norm[evidence.inliers])) / math.sqrt(2 * math.log(2))
-        limit = max(threshold_sigma(int(evidence.inliers.sum())) * robust_sigma, SEED_FLOOR_PX)
+        # a corner the seed cannot project (NaN) is no inlier and says nothing of the noise
+        evidence.inliers &= np.isfinite(norm)
+        projected = norm[evidence.inliers]
+        robust_sigma = float(np.median(projected)) / math.sqrt(2 * math.log(2)) \
+            if len(projected) else 0.0
+        limit = max(SEED_FLOOR_PX, threshold_sigma(int(evidence.inliers.sum())) * robust_sigma)
         evidence.inliers &= norm <= limit / obs.weight[:, None]
         # a view left with too few corners cannot hold its pose in the first solve (a single
         # corner leaves it singular): it sits that solve out and is judged after it

@@ -142,3 +142,28 @@ def test_equations_summed_over_chunks_of_views_are_the_whole_problems(
         np.testing.assert_allclose(getattr(normal, name), getattr(expected, name), rtol=1e-10,
                                    atol=1e-9, err_msg=name)
     assert lin.cost == pytest.approx(whole.cost, rel=1e-12)
+
+
+def test_a_point_that_does_not_project_counts_for_nothing_where_unseen() -> None:
+    # the board turned and moved so that its first row of corners lies in the camera's focal
+    # plane (1e-300 m in front: x / z overflows and they project to NaN) while the other rows
+    # stand in front: the view sees only those
+    state, layout, obs = rig_problem([true_model(), true_model()], 4, 0.0, seed=5)
+    points = BOARD.points_in_board()
+    camera_from_board = pose(np.array([1.0, 0.0, 0.0]), np.zeros(3))
+    camera_from_board[:3, 3] = -camera_from_board[:3, :3] @ points[0] + [0.0, 0.0, 1e-300]
+    in_camera = points @ camera_from_board[:3, :3].T + camera_from_board[:3, 3]
+    first_row = np.arange(BOARD.cols)
+    assert (in_camera[BOARD.cols:, 2] > 0.02).all()
+    state.board_rotation[0] = camera_from_board[:3, :3]
+    state.board_translation[0] = camera_from_board[:3, 3]
+    with np.errstate(all="ignore"):
+        uv = true_model().project(in_camera)
+        assert np.isnan(uv[first_row[1:]]).all() and np.isfinite(uv[BOARD.cols:]).all()
+        obs.observed[0] = np.nan_to_num(uv)
+        obs.mask[0, first_row] = False
+        lin, normal = linearized_equations(state, layout, obs, points, len(state.board_rotation))
+    assert np.isfinite(lin.residuals).all() and np.isfinite(lin.cost)
+    assert np.isfinite(normal.a).all() and np.isfinite(normal.b).all()
+    assert np.isfinite(normal.c).all() and np.isfinite(normal.g_global).all()
+    assert np.all(lin.residuals[0, first_row] == 0)
