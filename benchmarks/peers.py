@@ -274,7 +274,7 @@ def main() -> None:
                         help="also measure peak memory: view on 1- and 10-minute logs, demo")
     parser.add_argument("--keep", type=Path, help="work in this folder and keep the inputs")
     args = parser.parse_args()
-    for package in ("camlog", "replay", "processors", "recorder"):
+    for package in ("camlog", "replay", "processors", "recorder", "rerun_export"):
         compileall.compile_dir(REPO / package, quiet=1)
     with tempfile.TemporaryDirectory(prefix="camlog-peers-") as tmp_name:
         tmp = args.keep or Path(tmp_name)
