@@ -31,5 +31,8 @@ def _faults(mode: str) -> int:
 @pytest.mark.skipif(platform.libc_ver()[0] != "glibc", reason="glibc's malloc thresholds")
 def test_freed_blocks_are_reused_instead_of_faulted_in_again() -> None:
     pages = 3 * 8 * 1024 * 1024 // 4096  # of one round's blocks
-    assert _faults("default") > 20 * pages  # the freed heap trimmed, faulted in again
+    # the freed heap trimmed, faulted in again: how often depends on what the process freed
+    # before (glibc raises its own thresholds after freeing a mapped block; 7 to 27 of the 40
+    # rounds' worth here, with and without the modules' bytecode written)
+    assert _faults("default") > 5 * pages
     assert _faults("kept") < 3 * pages  # the first round's pages, then reused
