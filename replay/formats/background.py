@@ -11,6 +11,7 @@ then never appears under its final name.
 
 from __future__ import annotations
 
+import atexit
 import queue
 import threading
 from collections.abc import Callable
@@ -29,6 +30,8 @@ _ABORT = object()
 _CLOSE = object()
 #: how often a caller waiting on a full queue looks for the worker's error
 _POLL_S = 0.2
+#: how long the interpreter's exit waits for a worker whose start was interrupted to begin
+_BEGIN_S = 1.0
 
 
 class BackgroundWriter(KeptOnSuccess):
@@ -42,18 +45,24 @@ class BackgroundWriter(KeptOnSuccess):
         self._queue: queue.Queue[Any] = queue.Queue(maxsize=max_queued)
         self.error: BaseException | None = None
         self.closed = False
+        self._drop = False  # a Ctrl-C while the log is finished, or the interpreter's exit
         self._open_log = open_log
         self._opened = threading.Event()
+        self._began, self._worker_done = threading.Event(), False
         self._thread = threading.Thread(target=self._run, name="camlog-writer",
                                         daemon=True)
-        self._thread.start()
+        # a Ctrl-C can land inside Thread.start, after the thread began: nothing here can
+        # tell, so the interpreter's exit drops a log whose worker still runs
+        atexit.register(self._drop_at_exit)
         try:
+            self._thread.start()
             self._opened.wait()
         except BaseException:  # Ctrl-C while the log opens: drop it once it is open
             self.abort()
             raise
         if self.error is not None:  # the log could not be opened
             self._thread.join()
+            atexit.unregister(self._drop_at_exit)
             raise self.error
 
     def write(self, topic: str, message: Message, *, log_time_ns: int | None = None) -> None:
@@ -92,14 +101,49 @@ class BackgroundWriter(KeptOnSuccess):
                 continue
 
     def _stop(self, sentinel: object) -> None:
-        if self.closed:
-            return
-        self.closed = True
-        if self._thread.is_alive():
-            self._queue.put(sentinel)  # the worker drains the queue even after an error
-            self._thread.join()
+        if not self.closed:
+            self.closed = True
+            # the worker drains the queue even after an error, and takes this once it runs
+            while not self._worker_done:
+                try:
+                    self._queue.put(sentinel, timeout=_POLL_S)
+                    break
+                except queue.Full:
+                    continue
+        self._join()
+
+    def _join(self) -> None:
+        """Wait for the worker to finish or drop the log. A Ctrl-C meanwhile asks it to drop
+        the log unless it is already finishing it, and is raised once it is done: the
+        process never ends with the worker half-way and its temporary file left behind."""
+        interrupted: BaseException | None = None
+        while self._thread.is_alive():
+            try:
+                self._thread.join()
+            except KeyboardInterrupt as err:
+                interrupted = err
+                self._drop = True
+        if self._worker_done:
+            atexit.unregister(self._drop_at_exit)
+        if interrupted is not None:
+            raise interrupted
+
+    def _drop_at_exit(self) -> None:
+        """At the interpreter's exit, a worker that still runs drops its log (one whose
+        start was interrupted may only now begin: given a second to)."""
+        self._drop = True
+        if not self._worker_done:
+            self._began.wait(_BEGIN_S)
+        self._stop(_ABORT)
 
     def _run(self) -> None:
+        self._began.set()
+        try:
+            self._serve()
+        finally:
+            self._worker_done = True
+
+    def _serve(self) -> None:
         try:
             writer = self._open_log()
         except BaseException as err:  # handed to the caller
@@ -115,7 +159,7 @@ class BackgroundWriter(KeptOnSuccess):
                 except BaseException as err:
                     self.error = err
         try:
-            if item is _CLOSE and self.error is None:
+            if item is _CLOSE and self.error is None and not self._drop:
                 writer.close()
             else:
                 writer.abort()

@@ -71,3 +71,46 @@ def test_caller_error_drops_the_log(tmp_path: Path) -> None:
         raise RuntimeError("boom")
     assert list(tmp_path.iterdir()) == []
     assert not any(t.name == "camlog-writer" for t in threading.enumerate())
+
+
+INTERRUPTED = """
+import sys, threading
+from pathlib import Path
+from replay import Text, open_writer
+from replay.formats.background import BackgroundWriter
+
+moment, out = sys.argv[1], Path(sys.argv[2])
+real_start, real_join = threading.Thread.start, threading.Thread.join
+
+def start_then_interrupt(self):  # the thread has begun when Ctrl-C lands in start
+    real_start(self)
+    raise KeyboardInterrupt
+
+def interrupted_join(self, timeout=None):  # Ctrl-C while close waits for the worker
+    threading.Thread.join = real_join
+    raise KeyboardInterrupt
+
+if moment == "start":
+    threading.Thread.start = start_then_interrupt
+writer = BackgroundWriter(lambda: open_writer(out / "run.mcap"))
+for i in range(50):
+    writer.write("/chatter", Text("x" * 10000), log_time_ns=i + 1)
+if moment == "close":
+    threading.Thread.join = interrupted_join
+writer.close()
+"""
+
+
+@pytest.mark.parametrize("moment", ["start", "close"])
+def test_ctrl_c_leaves_no_temporary_file(tmp_path: Path, moment: str) -> None:
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", INTERRUPTED, moment, str(tmp_path)],
+                          capture_output=True, text=True, timeout=60)
+    assert done.returncode != 0 and "KeyboardInterrupt" in done.stderr
+    left = sorted(p.name for p in tmp_path.iterdir())
+    # a log is never left half-written: gone, or (Ctrl-C while it was being finished) whole
+    assert left in ([], ["run.mcap"]), left
+    if left:
+        assert len(read_log(tmp_path / "run.mcap")) == 50
