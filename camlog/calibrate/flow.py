@@ -11,7 +11,8 @@ from __future__ import annotations
 
 import os
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -137,6 +138,19 @@ def cameras_of(request: CalibrateRequest) -> list[str]:
     return spaces
 
 
+@contextmanager
+def _singular_is_one_line() -> Iterator[None]:
+    """Equations the views leave singular, should a solve meet them, as one CalibrationError
+    line rather than numpy's traceback."""
+    try:
+        yield
+    except np.linalg.LinAlgError as err:
+        raise CalibrationError(
+            f"the views leave the calibration's equations singular ({err}): some unknown "
+            "is not held by them (e.g. every view of a camera shows the board alike)"
+            ) from None
+
+
 def calibrate_log(request: CalibrateRequest, *, workers: int | None = None,
                   measure_again: MeasureAgain | None = None) -> CalibrationRun:
     """Calibrate one camera, a stereo pair (``left``/``right``) or, with ``rig`` or three
@@ -171,7 +185,9 @@ def calibrate_log(request: CalibrateRequest, *, workers: int | None = None,
         if board.pattern == "charuco":
             # a first calibration places the corners a second detection refines (see
             # processors.calibration.targets): more of them, and nearer the border
-            models = guiding_models(cameras_views, board, options, approximate_s=approximate_s)
+            with _singular_is_one_line():
+                models = guiding_models(cameras_views, board, options,
+                                        approximate_s=approximate_s)
             if models:
                 found = detect_views(reader, sources, board, workers=workers,
                                      progress=progress, models=models)
@@ -185,15 +201,10 @@ def calibrate_log(request: CalibrateRequest, *, workers: int | None = None,
             remeasure = partial(remeasured_rig, reader, cameras_views, board=board,
                                 workers=workers, progress=progress)
         # with the report, a short log's statistics are computed while the evidence pass runs
-        try:
+        with _singular_is_one_line():
             solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s,
                                diameter_m=diameter_m, background=report, remeasure=remeasure,
                                as_rig=as_rig)
-        except np.linalg.LinAlgError as err:
-            raise CalibrationError(
-                f"the views leave the calibration's equations singular ({err}): some unknown "
-                "is not held by them (e.g. every view of a camera shows the board alike)"
-                ) from None
         solutions, stereo = solved.cameras, solved.stereo
         scenario = found.scenario
         truth = [scenario.camera_for(s.views.source.namespace,
