@@ -29,6 +29,7 @@ import numpy as np
 from replay.camera import CameraModel
 from replay.messages import F64
 
+from ..errors import ProcessorError
 from .joint import MIN_VIEWS, BoardView, JointResult, calibrate_cameras, camera_views
 from .options import CalibrationOptions
 from .robust import MIN_VIEW_POINTS
@@ -98,15 +99,19 @@ def cross_validate(points_in_board: F64, views: list[BoardView], sizes: list[tup
                    step_px: int = GRID_STEP_PX,
                    disc_diameter_m: float | None = None) -> list[CrossValidation] | None:
     """Per camera, half the halves' difference for points at ``range_m``; None when a half
-    would have fewer than :data:`~.joint.MIN_VIEWS` views of some camera.
+    would have fewer than :data:`~.joint.MIN_VIEWS` views of some camera, or does not solve
+    (its views leave an unknown free: a statistic, not the calibration, is then missing).
     ``disc_diameter_m``: as :func:`~.joint.calibrate_cameras`'s."""
     parts = halves(views)
     for part in parts:
         for camera in range(len(sizes)):
             if len(camera_views(part, camera)) < MIN_VIEWS:
                 return None
-    a, b = (calibrate_cameras(points_in_board, part, sizes, options,
-                              disc_diameter_m=disc_diameter_m) for part in parts)
+    try:
+        a, b = (calibrate_cameras(points_in_board, part, sizes, options,
+                                  disc_diameter_m=disc_diameter_m) for part in parts)
+    except (ProcessorError, np.linalg.LinAlgError):  # a half that does not solve: no figure
+        return None
     out = []
     for camera, size in enumerate(sizes):
         pixels = grid(size, step_px)

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from processors.calibration import validation
 from processors.calibration.joint import BoardView
 from processors.calibration.mono import (
     TANGENTIAL_P_VALUE,
@@ -274,3 +275,20 @@ def test_opencv_solvers_run_on_one_thread_and_give_the_same_result_twice() -> No
             assert cv2.getNumThreads() == 1
         assert cv2.getNumThreads() == 1
     assert cv2.getNumThreads() == before
+
+
+def test_cross_validation_is_none_when_a_half_does_not_solve(
+    poses: list[np.ndarray], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    points = BOARD.points_in_board()
+    corners = views(true_model(), poses, NOISE_PX, seed=6)
+    observed = [BoardView(0, i, np.arange(BOARD.corner_count), c)
+                for i, c in enumerate(corners)]
+    options = [CalibrationOptions()]
+    assert cross_validate(points, observed, [(W, H)], options, range_m=1e4) is not None
+
+    def singular(*_args: object, **_kwargs: object) -> None:
+        raise np.linalg.LinAlgError("Singular matrix")
+
+    monkeypatch.setattr(validation, "calibrate_cameras", singular)
+    assert cross_validate(points, observed, [(W, H)], options, range_m=1e4) is None
