@@ -44,7 +44,7 @@ from ..errors import CalibrationError
 from .circles import CircleSize, circle_size
 from .instants import ViewsOfRig, rig_views
 from .rig_pairs import PairSolution, rig_pairs
-from .views import CameraViews, Frame
+from .views import CameraViews, DetectedFrame
 
 __all__ = ["CalibratedCamera", "RigSolution", "guiding_models", "solve_rig"]
 
@@ -99,7 +99,7 @@ class RigSolution:
         return [f.detection.corners_px for f in camera.views.distinct()
                 if f.detection is not None and self.rejection(camera, f) is not None]
 
-    def rejection(self, camera: CalibratedCamera, frame: Frame) -> str | None:
+    def rejection(self, camera: CalibratedCamera, frame: DetectedFrame) -> str | None:
         """Why a frame's board is not (in) a used view (None: it is)."""
         if frame.detection is not None and not frame.detection.accepted:
             return frame.detection.reason
@@ -108,7 +108,7 @@ class RigSolution:
         view = camera.view_of.get(frame.index)
         return None if view is None else self.joint.rejected.get(view)
 
-    def status(self, camera: CalibratedCamera, frame: Frame) -> tuple[str, bool]:
+    def status(self, camera: CalibratedCamera, frame: DetectedFrame) -> tuple[str, bool]:
         """Text drawn on an annotated frame, and whether its view was used."""
         if frame.detection is None:
             return "no board found", False
