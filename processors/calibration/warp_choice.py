@@ -1,7 +1,7 @@
 """Whether to estimate the board's warp (:mod:`.warp`), by cross-validation over whole views.
 
 As the lens order (:mod:`.model_order`): the board poses (an even sample of at most
-:data:`~.seed.STATISTICS_VIEWS`), in time order, are cut into :data:`WARP_FOLDS` contiguous
+:data:`WARP_POSES`), in time order, are cut into :data:`WARP_FOLDS` contiguous
 blocks. For each block the joint problem of the sampled poses is solved again from the flat
 solution without the block's views, once with the board held flat and once with its warp
 estimated (the project's own bundle: OpenCV cannot fit a warp); each held-out view's
@@ -31,11 +31,15 @@ from . import bundle
 from .model_order import MAX_P_VALUE, MIN_CORNERS, MIN_GAIN, MIN_ORDER_VIEWS, signed_rank_p
 from .normal import refine
 from .robust import Problem
-from .seed import STATISTICS_VIEWS, spread
+from .seed import spread
 
-__all__ = ["WARP_FOLDS", "WarpChoice", "choose_warp"]
+__all__ = ["WARP_FOLDS", "WARP_POSES", "WarpChoice", "choose_warp"]
 
 WARP_FOLDS = 5
+#: the folds refit the problem on an even sample of at most this many board poses: a waved
+#: board's neighbouring frames are nearly one pose, and ten solves of every pose were most of
+#: its run (held boards give far fewer)
+WARP_POSES = 240
 
 
 @dataclass(frozen=True)
@@ -89,7 +93,7 @@ def choose_warp(problem: Problem, *, folds: int = WARP_FOLDS) -> WarpChoice:
         return WarpChoice(np.zeros(0), np.zeros(0), math.nan, math.nan, 0,
                           f"{len(usable)} views, fewer than {MIN_ORDER_VIEWS}")
     every = np.unique(obs.instant[usable])
-    seen = every[spread(len(every), STATISTICS_VIEWS)]
+    seen = every[spread(len(every), WARP_POSES)]
     if len(seen) < len(every):  # the views of the poses left out take no part
         kept = np.flatnonzero(~np.isin(obs.instant, np.setdiff1d(every, seen)))
         obs = bundle.Observations(obs.camera[kept], obs.instant[kept], obs.observed[kept],

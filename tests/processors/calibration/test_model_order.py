@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from processors.calibration import model_order
 from processors.calibration.model_order import (
     EXACT_RANKS,
     MIN_ORDER_VIEWS,
@@ -231,12 +230,3 @@ def test_the_approximation_takes_over_where_it_agrees_with_the_exact_law() -> No
         approximate = stats.wilcoxon(d, alternative="greater", method="asymptotic").pvalue
         assert abs(exact - approximate) < 1e-3
 
-
-def test_the_views_measured_are_an_even_sample_of_a_long_log(
-        monkeypatch: pytest.MonkeyPatch) -> None:
-    """Past :data:`~processors.calibration.seed.STATISTICS_VIEWS` views the held-out errors
-    are those of an even sample: the choice measures that many, and still sees the k3."""
-    monkeypatch.setattr(model_order, "STATISTICS_VIEWS", 40)
-    choice = choice_of(board_views(WITH_K3, 21, count=80))
-    assert len(choice.held_out_px2[0]) == 40 == choice.views
-    assert order_label(choice.options) == "plumb_bob k1 k2 k3"

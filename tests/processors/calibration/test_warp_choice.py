@@ -121,9 +121,9 @@ def test_the_views_of_one_board_pose_count_once_their_corners_pooled() -> None:
 
 def test_the_poses_compared_are_an_even_sample_of_a_long_log(
         monkeypatch: pytest.MonkeyPatch) -> None:
-    """Past :data:`~processors.calibration.seed.STATISTICS_VIEWS` board poses the folds are
+    """Past :data:`~processors.calibration.warp_choice.WARP_POSES` board poses the folds are
     those of an even sample (the solve itself keeps every view): a bow is still chosen."""
-    monkeypatch.setattr(warp_choice, "STATISTICS_VIEWS", 20)
+    monkeypatch.setattr(warp_choice, "WARP_POSES", 20)
     result = calibrated(board_views(BOW_M, 1, count=40))
     choice = result.warp_choice
     assert choice is not None and choice.views == 20 and choice.chosen, choice
