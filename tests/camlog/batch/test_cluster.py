@@ -27,8 +27,8 @@ from pathlib import Path
 
 import pytest
 
-from camlog.batch.pipeline import load_pipeline
 from camlog.batch.run import run_batch
+from camlog.requests.batch import BatchRequest
 
 from .faults import alive, cmdline, output_files, start_batch, wait_for
 from .test_s3 import free_port
@@ -166,8 +166,8 @@ def test_a_node_killed_mid_batch_changes_no_output(
 ) -> None:
     pipeline_file = cluster_logs[0].parent / "pipe.toml"
     reference = tmp_path / "reference"
-    assert not run_batch(load_pipeline(pipeline_file), list(cluster_logs), reference, jobs=2,
-                         progress=False).failed
+    assert not run_batch(BatchRequest(pipeline=pipeline_file, logs=tuple(cluster_logs),
+                                      output=reference, jobs=2, progress=False)).failed
     out = tmp_path / "out"
     started = time.monotonic()
     # the cluster named as users do, through RAY_ADDRESS

@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from camlog.batch.pipeline import load_pipeline
 from camlog.batch.run import run_batch
+from camlog.requests.batch import BatchRequest
 
 from .faults import (
     alive,
@@ -32,8 +32,8 @@ def test_a_killed_worker_is_retried_and_outputs_are_complete(fault_logs: list[Pa
                                                              tmp_path: Path) -> None:
     pipeline_file = fault_logs[0].parent / "pipe.toml"
     reference = tmp_path / "reference"
-    clean = run_batch(load_pipeline(pipeline_file), fault_logs, reference, jobs=2,
-                      progress=False)
+    clean = run_batch(BatchRequest(pipeline=pipeline_file, logs=tuple(fault_logs),
+                                   output=reference, jobs=2, progress=False))
     assert not clean.failed
     out = tmp_path / "out"
     batch = start_batch([str(pipeline_file), *map(str, fault_logs), "-o", str(out), "-j", "2"])
