@@ -62,6 +62,7 @@ def in_image(s: ScenarioSpec, world_from_target: F64, points_in_target: F64) -> 
     return True
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["mono_checkerboard", "stereo_checkerboard"])
 def test_random_poses_are_in_view_but_a_partial_share(name: str) -> None:
     s = scenario(name)
@@ -177,6 +178,7 @@ def test_stereo_scenarios_sharing_poses_are_grouped() -> None:
     assert ["stereo_checkerboard", "stereo_unsynced"] in groups
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", SEEDS)
 @pytest.mark.parametrize("names", moving_stereo_scenarios(), ids="+".join)
 def test_long_stereo_recordings_plan_every_pose_as_asked(names: list[str], seed: int) -> None:

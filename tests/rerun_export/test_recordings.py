@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
+import pytest
 from rerun.chunk import RrdReader
 from rerun.error_utils import RerunWarning
 
@@ -53,6 +54,7 @@ def image_stamps(path: Path) -> dict[str, list[int]]:
     return out
 
 
+@pytest.mark.slow
 def test_unrelated_logs_keep_their_own_recordings(tmp_path: Path) -> None:
     morning = camera_log(tmp_path / "morning.mcap", "/front", T0)
     evening = camera_log(tmp_path / "evening.mcap", "/front", T0 + 10 * HOUR_NS, frames=2)

@@ -97,6 +97,7 @@ def test_mask_classes_survive_in_the_recording(red_processed_log: Path, tmp_path
     assert f"{LEFT}/red_pixels/mask" in [c.entity_path for c in RrdReader(out).stream(store=store)]
 
 
+@pytest.mark.slow
 def test_calibration_corners_residuals_and_errors(mono_calibration_log: Path,
                                                   tmp_path: Path) -> None:
     out = tmp_path / "calibration.rrd"

@@ -28,6 +28,7 @@ def fault_logs(short_logs: list[Path]) -> list[Path]:
     return short_logs[:3]
 
 
+@pytest.mark.slow
 def test_a_killed_worker_is_retried_and_outputs_are_complete(fault_logs: list[Path],
                                                              tmp_path: Path) -> None:
     pipeline_file = fault_logs[0].parent / "pipe.toml"
@@ -55,6 +56,7 @@ def test_a_killed_worker_is_retried_and_outputs_are_complete(fault_logs: list[Pa
     assert output_files(out) == output_files(reference)
 
 
+@pytest.mark.slow
 def test_workers_end_with_the_batch_process(fault_logs: list[Path], tmp_path: Path) -> None:
     pipeline_file = fault_logs[0].parent / "pipe.toml"
     batch = start_batch([str(pipeline_file), *map(str, fault_logs), "-o", str(tmp_path / "o"),

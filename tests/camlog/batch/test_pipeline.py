@@ -151,6 +151,7 @@ def camlog_batch(pipeline: Path, tmp_path: Path) -> subprocess.CompletedProcess[
                           check=False)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "text"), [
     ("deep.toml", "a = " + "[" * 3000 + "]" * 3000 + "\n"),
     ("dotted.toml", ".".join(["a"] * 3000) + " = 1\n"),
@@ -168,6 +169,7 @@ def test_a_deeply_nested_pipeline_is_one_line(tmp_path: Path, name: str, text: s
         f"{MAX_DEPTH} levels deep: refused"]
 
 
+@pytest.mark.slow
 def test_a_pipeline_file_of_many_megabytes_is_refused(tmp_path: Path) -> None:
     path = tmp_path / "huge.toml"
     path.write_text("# padding\n" * (MAX_FILE_BYTES // 10 + 1))

@@ -12,6 +12,7 @@ import pytest
 from camlog.batch.run import run_batch
 from camlog.cli import main
 from camlog.requests.batch import BatchRequest
+from tests.slow import renders
 
 SCENARIOS = Path(__file__).resolve().parents[3] / "datasets" / "scenarios"
 PIPELINE = """
@@ -29,6 +30,7 @@ run = "info"
 
 
 @pytest.fixture(scope="module")
+@renders
 def logs(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
     tmp = tmp_path_factory.mktemp("batch_logs")
     made = []
