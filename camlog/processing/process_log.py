@@ -25,7 +25,7 @@ import cv2
 
 from processors.base import Processor
 from processors.errors import OptionValueError, ProcessorError
-from processors.spec import Configured, OptionKind
+from processors.spec import Configured
 from processors.throttle import Throttle
 from replay._version import VERSION
 from replay.atomic import check_not_input
@@ -39,7 +39,7 @@ from replay.storage import local_paths
 from replay.topics import PROCESSED
 from replay.wire import msgtype_of, serialize
 
-from ..errors import ProcessingError, UsageError
+from ..errors import ProcessingError
 from ..requests.processing import ProcessRequest, option_error
 from .checks import (
     IMAGE_TYPES,
@@ -48,7 +48,7 @@ from .checks import (
     require_messages,
     require_topic,
 )
-from .outputs import COMPRESSIONS, plan_outputs
+from .outputs import plan_outputs
 
 
 @dataclass(frozen=True)
@@ -134,21 +134,6 @@ class _Counts:
     pending: deque[tuple[_TopicRun, Future[list[RawMessage] | None]]] = field(default_factory=deque)
 
 
-def _check_options(processors: Sequence[Configured], topics: Sequence[str],
-                   compress: str | None, thin: bool) -> None:
-    if not topics or len(set(topics)) != len(topics):
-        raise UsageError("give each topic to process once")
-    for configured in processors:
-        if len(topics) > 1 and any(o.kind is OptionKind.CAMERA_INFO
-                                   for o in configured.spec.options):
-            raise UsageError(f"{configured.name} takes one camera's calibration: process "
-                              "one topic with it per run")
-    if thin and any(not c.spec.selects for c in processors):
-        raise UsageError("thinning passes frames through: use only selecting processors")
-    if compress is not None and compress not in COMPRESSIONS:
-        raise UsageError(f"unknown compression {compress!r} (use {' or '.join(COMPRESSIONS)})")
-
-
 def _record(plans: Mapping[str, list[list[tuple[str, ProcessedOutput]]]],
             processors: Sequence[Configured]) -> ProcessedOutputs:
     outputs = [o for per_topic in plans.values() for per in per_topic for _, o in per]
@@ -183,7 +168,6 @@ def _process_log(request: ProcessRequest) -> ProcessResult:
                                         request.recover)
     started = time.perf_counter()
     request.require_processors()
-    _check_options(processors, topics, compress, thin)
     check_not_input(output, local_paths(input_path))
     computing = [c for c in processors if not c.spec.selects]
     plans = plan_outputs(topics, computing, output_ns=output_ns, compress=compress)

@@ -22,6 +22,7 @@ from typing import Any, ClassVar, TypeVar
 from processors.errors import OptionValueError
 from processors.registry import SPECS, spec_of
 from processors.spec import Configured, Option, OptionKind, ProcessorSpec
+from replay.format_names import STILL_CODECS
 from replay.storage import Location
 from replay.topics import RESYNC_PREFIX
 
@@ -29,15 +30,13 @@ from . import fields as common
 from .fields import RequestError, option, required
 from .values import bounded_int, name, number
 
-__all__ = ["CHAPTER_NS", "COMPRESSIONS", "ProcessRequest", "ResyncRequest", "ThrottleRequest",
+__all__ = ["CHAPTER_NS", "ProcessRequest", "ResyncRequest", "ThrottleRequest",
            "configure_values", "option_error", "processor_fields", "resolve_value"]
 
 T = TypeVar("T")
 
 #: the namespace of the chapter's nodes (``/image_converter/edges`` ...)
 CHAPTER_NS = "/image_converter"
-#: formats image outputs may be compressed to
-COMPRESSIONS = ("jpeg", "png")
 
 
 # --- processor options as request fields --------------------------------------------------
@@ -222,7 +221,7 @@ class ProcessRequest:
         None, "--output-ns", metavar="NS",
         help=f"namespace of the outputs; {{ns}} stands for the input's (e.g. /processed{{ns}}); "
              f"{CHAPTER_NS} gives the chapter's topic names")
-    compress: str | None = option(None, "--compress", choices=COMPRESSIONS,
+    compress: str | None = option(None, "--compress", choices=STILL_CODECS,
                                   help="write image outputs as CompressedImage on "
                                        "TOPIC/compressed")
     drop_input: bool = option(False, "--drop-input", "--topics-only", action="store_true",
@@ -242,6 +241,20 @@ class ProcessRequest:
         chosen = _chosen(self, SPECS)
         if chosen is not None:
             object.__setattr__(self, "processors", chosen)
+        if len(set(self.topic)) != len(self.topic):
+            raise RequestError(ProcessRequest, "give each {topic} once")
+        if self.compress is not None and self.compress not in STILL_CODECS:
+            raise RequestError(ProcessRequest, f"unknown {{compress}} {self.compress!r} (use "
+                                               f"{' or '.join(STILL_CODECS)})")
+        for configured in self.processors:
+            if len(self.topic) > 1 and any(o.kind is OptionKind.CAMERA_INFO
+                                           for o in configured.spec.options):
+                raise RequestError(ProcessRequest, f"{configured.name} takes one camera's "
+                                                   "calibration: process one {topic} with it "
+                                                   "per run")
+        if self.thin and any(not c.spec.selects for c in self.processors):
+            raise RequestError(ProcessRequest, "thinning passes frames through: use only "
+                                               "selecting processors")
 
     def require_processors(self) -> None:
         """The run's rule: a processor that computes outputs (or, thinning, one that

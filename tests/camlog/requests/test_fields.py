@@ -170,7 +170,8 @@ def _with(command: str, field: Field[Any], value: Any) -> dict[str, Any]:
     processor's option needs the processor's flag)."""
     required = {"size": "7x6", "square": 0.01, "topic": "/c/image_raw"}
     processor, dot, _ = key_of(field).partition(".")
-    return {**{f.name: required[f.name] for f in request_fields(COMMANDS[command][0])
+    return {**{f.name: (required[f.name],) if arg_of(f).action in ("append", "extend")
+               else required[f.name] for f in request_fields(COMMANDS[command][0])
                if f.default is dataclasses.MISSING},
             **({processor: True} if dot else {}),
             field.name: value, **COMPANIONS.get((command, field.name), {})}
