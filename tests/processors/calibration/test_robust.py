@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from processors.calibration import bundle
 from processors.calibration.joint import BoardView, calibrate_cameras
@@ -80,6 +81,7 @@ def test_a_view_with_one_corner_where_its_seed_pose_puts_it_sits_the_first_solve
     assert problem.sigma_px < 1.3 * NOISE_PX
 
 
+@pytest.mark.slow
 def test_a_pair_showing_two_poses_stays_out_and_changes_nothing() -> None:
     rng = np.random.default_rng(4)
     right_from_left = pose(np.array([0.0, 0.02, 0.0]), np.array([-0.1, 0.0, 0.0]))
