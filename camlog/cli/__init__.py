@@ -107,6 +107,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     as_program = argv is None
     if as_program:
         sys.unraisablehook = _interrupt_where_it_can_be_handled(sys.unraisablehook)
+        signal.signal(signal.SIGINT, _note_interrupt)
     argv = sys.argv[1:] if argv is None else list(argv)
     command = _command_in(argv)
     where = f"camlog {command}" if command else "camlog"
@@ -115,6 +116,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     finally:
         if as_program:
             signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+#: whether Ctrl-C has come (set by camlog's own process's handler)
+_INTERRUPTED = threading.Event()
+
+
+def _note_interrupt(signum: int, frame: Any) -> None:
+    """Python's own Ctrl-C handler, remembering that the signal came: an extension module
+    that imports from C turns the KeyboardInterrupt into an ImportError of its own (numpy's
+    ``PyCapsule_Import could not import module "datetime"``), which is still Ctrl-C."""
+    _INTERRUPTED.set()
+    signal.default_int_handler(signum, frame)
 
 
 #: how long after an undeliverable Ctrl-C it is sent again (the hook has returned by then)
@@ -183,6 +196,9 @@ def _run(argv: list[str], command: str | None, where: str, *, as_program: bool) 
         print(f"{where}: error: out of memory", file=sys.stderr)
         return 1
     except Exception as err:
+        if _INTERRUPTED.is_set():  # Ctrl-C, turned into another error by C code
+            print(f"{where}: interrupted", file=sys.stderr)
+            return 130
         if not known_error(err):
             raise
         print(f"{where}: error: {err}", file=sys.stderr)
