@@ -87,7 +87,16 @@ class StereoMatcher:
 
     def match(self, left_gray: np.ndarray, right_gray: np.ndarray) -> PairMatches:
         """The pair's matched features, rectified (none when the images show no texture)."""
-        empty = PairMatches(np.zeros((0, 2)), np.zeros((0, 2)))
+        raw_left, raw_right = self.match_raw(left_gray, right_gray)
+        if not len(raw_left):
+            return PairMatches(np.zeros((0, 2)), np.zeros((0, 2)))
+        left_px, right_px = self.rectify(raw_left, raw_right)
+        return PairMatches(left_px, right_px)
+
+    def match_raw(self, left_gray: np.ndarray, right_gray: np.ndarray) -> tuple[F64, F64]:
+        """The pair's matched features ``(N, 2)`` in each raw image (the right ones refined
+        by Lucas-Kanade; none when the images show no texture)."""
+        empty = (np.zeros((0, 2)), np.zeros((0, 2)))
         key_left, desc_left = self._orb.detectAndCompute(left_gray, None)
         key_right, desc_right = self._orb.detectAndCompute(right_gray, None)
         if desc_left is None or desc_right is None:
@@ -111,10 +120,7 @@ class StereoMatcher:
         refined = refined.reshape(-1, 2).astype(np.float64)
         kept = (status.reshape(-1) == 1) \
             & (np.linalg.norm(refined - guess.reshape(-1, 2), axis=1) < REFINE_PX)
-        if not kept.any():
-            return empty
-        left_px, right_px = self.rectify(raw_left[near][kept], refined[kept])
-        return PairMatches(left_px, right_px)
+        return raw_left[near][kept], refined[kept]
 
 
 @dataclass(frozen=True)

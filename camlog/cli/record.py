@@ -93,6 +93,19 @@ def _drift(text: str) -> dict[str, Any]:
     return {"camera": camera, "axis": axis, "degrees": numbers[0], "start_s": numbers[1]}
 
 
+def _latency(text: str) -> dict[str, Any]:
+    """``CAMERA:MS`` as a scenario's ``[[latencies]]`` table."""
+    camera, _, ms = text.rpartition(":")
+    try:
+        latency_ms = float(ms)
+    except ValueError:
+        latency_ms = math.nan
+    if not camera or not math.isfinite(latency_ms):
+        raise argparse.ArgumentTypeError(
+            f"expected CAMERA:MS, e.g. right:17 or left:-5, got {text!r}")
+    return {"camera": camera, "latency_ms": latency_ms}
+
+
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Register the ``record`` arguments."""
     p.add_argument("scenario", nargs="?", default=DEFAULT_SCENARIO,
@@ -133,6 +146,10 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="turn a camera (its name, e.g. left or right, or namespace) by DEGREES "
                         "about an axis of its optical frame (roll: z, pitch: x, yaw: y) from S "
                         "seconds after the start on, its camera_info unchanged; repeatable")
+    p.add_argument("--latency", type=_latency, action="append", metavar="CAMERA:MS",
+                   help="stamp a camera's messages MS milliseconds after the exposure they "
+                        "carry (negative: before it), as a driver that stamps late does; "
+                        "exposure times, jitter and drops unchanged; repeatable")
     add_no_progress(p)
 
 
@@ -147,6 +164,7 @@ def overrides_from(args: argparse.Namespace) -> dict[str, Any]:
         "supersample": args.supersample,
         "encoding": args.encoding,
         "drifts": args.drift,
+        "latencies": args.latency,
     }
     if args.resolution:
         out["width"], out["height"] = args.resolution
@@ -180,5 +198,7 @@ def run(args: argparse.Namespace) -> int:
           f"in {result.wall_s:.1f} s ({result.fps:.0f} frames/s)")
     for drift in scenario.drifts:
         print(f"drift: {drift.camera} {drift.axis} {drift.degrees:+g}° from {drift.start_s:g} s")
+    for latency in scenario.latencies:
+        print(f"latency: {latency.camera} stamped {latency.latency_ms:+g} ms from its exposures")
     print(f"wrote {result.path} ({result.storage})")
     return 0

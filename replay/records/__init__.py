@@ -23,7 +23,15 @@ from .calibration import (
 from .processed import ProcessedOutput, ProcessedOutputs, outputs_by_topic
 from .resync import OffsetStats, ResyncStats
 from .rig import RigCameraSummary, RigPairSummary, RigSummary
-from .scenario import RenderView, Scenario, ScenarioCamera, ScenarioDrift, ScenarioTarget
+from .scenario import (
+    RenderView,
+    Scenario,
+    ScenarioCamera,
+    ScenarioDrift,
+    ScenarioLatency,
+    ScenarioTarget,
+)
+from .time_offset import TimeOffset
 
 __all__ = [
     "BoardSummary",
@@ -50,10 +58,12 @@ __all__ = [
     "Scenario",
     "ScenarioCamera",
     "ScenarioDrift",
+    "ScenarioLatency",
     "ScenarioTarget",
     "StereoSummary",
     "StereoTruth",
     "TangentialSummary",
+    "TimeOffset",
     "UncertaintySummary",
     "ViewResiduals",
     "from_json",
