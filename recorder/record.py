@@ -22,8 +22,7 @@ from replay._version import VERSION
 from replay.formats import LogWriter
 from replay.formats.background import BackgroundWriter
 from replay.geometry import invert, quat_xyzw_from_rotation
-from replay.records import RenderView, ScenarioCamera, ScenarioDrift, ScenarioLatency
-from replay.records import Scenario as ScenarioRecord
+from replay.records import RenderView, Scenario, ScenarioCamera, ScenarioDrift, ScenarioLatency
 from replay.topics import SCENARIO, CameraTopics
 
 from .clock import Shot, schedule
@@ -34,7 +33,7 @@ from .motion import plan_trajectory
 from .multiview import CameraOptics, MultiViewOptics, plan_camera_optics
 from .render import SceneRenderer, gl_backend
 from .rig_motion import CameraPoses, plan_rig_path
-from .scenario import Scenario
+from .scenario import ScenarioSpec
 from .targets import target_record
 
 #: seed streams, so that changing one aspect of a scenario does not reshuffle the others
@@ -64,7 +63,7 @@ class RecordResult:
         return sum(self.frames.values()) / self.loop_s if self.loop_s > 0 else 0.0
 
 
-def rng_for(scenario: Scenario, stream: int, index: int) -> np.random.Generator:
+def rng_for(scenario: ScenarioSpec, stream: int, index: int) -> np.random.Generator:
     """The random generator of one seed stream (motion, clock, noise) and index."""
     return np.random.default_rng([scenario.seed, stream, index])
 
@@ -80,8 +79,8 @@ def _views_record(optics: CameraOptics) -> dict[str, Any]:
 
 
 def scenario_record(
-    scenario: Scenario, optics: list[CameraOptics], dropped: dict[int, np.ndarray]
-) -> ScenarioRecord:
+    scenario: ScenarioSpec, optics: list[CameraOptics], dropped: dict[int, np.ndarray]
+) -> Scenario:
     """Everything that shaped the recording, stored in the log (``/camlog/scenario``)."""
     import mujoco
 
@@ -105,7 +104,7 @@ def scenario_record(
     latencies = [ScenarioLatency(camera=latency.camera, namespace=namespaces[latency.camera],
                                  latency_ms=latency.latency_ms)
                  for latency in scenario.latencies]
-    return ScenarioRecord(
+    return Scenario(
         scenario=scenario.name, source=scenario.source, seed=scenario.seed,
         camlog_version=VERSION, mujoco_version=mujoco.__version__,
         renderer=f"mujoco/{gl_backend()}", spec=scenario.spec, cameras=cameras,
@@ -118,7 +117,7 @@ class _Pipeline:
     that also finishes frames there (warp, noise, encoding) before writing them."""
 
     def __init__(
-        self, scenario: Scenario, optics: list[CameraOptics], open_log: Callable[[], LogWriter]
+        self, scenario: ScenarioSpec, optics: list[CameraOptics], open_log: Callable[[], LogWriter]
     ) -> None:
         self.scenario = scenario
         self.optics = optics
@@ -163,7 +162,7 @@ class _Pipeline:
 
 
 def record(
-    scenario: Scenario,
+    scenario: ScenarioSpec,
     output: str | Path,
     *,
     fmt: str | None = None,

@@ -27,7 +27,7 @@ from .targets import check_target
 
 
 @dataclass(frozen=True)
-class Scenario:
+class ScenarioSpec:
     """A resolved scenario: cameras, targets, motion, timing and seed (all that shapes it)."""
 
     name: str
@@ -69,7 +69,7 @@ class Scenario:
 
 def load_scenario(
     name_or_path: str | None = None, overrides: dict[str, Any] | None = None
-) -> Scenario:
+) -> ScenarioSpec:
     """Load a built-in scenario by name or a spec file by path, then apply ``overrides``."""
     name_or_path = name_or_path or DEFAULT_SCENARIO
     path = Path(name_or_path)
@@ -126,7 +126,7 @@ def apply_overrides(raw: dict[str, Any], overrides: dict[str, Any]) -> dict[str,
     return out
 
 
-def parse_scenario(raw: dict[str, Any], source: str) -> Scenario:
+def parse_scenario(raw: dict[str, Any], source: str) -> ScenarioSpec:
     """Validate raw spec data and resolve cameras, rig poses and targets."""
     top = SpecTable(raw, "", source)
     name = top.text("name")
@@ -176,8 +176,9 @@ def parse_scenario(raw: dict[str, Any], source: str) -> Scenario:
     rig_motion = parse_rig_motion(raw["rig_motion"], "rig_motion.", source) \
         if top.get("rig_motion", None) is not None else None
     top.check_unknown()
-    scenario = Scenario(name, description, seed, duration_s, frames, start_stamp_ns,
-                        tuple(cameras), targets, raw, source, drifts, latencies, rig_motion)
+    scenario = ScenarioSpec(name, description, seed, duration_s, frames, start_stamp_ns,
+                            tuple(cameras), targets, raw, source, drifts, latencies,
+                            rig_motion)
     if max(scenario.frame_counts) > MAX_FRAMES:
         raise ScenarioError(f"{source}: {max(scenario.frame_counts)} frames per camera is more "
                             f"than camlog records at once ({MAX_FRAMES}); shorten it")

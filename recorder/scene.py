@@ -15,7 +15,7 @@ from replay.geometry import OPTICAL_FROM_MJCAMERA, quat_xyzw_from_rotation
 from replay.messages import F64
 
 from .optics import View
-from .scenario import Scenario
+from .scenario import ScenarioSpec
 from .targets import CIRCLE_SLICES, PLANAR_KINDS, target_geoms, texture_image
 
 #: MuJoCo's headlight shines along the rendering camera's view; a camera rendered as several
@@ -59,7 +59,7 @@ def texture_file(target_name: str) -> str:
     return f"{target_name}_texture.png"
 
 
-def scene_assets(scenario: Scenario) -> dict[str, bytes]:
+def scene_assets(scenario: ScenarioSpec) -> dict[str, bytes]:
     """The files the scene's MJCF refers to, by name: every textured target's texture
     (PNG)."""
     assets = {}
@@ -72,7 +72,7 @@ def scene_assets(scenario: Scenario) -> dict[str, bytes]:
 
 
 def build_mjcf(
-    scenario: Scenario, *, offscreen_size: tuple[int, int],
+    scenario: ScenarioSpec, *, offscreen_size: tuple[int, int],
     views: dict[str, tuple[View, ...]] | None = None,
 ) -> str:
     """MJCF text of the scenario's scene; ``offscreen_size`` is the largest render (W, H);

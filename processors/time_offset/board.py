@@ -210,26 +210,26 @@ def _coarse(first: _Posed, second: _Posed, search_s: float,
 
 
 @dataclass(frozen=True)
-class _State:
+class _BoardFit:
     """What the fit moves: the offset (s) and the rig ``second_from_first`` (4, 4)."""
 
     offset_s: float
     rig: F64
 
 
-def _advance(state: _State, step: F64) -> _State:
+def _advance(state: _BoardFit, step: F64) -> _BoardFit:
     """``state`` moved by an increment: offset, then (unless held) the rig's rotation
     ``R <- exp([d]x) R`` and translation."""
     if len(step) == 1:
-        return _State(state.offset_s + float(step[0]), state.rig)
+        return _BoardFit(state.offset_s + float(step[0]), state.rig)
     rig = np.eye(4)
     rig[:3, :3] = matrices(step[None, 1:4])[0] @ state.rig[:3, :3]
     rig[:3, 3] = state.rig[:3, 3] + step[4:7]
-    return _State(state.offset_s + float(step[0]), rig)
+    return _BoardFit(state.offset_s + float(step[0]), rig)
 
 
 @dataclass(frozen=True)
-class _Side:
+class _Direction:
     """One direction of the fit: the frames of ``seen_by`` (rows) predicted from the board
     of ``moved`` interpolated at their times (``sign`` +1: the second camera's frames, at
     ``t - offset`` in the first camera's clock; -1: the first's, at ``t + offset``)."""
@@ -240,7 +240,7 @@ class _Side:
     start: I64
     sign: float
 
-    def linearize(self, state: _State, rig_free: bool) -> tuple[F64, F64]:
+    def linearize(self, state: _BoardFit, rig_free: bool) -> tuple[F64, F64]:
         """Residuals ``(2M,)`` of the seen corners and their Jacobian ``(2M, U)``."""
         times = self.seen_by.times_s[self.rows] - self.sign * state.offset_s
         points, velocity = _interpolated(self.moved, times, self.start)
@@ -288,20 +288,20 @@ def estimate_board_offset(first: BoardTrack, second: BoardTrack, *, points_in_bo
     for moved, seen_by, sign in ((a, b, 1.0), (b, a, -1.0)):
         start, found = moved.stencils.locate(seen_by.times_s - sign * offset0)
         rows = np.flatnonzero(found)
-        sides.append(_Side(moved, seen_by, rows, start[rows], sign))
+        sides.append(_Direction(moved, seen_by, rows, start[rows], sign))
     period = a.stencils.period_s
     clusters = np.concatenate([
         np.repeat(np.floor(side.seen_by.times_s[side.rows] / (CLUSTER_FRAMES * period)),
                   2 * side.seen_by.seen[side.rows].sum(axis=1)) for side in sides])
     rig_free = second_from_first is None
 
-    def linearize(state: _State) -> tuple[F64, F64]:
+    def linearize(state: _BoardFit) -> tuple[F64, F64]:
         parts = [side.linearize(state, rig_free) for side in sides]
         return (np.concatenate([r for r, _ in parts]),
                 np.concatenate([j for _, j in parts], axis=0))
 
     tolerance = STEPS if rig_free else STEPS[:1]
-    fit = robust_fit(linearize, _advance, _State(offset0, rig0),
+    fit = robust_fit(linearize, _advance, _BoardFit(offset0, rig0),
                      clusters=clusters.astype(np.int64), tolerance=tolerance)
     state = fit.state
     moving = sum(_moving(side, state) for side in sides)
@@ -317,7 +317,7 @@ def estimate_board_offset(first: BoardTrack, second: BoardTrack, *, points_in_bo
                           math.sqrt(2.0 * float(np.mean(used ** 2))), "board", state.rig)
 
 
-def _moving(side: _Side, state: _State) -> int:
+def _moving(side: _Direction, state: _BoardFit) -> int:
     """Frames of one side whose board moves at least :data:`MOVING_PX_S` in the image."""
     times = side.seen_by.times_s[side.rows] - side.sign * state.offset_s
     points, velocity = _interpolated(side.moved, times, side.start)

@@ -94,13 +94,13 @@ def track_rows(grays: list[np.ndarray], centre: int, points_px: F64) -> tuple[F6
 
 
 @dataclass(frozen=True)
-class _State:
+class _FeatureFit:
     offset_s: float
     rotation: F64  # pitch, roll (rad) about the rectified axes
 
 
-def _advance(state: _State, step: F64) -> _State:
-    return _State(state.offset_s + float(step[0]), state.rotation + step[1:])
+def _advance(state: _FeatureFit, step: F64) -> _FeatureFit:
+    return _FeatureFit(state.offset_s + float(step[0]), state.rotation + step[1:])
 
 
 def estimate_feature_offset(pairs: list[FeaturePair], *, p_rect: F64) -> OffsetEstimate:
@@ -127,18 +127,18 @@ def estimate_feature_offset(pairs: list[FeaturePair], *, p_rect: F64) -> OffsetE
     origin = times.mean(axis=1, keepdims=True)
     period = float(np.median(np.diff(usable[0].left_times_s)))
 
-    def speeds(state: _State) -> tuple[F64, F64]:
+    def speeds(state: _FeatureFit) -> tuple[F64, F64]:
         weights, derivative = lagrange_weights(times - origin,
                                                right_time - state.offset_s - origin[:, 0])
         return np.sum(weights * rows, axis=1), np.sum(derivative * rows, axis=1)
 
-    def linearize(state: _State) -> tuple[F64, F64]:
+    def linearize(state: _FeatureFit) -> tuple[F64, F64]:
         row, speed = speeds(state)
         residual = right[:, 1] - row - design @ state.rotation
         return residual, np.column_stack([speed, -design])
 
     clusters = np.floor(right_time / (CLUSTER_FRAMES * period)).astype(np.int64)
-    fit = robust_fit(linearize, _advance, _State(0.0, np.zeros(2)), clusters=clusters,
+    fit = robust_fit(linearize, _advance, _FeatureFit(0.0, np.zeros(2)), clusters=clusters,
                      tolerance=TOLERANCE)
     state = fit.state
     _, speed = speeds(state)
