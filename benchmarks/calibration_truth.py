@@ -111,8 +111,8 @@ def true_right_from_left(run: CalibrationRun) -> F64 | None:
 
 def camlog_accuracy(run: CalibrationRun) -> Accuracy:
     """camlog's result against the truth."""
-    return accuracy([c.solution.result.model for c in run.cameras], true_models(run),
-                    run.stereo.result.right_from_left if run.stereo is not None else None,
+    return accuracy([c.model for c in run.cameras], true_models(run),
+                    run.solved.stereo.right_from_left if run.solved.stereo is not None else None,
                     true_right_from_left(run))
 
 

@@ -50,11 +50,13 @@ MIN_VIEWS = 5
 class JointResult:
     """Calibrated cameras, rig and board poses, with the evidence and what uncertainty needs.
 
-    ``residuals_px[i]`` ``(M, 2)`` (observed - projected) and ``inliers[i]`` ``(M,)`` follow
-    the order of ``views[i]``'s corners; views in ``rejected`` carry no weight. ``views`` are
-    those given, each at the instant whose board pose it was solved with: a view in
-    ``split`` left the instant it was given, whose other views saw the board elsewhere (not
-    simultaneous), for a board pose of its own (a new instant number).
+    Cameras are numbered as the ``sizes`` given (every per-camera list follows it), views as
+    the ``views`` given: ``residuals_px[i]`` ``(M, 2)`` (observed - projected) and
+    ``inliers[i]`` ``(M,)`` follow the order of ``views[i]``'s corners; views in
+    ``rejected`` carry no weight. Each of ``views`` is at the instant whose board pose it
+    was solved with: a view in ``split`` left the instant it was given, whose other views
+    saw the board elsewhere (not simultaneous), for a board pose of its own (a new instant
+    number).
     """
 
     views: list[BoardView]
@@ -96,6 +98,23 @@ class JointResult:
                                                       strict=True)]
         count = sum(int(m.sum()) for m in self.inliers)
         return math.sqrt(float(sum(squared)) / max(count, 1))
+
+    def used_views(self, camera: int) -> list[int]:
+        """The views of one camera that carry weight, in view order."""
+        return [i for i in camera_views(self.views, camera) if i not in self.rejected]
+
+    def parameters(self, camera: int) -> dict[str, float]:
+        """One camera's intrinsics by name (fx, fy, cx, cy, then the distortion
+        coefficients); their standard deviations are ``std[camera]``."""
+        m = self.models[camera]
+        names = ["fx", "fy", "cx", "cy", *INTRINSIC_NAMES[m.distortion_model][4:]]
+        return dict(zip(names, [m.fx, m.fy, m.cx, m.cy, *m.d.tolist()], strict=True))
+
+    def camera_from_board(self, view: int) -> F64:
+        """The board's pose ``(4, 4)`` in the camera of one view."""
+        board_view = self.views[view]
+        return self.camera_from_reference[board_view.camera] \
+            @ self.reference_from_board[board_view.instant]
 
     def view_rms_px(self, view: int) -> float:
         """RMS error of one view's inlier corners (px)."""

@@ -7,10 +7,11 @@ warp estimated (the project's own bundle: OpenCV cannot fit a warp); each held-o
 pose alone is then solved with the fitted intrinsics, rig and warp, and its mean squared
 reprojection error ``e(v)`` (px²) measured. The warp is chosen when its held-out error is
 lower by at least :data:`~.model_order.MIN_GAIN` and the board poses' paired differences
-``e_flat(p) - e_warped(p)`` (a pose's views pooled) favour it with an exact one-sided
-signed-rank p below :data:`~.model_order.MAX_P_VALUE`. Board poses are the units, so an
-error a view's corners share (blur, a pose they pull together) counts once per pose, not
-once per corner, and the views a rig's cameras take of one pose count once together.
+``e_flat(p) - e_warped(p)`` (a pose's views pooled) favour it with a one-sided signed-rank
+p (:func:`~.model_order.signed_rank_p`) below :data:`~.model_order.MAX_P_VALUE`. Board poses
+are the units, so an error a view's corners share (blur, a pose they pull together) counts
+once per pose, not once per corner, and the views a rig's cameras take of one pose count once
+together.
 
 The folds start at the flat solution with its inliers and weights: each costs two
 Levenberg-Marquardt refinements from nearby, a few solves of the whole problem in all.
