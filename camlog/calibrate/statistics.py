@@ -59,8 +59,10 @@ def camera_statistics(solved: RigSolution, *, points_in_board: F64) -> list[Came
     ``points_in_board`` ``(N, 3)``."""
     joint = solved.joint
     sizes = [c.views.size for c in solved.cameras]
+    # the views at the instants they were solved with: one not simultaneous with its
+    # instant's other views has a board pose of its own in each half too
     validation = cross_validate(
-        points_in_board, solved.rig.views, sizes, joint.options, range_m=FAR_M,
+        points_in_board, joint.views, sizes, joint.options, range_m=FAR_M,
         disc_diameter_m=solved.circles.diameter_m if solved.circles is not None else None)
     return [CameraStatistics(projection_uncertainty(joint.problem, index),
                              projection_uncertainty(joint.problem, index, range_m=FAR_M),

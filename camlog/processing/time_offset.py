@@ -19,11 +19,9 @@ import numpy as np
 
 from processors.calibration.board import Board
 from processors.calibration.options import CalibrationOptions
-from processors.calibration.seed import seed_model
 from processors.drift import StereoMatcher
 from processors.time_offset import (
     BoardTrack,
-    OffsetEstimate,
     estimate_board_offset,
 )
 from processors.time_offset.features import (
@@ -39,23 +37,16 @@ from replay.messages import CameraInfo
 from replay.progress import progress_bar
 from replay.records import TimeOffset
 
+from ..calibrate.offsets import board_track, first_calibrations, offset_record
 from ..calibrate.pixels import TopicFrames
 from ..calibrate.views import CameraViews, detect_views
 from ..errors import InputError
 from .cameras import CameraSource
 
-__all__ = ["measure_offset", "offset_record"]
+__all__ = ["measure_offset"]
 
 #: a stencil's gaps may vary by this factor (a larger one spans a dropped frame)
 GAP_FACTOR = 1.5
-
-
-def offset_record(estimate: OffsetEstimate, first: str, second: str) -> TimeOffset:
-    """The record of an estimate between cameras ``first`` and ``second`` (namespaces)."""
-    return TimeOffset(first=first, second=second, offset_ms=estimate.offset_ms,
-                      std_ms=estimate.std_ms, frames=estimate.frames,
-                      frames_fitted=estimate.frames_fitted, rms_px=estimate.rms_px,
-                      method=estimate.method, second_from_first=estimate.second_from_first)
 
 
 def measure_offset(reader: LogReader, left: CameraSource, right: CameraSource, *,
@@ -82,16 +73,11 @@ def _track(views: CameraViews, board: Board) -> BoardTrack:
     if not frames:
         raise InputError(f"no {board.cols}x{board.rows} board found in "
                          f"{views.source.image_topic}")
-    ids = [f.detection.ids for f in frames if f.detection is not None]
-    corners = [f.detection.corners_px for f in frames if f.detection is not None]
     info = views.log_info
     if info is not None and info.k[0, 0] > 0 and (info.width, info.height) == views.size:
-        model = CameraModel.from_camera_info(info)
-    else:
-        points = board.points_in_board()
-        model = seed_model([points[i] for i in ids], corners, views.size, CalibrationOptions())
-    return BoardTrack(np.array([f.stamp_ns for f in frames], dtype=np.int64), ids, corners,
-                      model)
+        return board_track(views, CameraModel.from_camera_info(info))
+    (model,) = first_calibrations([views], board, CalibrationOptions())
+    return board_track(views, model)
 
 
 def _calibration(reader: LogReader, left: CameraSource, right: CameraSource,

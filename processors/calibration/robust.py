@@ -31,7 +31,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
-from scipy.stats import chi2
 
 from replay.camera import CameraModel
 from replay.messages import F64
@@ -420,12 +419,25 @@ def _split_disagreeing(evidence: InlierSelection, state: bundle.RigState, *,
     for instant in tested:
         members = np.flatnonzero(instants == instant)
         dof = 6 * (len(members) - 1)
-        if gain[members].sum() <= chi2.isf(0.5 / len(tested), dof):
+        if chi2_survival(float(gain[members].sum()), dof) >= 0.5 / len(tested):
             continue
         pick = members[int(np.argmax(gain[members]))]
         state = evidence.split_off(int(rows[pick]), state, own.reference_from_board(int(pick)))
         split = True
     return state, split
+
+
+def chi2_survival(x: float, dof: int) -> float:
+    """``P(X > x)`` for ``X`` chi-square with an even number ``dof`` of degrees of freedom:
+    ``exp(-x/2) sum_{i < dof/2} (x/2)^i / i!``."""
+    if dof <= 0 or dof % 2:
+        raise ValueError(f"dof must be even and positive, got {dof}")
+    half = max(x, 0.0) / 2.0
+    term = total = math.exp(-half)
+    for i in range(1, dof // 2):
+        term *= half / i
+        total += term
+    return min(total, 1.0)
 
 
 def _word_splits(evidence: InlierSelection, state: bundle.RigState,
@@ -449,8 +461,9 @@ def _word_splits(evidence: InlierSelection, state: bundle.RigState,
                                                + other[:3, 3]), axis=1).max())
                  for r in partners
                  for other in (state.reference_from_board(int(obs.instant[r])),)]
+        mm = 1000 * max(moved, default=0.0)
         evidence.split[view] = (
-            f"not simultaneous: the board moved {1000 * max(moved):.1f} mm between the "
+            f"not simultaneous: the board moved {mm:.{1 if mm >= 1 else 2}f} mm between the "
             f"{'two images' if len(partners) == 1 else 'images'}" if moved else
             "not simultaneous: no other view of its instant is used")
 

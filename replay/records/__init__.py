@@ -17,6 +17,7 @@ from .calibration import (
     StereoSummary,
     StereoTruth,
     TangentialSummary,
+    TimeOffsetSummary,
     UncertaintySummary,
     ViewResiduals,
 )
@@ -64,6 +65,7 @@ __all__ = [
     "StereoTruth",
     "TangentialSummary",
     "TimeOffset",
+    "TimeOffsetSummary",
     "UncertaintySummary",
     "ViewResiduals",
     "from_json",
