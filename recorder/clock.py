@@ -8,6 +8,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .cameras import CameraSpec
+from .latency import LatencySpec, latency_at
 
 
 @dataclass(frozen=True)
@@ -49,20 +50,19 @@ def camera_times(
 
 def schedule(
     cameras: tuple[CameraSpec, ...], frame_counts: Sequence[int],
-    rngs: list[np.random.Generator], latencies_s: Sequence[float] = (),
+    rngs: list[np.random.Generator], latencies: Sequence[LatencySpec] = (),
 ) -> tuple[list[Shot], dict[int, np.ndarray]]:
     """All shots in stamp order (cameras in spec order at equal stamps), and drops per
     camera; camera ``i`` takes ``frame_counts[i]`` frames before drops and stamps them
-    ``latencies_s[i]`` after their exposure (none given: 0). Latencies do not touch the
-    clock's random draws: a camera exposes at the same times with or without one."""
+    after their exposure as ``latencies`` say (:mod:`recorder.latency`). Latencies do not
+    touch the clock's random draws: a camera exposes at the same times with or without."""
     shots: list[Shot] = []
     drops: dict[int, np.ndarray] = {}
-    latencies = list(latencies_s) or [0.0] * len(cameras)
-    for index, (camera, frame_count, rng, latency_s) in enumerate(zip(
-            cameras, frame_counts, rngs, latencies, strict=True)):
+    for index, (camera, frame_count, rng) in enumerate(zip(cameras, frame_counts, rngs,
+                                                           strict=True)):
         times, dropped = camera_times(camera, frame_count, rng)
         kept = np.setdiff1d(np.arange(frame_count), dropped)
-        shots += [Shot(float(t), index, int(k), latency_s)
+        shots += [Shot(float(t), index, int(k), latency_at(camera, latencies, float(t)))
                   for t, k in zip(times, kept, strict=True)]
         drops[index] = dropped
     shots.sort(key=lambda s: (s.stamp_s, s.camera_index))

@@ -28,7 +28,6 @@ from replay.topics import SCENARIO, CameraTopics
 from .clock import Shot, schedule
 from .errors import RecorderError
 from .exposure import rendered_shots
-from .latency import latencies_s
 from .motion import plan_trajectory
 from .multiview import CameraOptics, MultiViewOptics, plan_camera_optics
 from .render import SceneRenderer, gl_backend
@@ -102,7 +101,7 @@ def scenario_record(
                             start_stamp_ns=scenario.start_stamp_ns + round(d.start_s * 1e9))
               for d in scenario.drifts]
     latencies = [ScenarioLatency(camera=latency.camera, namespace=namespaces[latency.camera],
-                                 latency_ms=latency.latency_ms)
+                                 latency_ms=latency.latency_ms, start_s=latency.start_s)
                  for latency in scenario.latencies]
     return Scenario(
         scenario=scenario.name, source=scenario.source, seed=scenario.seed,
@@ -187,7 +186,7 @@ def record(
     shots, dropped = schedule(
         scenario.cameras, frame_counts,
         [rng_for(scenario, CLOCK_STREAM, i) for i in range(len(scenario.cameras))],
-        latencies_s(scenario.cameras, scenario.latencies),
+        scenario.latencies,
     )
     renderer = SceneRenderer(scenario, optics)  # first: it sets MUJOCO_GL before the import
     header = scenario_record(scenario, optics, dropped).to_message()

@@ -169,10 +169,11 @@ def parse_scenario(raw: dict[str, Any], source: str) -> ScenarioSpec:
         raise ScenarioError(f"{source}: latencies: expected [[latencies]] tables")
     latencies = tuple(parse_latency(t, f"latencies[{i}].", source, cameras)
                       for i, t in enumerate(latencies_raw))
-    late = [latency.camera for latency in latencies]
-    twice = sorted({name for name in late if late.count(name) > 1})
+    late = [(latency.camera, latency.start_s) for latency in latencies]
+    twice = sorted({key for key in late if late.count(key) > 1})
     if twice:
-        raise ScenarioError(f"{source}: latencies: camera {twice[0]!r} is given two latencies")
+        raise ScenarioError(f"{source}: latencies: camera {twice[0][0]!r} is given two "
+                            f"latencies from {twice[0][1]:g} s")
     rig_motion = parse_rig_motion(raw["rig_motion"], "rig_motion.", source) \
         if top.get("rig_motion", None) is not None else None
     top.check_unknown()

@@ -94,16 +94,19 @@ def _drift(text: str) -> dict[str, Any]:
 
 
 def _latency(text: str) -> dict[str, Any]:
-    """``CAMERA:MS`` as a scenario's ``[[latencies]]`` table."""
-    camera, _, ms = text.rpartition(":")
+    """``CAMERA:MS[@SECONDS]`` as a scenario's ``[[latencies]]`` table."""
+    where, at, start = text.rpartition("@") if "@" in text else (text, "", "0")
+    camera, _, ms = where.rpartition(":")
     try:
-        latency_ms = float(ms)
+        numbers = (float(ms), float(start))
     except ValueError:
-        latency_ms = math.nan
-    if not camera or not math.isfinite(latency_ms):
+        numbers = (math.nan, math.nan)
+    if not camera or not all(math.isfinite(v) for v in numbers):
         raise argparse.ArgumentTypeError(
-            f"expected CAMERA:MS, e.g. right:17 or left:-5, got {text!r}")
-    return {"camera": camera, "latency_ms": latency_ms}
+            f"expected CAMERA:MS or CAMERA:MS@SECONDS, e.g. right:17, left:-5 or "
+            f"right:25@6, got {text!r}")
+    table = {"camera": camera, "latency_ms": numbers[0]}
+    return table | ({"start_s": numbers[1]} if at else {})
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -146,10 +149,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="turn a camera (its name, e.g. left or right, or namespace) by DEGREES "
                         "about an axis of its optical frame (roll: z, pitch: x, yaw: y) from S "
                         "seconds after the start on, its camera_info unchanged; repeatable")
-    p.add_argument("--latency", type=_latency, action="append", metavar="CAMERA:MS",
+    p.add_argument("--latency", type=_latency, action="append", metavar="CAMERA:MS[@S]",
                    help="stamp a camera's messages MS milliseconds after the exposure they "
-                        "carry (negative: before it), as a driver that stamps late does; "
-                        "exposure times, jitter and drops unchanged; repeatable")
+                        "carry (negative: before it), as a driver that stamps late does "
+                        "(from S seconds after the start on: a driver restarted); exposure "
+                        "times, jitter and drops unchanged; repeatable")
     add_no_progress(p)
 
 
@@ -199,6 +203,8 @@ def run(args: argparse.Namespace) -> int:
     for drift in scenario.drifts:
         print(f"drift: {drift.camera} {drift.axis} {drift.degrees:+g}° from {drift.start_s:g} s")
     for latency in scenario.latencies:
-        print(f"latency: {latency.camera} stamped {latency.latency_ms:+g} ms from its exposures")
+        since = f" from {latency.start_s:g} s" if latency.start_s else ""
+        print(f"latency: {latency.camera} stamped {latency.latency_ms:+g} ms from its "
+              f"exposures{since}")
     print(f"wrote {result.path} ({result.storage})")
     return 0

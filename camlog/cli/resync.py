@@ -6,6 +6,7 @@ import argparse
 from typing import TYPE_CHECKING
 
 from ..requests.arguments import request_from_args
+from ..requests.fields import RequestError
 from ..requests.processing import ResyncRequest
 from .args import add_request
 
@@ -37,6 +38,8 @@ def run(args: argparse.Namespace) -> int:
     from ..processing.resync_log import measure_log_offset, resync_log
 
     request = request_from_args(ResyncRequest, args)
+    if request.output is None and not request.estimate_offset:
+        raise RequestError(ResyncRequest, "give {output} (or only {estimate_offset})")
     if request.output is None:
         measured = measure_log_offset(request)
         print(offset_line(measured.offset))

@@ -99,8 +99,6 @@ class ResyncRequest:
     progress: bool | None = common.progress()
 
     def __post_init__(self) -> None:
-        if self.output is None and not self.estimate_offset:
-            raise RequestError(ResyncRequest, "give {output} (or only {estimate_offset})")
         if (self.size is None) != (self.square is None):
             raise RequestError(ResyncRequest, "a board needs both {size} and {square}")
         if self.estimate_offset and self.offset is not None and self.offset != ESTIMATED:

@@ -16,7 +16,7 @@ pose of its own, and so stays in its camera's intrinsics while the pair leaves t
 (``split``: "not simultaneous: the board moved N mm between the two images"): when it would
 lose most of its corners with the shared pose, and, once the solve has settled, when its
 own pose explains its corners better than noise would (a likelihood ratio, chi-square with
-6 degrees of freedom, at one false split in two data sets). Views of a moving board carry
+6 degrees of freedom, at one false split in a hundred data sets). Views of a moving board carry
 their speed; after the first solve the blur law of :mod:`.motion` is fitted to their
 residuals, weights them and leaves out views too blurred to help. The centres of a circle
 grid's circles are measured as the centroids of their images; each round moves them by the
@@ -58,6 +58,9 @@ SHIFT_TOLERANCE_PX = 1e-4
 RETRY_SIGMA_GROWTH = 1.25
 #: rounds of splitting views that disagree with their instant's pose, at most
 MAX_SPLIT_STAGES = 3
+#: views split from their instant by chance, in a data set whose views all agree: one in a
+#: hundred data sets (a split costs the rig a joint view; a pair left in costs it more)
+FALSE_SPLITS = 0.01
 #: Gauss-Newton steps of a view's own pose
 OWN_POSE_ITERATIONS = 6
 
@@ -403,8 +406,8 @@ def _split_disagreeing(evidence: InlierSelection, state: bundle.RigState, *,
                        sigma: float) -> tuple[bundle.RigState, bool]:
     """In every instant whose views in use disagree on its board pose beyond noise (the
     likelihood ratio of a pose each against the one shared, chi-square with 6 degrees of
-    freedom per extra pose, beyond one false split in two data sets), the view whose own
-    pose gains most is given it; the state, and whether any was."""
+    freedom per extra pose, beyond :data:`FALSE_SPLITS` false splits per data set), the view
+    whose own pose gains most is given it; the state, and whether any was."""
     inliers = obs.with_mask(evidence.inliers)
     in_use = ~evidence.dropped & (evidence.inliers.sum(axis=1) >= MIN_VIEW_POINTS)
     counts = np.bincount(obs.instant[in_use], minlength=len(evidence.instants))
@@ -419,7 +422,7 @@ def _split_disagreeing(evidence: InlierSelection, state: bundle.RigState, *,
     for instant in tested:
         members = np.flatnonzero(instants == instant)
         dof = 6 * (len(members) - 1)
-        if chi2_survival(float(gain[members].sum()), dof) >= 0.5 / len(tested):
+        if chi2_survival(float(gain[members].sum()), dof) >= FALSE_SPLITS / len(tested):
             continue
         pick = members[int(np.argmax(gain[members]))]
         state = evidence.split_off(int(rows[pick]), state, own.reference_from_board(int(pick)))

@@ -31,7 +31,13 @@ from replay.messages import F64
 from ..calibration.lens import intrinsics_of, project
 from ..calibration.rotation import matrices, nearest_rotation
 from ..calibration.seed import board_pose
-from .estimate import CLUSTER_FRAMES, NotObservableError, OffsetEstimate, robust_fit
+from .estimate import (
+    CLUSTER_FRAMES,
+    MAD_TO_SIGMA,
+    NotObservableError,
+    OffsetEstimate,
+    robust_fit,
+)
 from .interpolation import Stencils
 
 __all__ = ["BoardTrack", "estimate_board_offset"]
@@ -52,6 +58,11 @@ MOVING_PX_S = 30.0
 MIN_MOVING_FRAMES = 10
 #: a standard deviation above this (s) is no measurement
 MAX_STD_S = 0.005
+#: the cameras agree on the board when the fit's residuals (robust sigma) are within this
+#: factor of each camera's own, plus a floor (px), with at least this share of inliers
+AGREEMENT_FACTOR = 3.0
+AGREEMENT_FLOOR_PX = 0.1
+MIN_INLIER_SHARE = 0.7
 #: the coarse search's step (s)
 SEARCH_STEP_S = 0.005
 #: Gauss-Newton has converged when no step is larger: offset (s), rotation (rad),
@@ -83,6 +94,7 @@ class _Posed:
     seen: B8
     stencils: Stencils
     model: CameraModel
+    noise_px: float  # robust sigma per coordinate of the frames' own PnP residuals
 
 
 def _oriented_pose(points_in_board: F64, ids: I64, corners_px: F64, model: CameraModel, *,
@@ -104,7 +116,7 @@ def _posed(track: BoardTrack, points_in_board: F64, origin_ns: int, *,
            half_turn: bool) -> _Posed | None:
     order = np.argsort(track.stamps_ns, kind="stable")
     times: list[int] = []
-    points, observed, seen = [], [], []
+    points, observed, seen, residuals = [], [], [], []
     for i in order.tolist():
         posed = _oriented_pose(points_in_board, np.asarray(track.point_ids[i], np.int64),
                                np.asarray(track.corners_px[i], np.float64), track.model,
@@ -114,6 +126,7 @@ def _posed(track: BoardTrack, points_in_board: F64, origin_ns: int, *,
         pose, ids, corners_px = posed
         times.append(int(track.stamps_ns[i]))
         points.append(points_in_board @ pose[:3, :3].T + pose[:3, 3])
+        residuals.append((track.model.project(points[-1][ids]) - corners_px).reshape(-1))
         corners = np.full((len(points_in_board), 2), np.nan)
         corners[ids] = corners_px
         observed.append(corners)
@@ -125,8 +138,9 @@ def _posed(track: BoardTrack, points_in_board: F64, origin_ns: int, *,
     stacked = np.stack(points)
     times_s = np.asarray((np.asarray(times, dtype=np.int64) - origin_ns) * 1e-9,
                          dtype=np.float64)
+    noise = MAD_TO_SIGMA * float(np.median(np.abs(np.concatenate(residuals))))
     return _Posed(times_s, stacked, np.stack(observed), np.stack(seen),
-                  Stencils(times_s, STENCIL, _smooth(stacked)), track.model)
+                  Stencils(times_s, STENCIL, _smooth(stacked)), track.model, noise)
 
 
 def _smooth(points: F64) -> B8:
@@ -307,6 +321,13 @@ def estimate_board_offset(first: BoardTrack, second: BoardTrack, *, points_in_bo
     moving = sum(_moving(side, state) for side in sides)
     std = math.sqrt(max(float(fit.covariance[0, 0]), 0.0))
     frames = sum(len(side.rows) for side in sides)
+    alone_px = max(a.noise_px, b.noise_px)
+    if not fit.sigma <= AGREEMENT_FACTOR * alone_px + AGREEMENT_FLOOR_PX \
+            or fit.inliers.mean() < MIN_INLIER_SHARE:
+        raise NotObservableError(
+            f"the cameras' views of the board do not agree at any offset within "
+            f"±{search_s * 1000:g} ms ({fit.sigma:.2f} px apart where each camera alone fits "
+            f"it to {alone_px:.2f} px): a larger offset, or views of different boards")
     if moving < MIN_MOVING_FRAMES or not std <= MAX_STD_S:
         raise NotObservableError(
             f"the board hardly moves in the frames both cameras see ({moving} of {frames} "

@@ -144,12 +144,14 @@ class ScenarioDrift:
 @dataclass(frozen=True)
 class ScenarioLatency:
     """A camera whose messages are stamped ``latency_ms`` milliseconds after the exposure
-    they carry (negative: before it): its frame exposed at ``t`` carries the stamp
-    ``t + latency_ms``. Exposure times, jitter and dropped frames are its clock's."""
+    they carry (negative: before it), for its frames exposed ``start_s`` or more after the
+    recording's start: such a frame exposed at ``t`` carries the stamp ``t + latency_ms``.
+    Exposure times, jitter and dropped frames are its clock's."""
 
     camera: str
     namespace: str
     latency_ms: float
+    start_s: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -170,11 +172,13 @@ class Scenario(JsonRecord):
     drifts: list[ScenarioDrift] | None = field(default=None, metadata=OMIT_NONE)
     latencies: list[ScenarioLatency] | None = field(default=None, metadata=OMIT_NONE)
 
-    def latency_ns(self, camera: ScenarioCamera) -> int:
-        """How much later than its exposure a camera's messages are stamped (ns; 0 for a
-        camera without a latency)."""
-        return next((round(latency.latency_ms * 1e6) for latency in self.latencies or ()
-                     if latency.camera == camera.name), 0)
+    def latency_ns(self, camera: ScenarioCamera, at_s: float = 0.0) -> int:
+        """How much later than its exposure a camera's frame exposed ``at_s`` after the
+        recording's start is stamped (ns; 0 for a camera without a latency)."""
+        started = [latency for latency in self.latencies or ()
+                   if latency.camera == camera.name and latency.start_s <= at_s]
+        return round(max(started, key=lambda latency: latency.start_s).latency_ms * 1e6) \
+            if started else 0
 
     def camera_for(self, namespace: str, frame_id: str | None = None) -> ScenarioCamera | None:
         """The camera of a namespace, or else the one camera with ``frame_id`` (topics
