@@ -57,7 +57,7 @@ def test_a_board_numbered_from_its_other_end_in_one_camera() -> None:
 def test_a_held_board_does_not_show_the_offset() -> None:
     """Held 0.5 s per pose and jumping between poses: no frame moves smoothly."""
     first, second = tracks(7, 17.0, held=True)
-    with pytest.raises(NotObservableError, match="hardly moves.*held one does not"):
+    with pytest.raises(NotObservableError, match=r"hardly moves.*held one does not"):
         estimate_board_offset(first, second, points_in_board=POINTS)
 
 

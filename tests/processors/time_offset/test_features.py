@@ -44,7 +44,7 @@ def pairs(offset_ms: float, *, amplitude_rad: float = 0.05, frames: int = 90,
     out = []
     half = STENCIL // 2
     for k in range(half, frames - half):
-        times = (np.arange(k - half, k + half + 1)) * PERIOD_S
+        times = np.arange(k - half, k + half + 1, dtype=np.float64) * PERIOD_S
         left = np.stack([_rows(points, pitch(t))[:, 1] for t in times], axis=1)
         right = _rows(points, pitch(k * PERIOD_S), baseline_m=0.06)
         out.append(FeaturePair(times, left + rng.normal(0, noise_px, left.shape),

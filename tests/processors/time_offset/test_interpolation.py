@@ -29,7 +29,7 @@ def test_shapes_are_checked() -> None:
 
 
 def test_a_query_takes_the_stencil_around_it() -> None:
-    stencils = Stencils(np.arange(10) * 0.1, 4)
+    stencils = Stencils(np.arange(10, dtype=np.float64) * 0.1, 4)
     start, found = stencils.locate(np.array([0.35, 0.05, 0.85, 0.91, -0.1]))
     assert start[0] == 2 and found[0]  # samples 2..5 around 0.35
     assert not found[1]  # before the second sample: no sample before the bracket's left
