@@ -57,7 +57,7 @@ SHIFT_TOLERANCE_PX = 1e-4
 #: views taken back in are kept only if the noise estimate grows by at most this factor
 RETRY_SIGMA_GROWTH = 1.25
 #: rounds of splitting views that disagree with their instant's pose, at most
-MAX_SPLIT_STAGES = 3
+MAX_SPLIT_STAGES = 5
 #: views split from their instant by chance, in a data set whose views all agree: one in a
 #: hundred data sets (a split costs the rig a joint view; a pair left in costs it more)
 FALSE_SPLITS = 0.01
@@ -404,10 +404,13 @@ def _own_poses(state: bundle.RigState, layout: bundle.Layout, obs: bundle.Observ
 def _split_disagreeing(evidence: InlierSelection, state: bundle.RigState, *,
                        layout: bundle.Layout, obs: bundle.Observations, points_in_board: F64,
                        sigma: float) -> tuple[bundle.RigState, bool]:
-    """In every instant whose views in use disagree on its board pose beyond noise (the
-    likelihood ratio of a pose each against the one shared, chi-square with 6 degrees of
-    freedom per extra pose, beyond :data:`FALSE_SPLITS` false splits per data set), the view
-    whose own pose gains most is given it; the state, and whether any was."""
+    """Views that disagree with their instant's board pose beyond noise given a pose of
+    their own: the likelihood ratio of a pose each against the one shared is chi-square
+    with 6 degrees of freedom per extra pose. An instant beyond :data:`FALSE_SPLITS` false
+    splits per data set is split; when none is, but the instants together are (many pairs a
+    little apart: the rig, fitted to them, hides each one's misfit), those that gain most
+    are split until the rest agree (one instant is always left). In an instant split, the
+    view whose own pose gains most is given it. The state, and whether any was."""
     inliers = obs.with_mask(evidence.inliers)
     in_use = ~evidence.dropped & (evidence.inliers.sum(axis=1) >= MIN_VIEW_POINTS)
     counts = np.bincount(obs.instant[in_use], minlength=len(evidence.instants))
@@ -418,29 +421,35 @@ def _split_disagreeing(evidence: InlierSelection, state: bundle.RigState, *,
     gain = (shared - alone) / sigma ** 2
     instants = obs.instant[rows]
     tested = np.unique(instants)
-    split = False
-    for instant in tested:
-        members = np.flatnonzero(instants == instant)
-        dof = 6 * (len(members) - 1)
-        if chi2_survival(float(gain[members].sum()), dof) >= FALSE_SPLITS / len(tested):
-            continue
-        pick = members[int(np.argmax(gain[members]))]
+    members = [np.flatnonzero(instants == instant) for instant in tested]
+    gains = np.array([float(gain[m].sum()) for m in members])
+    dofs = np.array([6 * (len(m) - 1) for m in members])
+    chosen = [i for i in range(len(tested))
+              if chi2_survival(float(gains[i]), int(dofs[i])) < FALSE_SPLITS / len(tested)]
+    if not chosen:
+        total, dof = float(gains.sum()), int(dofs.sum())
+        for i in np.argsort(-gains)[:-1].tolist():
+            if chi2_survival(total, dof) >= FALSE_SPLITS:
+                break
+            chosen.append(i)
+            total, dof = total - float(gains[i]), dof - int(dofs[i])
+    for i in chosen:
+        pick = members[i][int(np.argmax(gain[members[i]]))]
         state = evidence.split_off(int(rows[pick]), state, own.reference_from_board(int(pick)))
-        split = True
-    return state, split
+    return state, bool(chosen)
 
 
 def chi2_survival(x: float, dof: int) -> float:
     """``P(X > x)`` for ``X`` chi-square with an even number ``dof`` of degrees of freedom:
-    ``exp(-x/2) sum_{i < dof/2} (x/2)^i / i!``."""
+    ``exp(-x/2) sum_{i < dof/2} (x/2)^i / i!`` (summed in logarithms: no underflow)."""
     if dof <= 0 or dof % 2:
         raise ValueError(f"dof must be even and positive, got {dof}")
     half = max(x, 0.0) / 2.0
-    term = total = math.exp(-half)
-    for i in range(1, dof // 2):
-        term *= half / i
-        total += term
-    return min(total, 1.0)
+    if half == 0.0:
+        return 1.0
+    logs = [-half + i * math.log(half) - math.lgamma(i + 1) for i in range(dof // 2)]
+    top = max(logs)
+    return min(1.0, math.exp(top) * math.fsum(math.exp(v - top) for v in logs))
 
 
 def _word_splits(evidence: InlierSelection, state: bundle.RigState,

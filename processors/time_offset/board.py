@@ -140,17 +140,22 @@ def _posed(track: BoardTrack, points_in_board: F64, origin_ns: int, *,
                          dtype=np.float64)
     noise = MAD_TO_SIGMA * float(np.median(np.abs(np.concatenate(residuals))))
     return _Posed(times_s, stacked, np.stack(observed), np.stack(seen),
-                  Stencils(times_s, STENCIL, _smooth(stacked)), track.model, noise)
+                  Stencils(times_s, STENCIL, _smooth(stacked, track.model, noise)),
+                  track.model, noise)
 
 
-def _smooth(points: F64) -> B8:
-    """``(N,)`` frames whose motion a polynomial follows: acceleration below
-    :data:`SMOOTH_SHARE` of the speed, or at the noise's level (the first and last frame:
-    judged by their neighbour)."""
-    speed = np.linalg.norm(points[2:] - points[:-2], axis=2).mean(axis=1) / 2
-    acceleration = np.linalg.norm(points[2:] - 2 * points[1:-1] + points[:-2],
+def _smooth(points: F64, model: CameraModel, noise_px: float) -> B8:
+    """``(N,)`` frames whose motion a polynomial follows, judged in the image (the board's
+    points ``(N, P, 3)`` seen through ``model``): acceleration (second difference, px)
+    below :data:`SMOOTH_SHARE` of the speed (half the central difference), or within
+    :data:`NOISE_MULTIPLE` times what the corners' noise ``noise_px`` gives a still board
+    (the first and last frame: judged by their neighbour)."""
+    pixels = model.project(points.reshape(-1, 3)).reshape(*points.shape[:2], 2)
+    speed = np.linalg.norm(pixels[2:] - pixels[:-2], axis=2).mean(axis=1) / 2
+    acceleration = np.linalg.norm(pixels[2:] - 2 * pixels[1:-1] + pixels[:-2],
                                   axis=2).mean(axis=1)
-    floor = NOISE_MULTIPLE * float(np.median(acceleration)) if len(acceleration) else 0.0
+    # a second difference of three samples each off by noise_px per coordinate
+    floor = NOISE_MULTIPLE * noise_px * math.sqrt(6.0 * 2.0)
     inner = (acceleration <= SMOOTH_SHARE * speed) | (acceleration <= floor)
     return np.concatenate([inner[:1], inner, inner[-1:]])
 
@@ -213,8 +218,15 @@ def _coarse(first: _Posed, second: _Posed, search_s: float,
     scored = [_agreement(first, second, float(o), second_from_first) for o in grid]
     most = max(count for _, count, _ in scored)
     if most < MIN_MOVING_FRAMES:
-        raise NotObservableError("the two cameras never see the board at the same time (within "
-                            f"{search_s * 1000:g} ms)")
+        overlap = min(first.times_s[-1], second.times_s[-1] + search_s) \
+            - max(first.times_s[0], second.times_s[0] - search_s)
+        if overlap <= 0:
+            raise NotObservableError("the two cameras never see the board at the same time "
+                                     f"(within {search_s * 1000:g} ms)")
+        raise NotObservableError(
+            "the board is not seen moving in consecutive frames of both cameras (a held "
+            "board, repeated frames, or snapshots): a waved board shows the offset, a held "
+            "one does not")
     costs = np.array([cost if count >= most / 4 else math.inf for cost, count, _ in scored])
     centre = float(grid[int(np.argmin(costs))])
     fine = centre + np.arange(-10, 11) * SEARCH_STEP_S / 10
