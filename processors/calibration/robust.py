@@ -263,7 +263,7 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
         evidence.inliers[evidence.inliers.sum(axis=1) < MIN_VIEW_POINTS] = False
     speeds = np.array([views[i].speed_px for i in evidence.order])
     lenses = [(o.distortion_model, s) for o, s in zip(options, sizes, strict=True)]
-    rounds, trial, splits = 0, None, 0
+    rounds, trial, splits, lost_stages = 0, None, 0, 0
     while True:
         rounds += 1
         refinement = normal.refine(state, layout,
@@ -274,7 +274,7 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
         settled = float(np.abs(shift - previous).max(initial=0.0)) <= SHIFT_TOLERANCE_PX
         norm = _residual_norms(state, layout, _moved(obs, shift), points_in_board)
         sigma = _sigma(norm * obs.weight[:, None], evidence.inliers, layout)
-        if rounds >= MAX_ROUNDS * ((1 if trial is None else 2) + splits):
+        if rounds >= MAX_ROUNDS * ((1 if trial is None else 2) + splits + lost_stages):
             break
         if not (fresh and reject):
             if settled:
@@ -286,6 +286,7 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
         if lost:  # views that lose most of their corners to a shared pose get their own
             state = _split_lost(evidence, state, _moved(obs, shift), points_in_board,
                                 lenses=lenses, rows=lost)
+            lost_stages += 1
             continue
         if not changed and settled:
             if trial is None and splits < MAX_SPLIT_STAGES:
@@ -409,8 +410,9 @@ def _split_disagreeing(evidence: InlierSelection, state: bundle.RigState, *,
     with 6 degrees of freedom per extra pose. An instant beyond :data:`FALSE_SPLITS` false
     splits per data set is split; when none is, but the instants together are (many pairs a
     little apart: the rig, fitted to them, hides each one's misfit), those that gain most
-    are split until the rest agree (one instant is always left). In an instant split, the
-    view whose own pose gains most is given it. The state, and whether any was."""
+    are split until the rest agree. The instant that agrees best is never split: the rig
+    rests on it (the flow warns when it rests on few). In an instant split, the view whose
+    own pose gains most is given it. The state, and whether any was."""
     inliers = obs.with_mask(evidence.inliers)
     in_use = ~evidence.dropped & (evidence.inliers.sum(axis=1) >= MIN_VIEW_POINTS)
     counts = np.bincount(obs.instant[in_use], minlength=len(evidence.instants))
@@ -428,11 +430,13 @@ def _split_disagreeing(evidence: InlierSelection, state: bundle.RigState, *,
               if chi2_survival(float(gains[i]), int(dofs[i])) < FALSE_SPLITS / len(tested)]
     if not chosen:
         total, dof = float(gains.sum()), int(dofs.sum())
-        for i in np.argsort(-gains)[:-1].tolist():
+        for i in np.argsort(-gains).tolist():
             if chi2_survival(total, dof) >= FALSE_SPLITS:
                 break
             chosen.append(i)
             total, dof = total - float(gains[i]), dof - int(dofs[i])
+    if len(chosen) == len(tested):  # the rig rests on the one that agrees best
+        chosen.remove(int(np.argmin(gains)))
     for i in chosen:
         pick = members[i][int(np.argmax(gain[members[i]]))]
         state = evidence.split_off(int(rows[pick]), state, own.reference_from_board(int(pick)))
