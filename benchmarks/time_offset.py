@@ -223,8 +223,10 @@ def _results(keys: list[str], run: Any, keep: Path) -> Iterator[dict[str, Any]]:
         if key not in kept:
             kept[key] = run(key)
             keep.parent.mkdir(parents=True, exist_ok=True)
-            with keep.open("a") as f:
-                f.write(json.dumps(kept[key]) + "\n")
+            cut = keep.exists() and not keep.read_bytes().endswith(b"\n") \
+                and keep.stat().st_size > 0
+            with keep.open("a") as f:  # a line cut short stays apart from the next one
+                f.write(("\n" if cut else "") + json.dumps(kept[key]) + "\n")
             print(json.dumps(kept[key]), flush=True)
         yield kept[key]
 
