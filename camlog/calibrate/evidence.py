@@ -4,8 +4,11 @@ This is the second pass over the log, and it cannot be folded into the first: a 
 annotation (used, and with which error, or rejected, and why) is known only once every
 camera is solved, and keeping the images until then would make memory grow with the log.
 The pass copies every input message, and adds per camera frame the calibrated camera_info,
-the frame with its corners drawn, the view's error and residuals and, for stereo, the
-rectified image. It also hands back the rectified images of one joint view for the report.
+the frame with its corners drawn (the first frame of each view and every frame in none, an
+even sample of at most :data:`DRAWN_FRAMES` of them: a waved board makes every frame a view,
+and a full-colour image of each was most of what the log's writer compressed), the view's
+error and residuals (every view) and, for stereo, the rectified image. It also hands back
+the rectified images of one joint view for the report.
 """
 
 from __future__ import annotations
@@ -18,6 +21,7 @@ import numpy as np
 
 from camlog.calibrate.figures import annotate_detection
 from processors.calibration.board import Board
+from processors.calibration.seed import spread
 from replay.camera import rectify_maps
 from replay.formats import LogReader, LogWriter
 from replay.formats.background import BackgroundWriter
@@ -28,15 +32,19 @@ from replay.records import CalibrationSummary, ViewResiduals
 from replay.topics import CALIBRATION_SUMMARY, CameraTopics
 
 from .pixels import TopicFrames
-from .solving import RigSolution
+from .solving import CalibratedCamera, RigSolution
 from .views import DetectedFrame
 
-__all__ = ["EVIDENCE_ZSTD_LEVEL", "Evidence", "write_evidence", "write_summary"]
+__all__ = ["DRAWN_FRAMES", "EVIDENCE_ZSTD_LEVEL", "Evidence", "drawn_frames", "write_evidence",
+           "write_summary"]
 
 #: zstd level of calibration.mcap's chunks: camera frames are noise that compresses little,
 #: and the default level 3 was most of the writer thread's work (the 12-pair 640x480
 #: sample's 66 MB: 49 MB in 0.33 s of CPU at level 3, 57 MB in 0.09 s at level 1)
 EVIDENCE_ZSTD_LEVEL = 1
+#: frames per camera drawn with their corners, at most (an even sample beyond; held boards
+#: give far fewer views)
+DRAWN_FRAMES = 240
 
 
 @dataclass(frozen=True)
@@ -64,6 +72,15 @@ def hold_ends(frames: Sequence[DetectedFrame], view_of: Mapping[int, int]) -> di
     return ends
 
 
+def drawn_frames(camera: CalibratedCamera, solved: RigSolution) -> set[int]:
+    """The frames of ``camera`` drawn with their corners: of the distinct frames that are
+    the first of a view or in none, an even sample of at most :data:`DRAWN_FRAMES`."""
+    shown = [f.index for f in camera.views.frames if not f.duplicate
+             and ((view := camera.view_of.get(f.index)) is None
+                  or solved.first_frame(view) == f.index)]
+    return {shown[i] for i in spread(len(shown), DRAWN_FRAMES)}
+
+
 def write_evidence(reader: LogReader, writer: LogWriter | BackgroundWriter,
                    solved: RigSolution, *, board: Board, progress: bool | None) -> Evidence:
     """Write into ``writer`` the log of ``reader`` plus the calibration's annotated topics
@@ -73,6 +90,7 @@ def write_evidence(reader: LogReader, writer: LogWriter | BackgroundWriter,
     by_topic = {c.views.source.image_topic: c for c in cameras}
     counters = dict.fromkeys(by_topic, 0)
     ends = {c.views.source.namespace: hold_ends(c.views.frames, c.view_of) for c in cameras}
+    drawn = {c.views.source.namespace: drawn_frames(c, solved) for c in cameras}
     maps = {c.views.source.namespace: _rectify_maps(c.camera_info) for c in cameras} \
         if stereo is not None else {}
     # frames of the joint views (their first), per camera, and the one the report shows
@@ -118,11 +136,12 @@ def write_evidence(reader: LogReader, writer: LogWriter | BackgroundWriter,
                 continue
             status, used = solved.status(camera, frame)
             corners = frame.detection.corners_px if frame.detection is not None else None
-            annotated = cv2.cvtColor(
-                annotate_detection(image.bgr8(), corners, board.pattern_size, status, used),
-                cv2.COLOR_BGR2RGB)
-            writer.write(topics.detections, Image(stamp, image.frame_id, "rgb8", annotated),
-                         log_time_ns=log_time)
+            if frame.index in drawn[ns]:
+                annotated = cv2.cvtColor(
+                    annotate_detection(image.bgr8(), corners, board.pattern_size, status, used),
+                    cv2.COLOR_BGR2RGB)
+                writer.write(topics.detections, Image(stamp, image.frame_id, "rgb8",
+                                                      annotated), log_time_ns=log_time)
             # a held pose's view is recorded at its first frame
             if used and corners is not None and view is not None:
                 rms = joint.view_rms_px(view)

@@ -14,6 +14,7 @@ from camlog.calibrate.figures import (
     uncertainty_figure,
     view_error_figure,
 )
+from processors.calibration.seed import spread
 from replay.calibration_ini import ost_text
 from replay.calibration_yaml import calibration_to_yaml
 from replay.records import CalibrationSummary
@@ -28,6 +29,9 @@ __all__ = ["FIGURES", "camera_file_stem", "output_names", "write_files"]
 
 #: figures drawn per camera (stereo: prefixed ``left_`` / ``right_``)
 FIGURES = ("coverage.png", "view_errors.png", "residuals.png", "uncertainty.png")
+#: the residual figure draws an even sample of at most this many used views (one arrow per
+#: corner: a waved board's thousands of views took seconds and hid each other)
+RESIDUAL_VIEWS = 240
 
 
 def camera_file_stem(namespace: str) -> str:
@@ -64,6 +68,11 @@ def _figures(folder: Path, solved: RigSolution, camera: CalibratedCamera,
     names."""
     size, namespace, joint = camera.views.size, camera.views.source.namespace, solved.joint
     used, rejected = solved.used_corners(camera), solved.rejected_corners(camera)
+    used_views = solved.used_views(camera)
+    # the residuals of an even sample of the used views: a waved board's are thousands
+    drawn = spread(len(used_views), RESIDUAL_VIEWS)
+    of = "" if len(drawn) == len(used_views) else \
+        f" of an even sample of {len(drawn)} of {len(used_views)} views"
     # views are not judged by their RMS (outliers are single corners): no limit line
     order = sorted(camera.view_ids, key=solved.first_frame)
     uncertainty = statistics.uncertainty
@@ -77,8 +86,8 @@ def _figures(folder: Path, solved: RigSolution, camera: CalibratedCamera,
             [v in joint.rejected for v in order], None,
             f"{namespace}: per-view reprojection error"),
         "residuals.png": residual_figure(
-            size, used, [joint.residuals_px[v] for v in solved.used_views(camera)],
-            f"{namespace}: residuals (observed - projected)"),
+            size, [used[i] for i in drawn], [joint.residuals_px[used_views[i]] for i in drawn],
+            f"{namespace}: residuals (observed - projected){of}"),
         "uncertainty.png": uncertainty_figure(
             size, uncertainty.pixels, uncertainty.sigma_px,
             f"{namespace}: projection uncertainty (1 sigma) at "

@@ -9,11 +9,12 @@ and joins them before the summary (:mod:`.flow`). That pays on short logs, where
 large share of the run; on a long log the pass and its writer thread already keep the cores
 busy, and the statistics computed beside them only add their memory to the pass's (a 400 s
 stereo log: a peak of 184 MB against 150 MB, in the same time): there they are computed
-first (:func:`beside_the_pass`).
+after it (:func:`beside_the_pass`).
 """
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 from processors.calibration.uncertainty import UncertaintyMap, projection_uncertainty
@@ -25,8 +26,9 @@ from .solving import RigSolution
 #: "far away": the uncertainty and cross-validation of rays
 FAR_M = 1e4
 #: the statistics run beside the evidence pass only for views of at most this many corners in
-#: all (a 40 s stereo log of 8 poses repeated holds 6 700, 400 s 67 000)
-BESIDE_CORNERS = 10_000
+#: all (a 40 s stereo log of 8 poses repeated holds 6 700, 400 s 67 000; a board waved for
+#: 40 s, 45 000, whose pass mostly waits for its writer)
+BESIDE_CORNERS = 50_000
 
 __all__ = ["BESIDE_CORNERS", "FAR_M", "CameraStatistics", "beside_the_pass",
            "camera_statistics"]
@@ -56,15 +58,22 @@ def beside_the_pass(solved: RigSolution) -> bool:
 
 def camera_statistics(solved: RigSolution, *, points_in_board: F64) -> list[CameraStatistics]:
     """Each camera's statistics, in camera order, from the joint solve of the board points
-    ``points_in_board`` ``(N, 3)``."""
+    ``points_in_board`` ``(N, 3)``: the halves' cross-validation on a thread while the
+    uncertainty maps are computed, joined here (their error raised here)."""
     joint = solved.joint
     sizes = [c.views.size for c in solved.cameras]
-    # the views at the instants they were solved with: one not simultaneous with its
+    # the halves' two solves on a thread of their own while the maps are computed here (both
+    # mostly in numpy and OpenCV, which release the GIL); joined, their error raised, below.
+    # The views at the instants they were solved with: one not simultaneous with its
     # instant's other views has a board pose of its own in each half too
-    validation = cross_validate(
-        points_in_board, joint.views, sizes, joint.options, range_m=FAR_M,
-        disc_diameter_m=solved.circles.diameter_m if solved.circles is not None else None)
-    return [CameraStatistics(projection_uncertainty(joint.problem, index),
-                             projection_uncertainty(joint.problem, index, range_m=FAR_M),
-                             validation[index] if validation is not None else None)
-            for index in range(len(sizes))]
+    with ThreadPoolExecutor(max_workers=1, thread_name_prefix="camlog-halves") as pool:
+        halves = pool.submit(
+            cross_validate, points_in_board, joint.views, sizes, joint.options,
+            range_m=FAR_M,
+            disc_diameter_m=solved.circles.diameter_m if solved.circles is not None else None)
+        maps = [(projection_uncertainty(joint.problem, index),
+                 projection_uncertainty(joint.problem, index, range_m=FAR_M))
+                for index in range(len(sizes))]
+    validation = halves.result()
+    return [CameraStatistics(*pair, validation[index] if validation is not None else None)
+            for index, pair in enumerate(maps)]

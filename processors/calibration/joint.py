@@ -169,20 +169,26 @@ def calibrate_cameras(points_in_board: F64, views: list[BoardView],
     problem, evidence, rounds = robust_solve(data, final, seeds=seeds, reject=reject_outliers,
                                              warp=warp)
     tests: list[TangentialTest | None] = [None] * cameras
+    trials: dict[int, tuple[Problem, int]] = {}
     for camera in (c for c in range(cameras) if auto[c]):
         trial = list(final)
         trial[camera] = wanted[camera].with_tangential("zero")
-        without, _e, _r = robust_solve(data, trial,
-                                       state=_without_tangential(problem.state, camera),
-                                       evidence=evidence, warp=warp)
+        without, _e, trial_rounds = robust_solve(
+            data, trial, state=_without_tangential(problem.state, camera), evidence=evidence,
+            warp=warp)
+        trials[camera] = without, trial_rounds
         chi2 = (without.cost - problem.cost) / problem.sigma_px ** 2
         tests[camera] = TangentialTest(chi2, math.exp(-max(chi2, 0.0) / 2) < TANGENTIAL_P_VALUE)
-    if any(t is not None and not t.estimated for t in tests):
+    dropped = [c for c, t in enumerate(tests) if t is not None and not t.estimated]
+    for camera in dropped:
+        final[camera] = wanted[camera].with_tangential("zero")
+    if len(dropped) == 1:  # the trial without that camera's p1, p2 is the solve wanted
+        problem, more = trials[dropped[0]]
+        rounds += more
+    elif dropped:
         state = problem.state
-        for camera, test in enumerate(tests):
-            if test is not None and not test.estimated:
-                final[camera] = wanted[camera].with_tangential("zero")
-                state = _without_tangential(state, camera)
+        for camera in dropped:
+            state = _without_tangential(state, camera)
         problem, _e, more = robust_solve(data, final, state=state, evidence=evidence,
                                          warp=warp)
         rounds += more

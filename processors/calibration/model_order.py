@@ -31,9 +31,12 @@ views' noise raises it. The bigger model is chosen when both
 Views far off under the smallest order (:data:`FAR_VIEW_FACTOR` times the median view's
 error: not the board, or blurred) are left out of the comparison, and each fold's fit sees
 an even sample of at most :data:`FOLD_VIEWS` training views (the cost stays that of a few
-seed calibrations however long the log). The folds are fitted on threads (OpenCV's solver
-releases the GIL; each fit alone on one thread, see :func:`~.seed.one_opencv_thread`), and the
-cameras climb their ladders at the same time: the same fits, in less time on several cores.
+seed calibrations however long the log). Every view is held out and measured, however many:
+on a 40 s waved board (1 036 views) an even sample of 218 chose k1 k2 where every view chose
+k1 k2 k3, whose max projection difference from the truth was lower (0.029 against 0.041 px).
+The folds are fitted on threads (OpenCV's solver releases the GIL; each fit alone on one
+thread, see :func:`~.seed.one_opencv_thread`), and the cameras climb their ladders at the same
+time: the same fits, in less time on several cores.
 The folds' models share most of their views, so the views' differences are not quite
 independent; the thresholds are strict for that reason. OpenCV's solver fits the
 folds (rational_polynomial without the joint solve's light prior on k4..k6): the choice

@@ -32,8 +32,10 @@ GRID_STEP_PX = 16
 #: pixels solved at once, at most
 CHUNK = 64
 #: board poses times pixels solved at once: the right-hand sides and solutions (100 bytes
-#: per pose and pixel) stay a few MB however many poses a long log holds
-POSE_PIXELS = 8192
+#: per pose and pixel) stay a few tens of MB however many poses a long log holds, in chunks
+#: large enough that a waved board's thousand poses do not make the work per chunk's
+#: overhead (at most :data:`CHUNK` pixels below 1 024 poses)
+POSE_PIXELS = 65536
 
 
 class OverImage:

@@ -1,9 +1,10 @@
 """Whether to estimate the board's warp (:mod:`.warp`), by cross-validation over whole views.
 
-As the lens order (:mod:`.model_order`): the board poses, in time order, are cut into
-:data:`WARP_FOLDS` contiguous blocks. For each block the joint problem is solved again from
-the flat solution without the block's views, once with the board held flat and once with its
-warp estimated (the project's own bundle: OpenCV cannot fit a warp); each held-out view's
+As the lens order (:mod:`.model_order`): the board poses (an even sample of at most
+:data:`WARP_POSES`), in time order, are cut into :data:`WARP_FOLDS` contiguous
+blocks. For each block the joint problem of the sampled poses is solved again from the flat
+solution without the block's views, once with the board held flat and once with its warp
+estimated (the project's own bundle: OpenCV cannot fit a warp); each held-out view's
 pose alone is then solved with the fitted intrinsics, rig and warp, and its mean squared
 reprojection error ``e(v)`` (px²) measured. The warp is chosen when its held-out error is
 lower by at least :data:`~.model_order.MIN_GAIN` and the board poses' paired differences
@@ -30,10 +31,15 @@ from . import bundle
 from .model_order import MAX_P_VALUE, MIN_CORNERS, MIN_GAIN, MIN_ORDER_VIEWS, signed_rank_p
 from .normal import refine
 from .robust import Problem
+from .seed import spread
 
-__all__ = ["WARP_FOLDS", "WarpChoice", "choose_warp"]
+__all__ = ["WARP_FOLDS", "WARP_POSES", "WarpChoice", "choose_warp"]
 
 WARP_FOLDS = 5
+#: the folds refit the problem on an even sample of at most this many board poses: a waved
+#: board's neighbouring frames are nearly one pose, and ten solves of every pose were most of
+#: its run (held boards give far fewer)
+WARP_POSES = 240
 
 
 @dataclass(frozen=True)
@@ -86,7 +92,13 @@ def choose_warp(problem: Problem, *, folds: int = WARP_FOLDS) -> WarpChoice:
     if len(usable) < MIN_ORDER_VIEWS:
         return WarpChoice(np.zeros(0), np.zeros(0), math.nan, math.nan, 0,
                           f"{len(usable)} views, fewer than {MIN_ORDER_VIEWS}")
-    seen = np.unique(obs.instant[usable])
+    every = np.unique(obs.instant[usable])
+    seen = every[spread(len(every), WARP_POSES)]
+    if len(seen) < len(every):  # the views of the poses left out take no part
+        kept = np.flatnonzero(~np.isin(obs.instant, np.setdiff1d(every, seen)))
+        obs = bundle.Observations(obs.camera[kept], obs.instant[kept], obs.observed[kept],
+                                  obs.mask[kept], obs.weight[kept])
+        usable = np.flatnonzero(obs.mask.sum(axis=1) >= MIN_CORNERS)
     errors = np.full((2, obs.view_count), math.inf)
     for block in np.array_split(seen, folds):
         held = np.isin(obs.instant, block)

@@ -229,3 +229,4 @@ def test_the_approximation_takes_over_where_it_agrees_with_the_exact_law() -> No
         exact = signed_rank_p(d)
         approximate = stats.wilcoxon(d, alternative="greater", method="asymptotic").pvalue
         assert abs(exact - approximate) < 1e-3
+

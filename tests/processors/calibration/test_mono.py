@@ -294,3 +294,4 @@ def test_cross_validation_is_none_when_a_half_does_not_solve(
 
     monkeypatch.setattr(validation, "calibrate_cameras", singular)
     assert cross_validate(points, observed, [(W, H)], options, range_m=1e4) is None
+

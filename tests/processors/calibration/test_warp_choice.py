@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from processors.calibration import warp_choice
 from processors.calibration.board import Board
 from processors.calibration.joint import BoardView, JointResult, calibrate_cameras
 from processors.calibration.options import CalibrationOptions
@@ -116,3 +117,14 @@ def test_the_views_of_one_board_pose_count_once_their_corners_pooled() -> None:
     flat, warped = _per_pose(errors, np.array([7, 7, 9]), np.array([40, 10, 30]))
     assert flat == pytest.approx([(40 * 1.0 + 10 * 3.0) / 50, 2.0])
     assert warped == pytest.approx([(40 * 0.5 + 10 * 1.0) / 50, 2.5])
+
+
+def test_the_poses_compared_are_an_even_sample_of_a_long_log(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Past :data:`~processors.calibration.warp_choice.WARP_POSES` board poses the folds are
+    those of an even sample (the solve itself keeps every view): a bow is still chosen."""
+    monkeypatch.setattr(warp_choice, "WARP_POSES", 20)
+    result = calibrated(board_views(BOW_M, 1, count=40))
+    choice = result.warp_choice
+    assert choice is not None and choice.views == 20 and choice.chosen, choice
+    assert len(result.used_views(0)) == 40
