@@ -3,7 +3,7 @@
 Three cases, each over many seeds:
 
 - **board**: ``stereo_moving_board`` (a waved board, both cameras exposing at the same
-  instants) with the right camera stamping 0, 3, 17, 33 or -10 ms late (``--latency``); the
+  instants, no motion blur) with the right camera stamping 0, 3, 17, 33 or -10 ms late; the
   offset measured by ``camlog resync --estimate-offset`` from the board
   (:func:`processors.time_offset.estimate_board_offset`): the median and 95th percentile of
   ``|error|`` per offset and the RMS of ``error / sigma`` (1 when the sigma is honest).
@@ -14,14 +14,19 @@ Three cases, each over many seeds:
   the rows (the RMS of the rig's rows' speed, from its true path), drawn to
   ``docs/time_offset_natural.png``.
 - **rig**: ``camlog calibrate`` of the board logs stamped 17 ms late (the offset measured and
-  the views paired by it), of the same seeds recorded with true stamps, and of the late logs
-  paired by their stamps (``resync``: every left frame with the right frame stamped
-  nearest, then calibrated as one instant each): the baseline's and the rotation's error
-  against the truth, medians over the seeds.
+  the views paired by it), of the same logs with true stamps, and of the late logs paired by
+  their stamps (``resync``: every left frame with the right frame stamped nearest, then
+  calibrated as one instant each): the baseline's and the rotation's error against the
+  truth, medians over the seeds.
 
-Recordings are cached in ``--cache`` (outside the repository, named by their inputs), each
-log's result appended to ``--keep`` (one JSON line, read back by a later run: a run can be
-resumed). Run with ``nice -n 10``::
+A latency changes nothing but stamps (the recorder draws no random number for it: the same
+seed renders the same images), so each seed is rendered once with true stamps and each
+offset's log is that recording with the right camera's messages re-stamped as
+``camlog record --latency right:MS`` stamps them (:func:`restamped`; the scenario record
+lists the latency); ``tests/benchmarks/test_time_offset.py`` checks that the two agree
+message for message. The same seeds serve every offset. Recordings are cached in ``--cache``
+(outside the repository, named by their inputs), each log's result appended to ``--keep``
+(one JSON line, read back by a later run: a run can be resumed). Run with ``nice -n 10``::
 
     python -m benchmarks.time_offset [--seeds 20] [--cases board,natural,rig] [--write-docs]
 """
@@ -30,6 +35,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import dataclasses
 import io
 import json
 import math
@@ -54,9 +60,9 @@ OFFSETS_MS = (0.0, 3.0, 17.0, 33.0, -10.0)
 RIG_OFFSET_MS = 17.0
 #: the natural case's rig motion, as multiples of the scenario's, cycled over the seeds
 MOTION_SCALES = (0.25, 0.5, 1.0, 1.5)
-DURATION_S = 6.0
-RIG_DURATION_S = 12.0
+DURATION_S = {"board": 8.0, "natural": 6.0}
 RESOLUTION = "320x240"
+FIRST_SEED = 1000
 LEFT, RIGHT = "/stereo_camera/left", "/stereo_camera/right"
 CAMERAS = ["--left", LEFT, "--right", RIGHT]
 BOARD = ["-s", "7x6", "-q", "0.01"]
@@ -68,7 +74,7 @@ FIGURE = PAGE.parent / "time_offset_natural.png"
 class Case:
     """One log of the sweep: its case, seed and the right camera's latency."""
 
-    kind: str  # board | natural | true (the board with true stamps, for the rig)
+    kind: str  # board | natural
     seed: int
     offset_ms: float
 
@@ -84,9 +90,13 @@ class Case:
 
 
 def _spec(case: Case, folder: Path) -> Path:
-    """The scenario spec of a case (the natural one with its rig motion scaled)."""
-    name = "stereo_moving_rig" if case.kind == "natural" else "stereo_moving_board"
+    """The scenario spec of a case: the natural one with its rig motion scaled, the board
+    without motion blur (sub-frame renders would multiply the rendering time)."""
+    name = _spec_name(case)
     text = (PAGE.parents[1] / "datasets" / "scenarios" / f"{name}.toml").read_text()
+    if case.kind == "board":
+        assert text.count("exposure_s = 0.004\n") == 2, f"{name}.toml: expected two exposures"
+        text = text.replace("exposure_s = 0.004\n", "")
     if case.kind == "natural":
         scenario = load_scenario(name)
         assert scenario.rig_motion is not None
@@ -102,21 +112,58 @@ def _spec(case: Case, folder: Path) -> Path:
 
 
 def recording(case: Case, cache: Path) -> Path:
-    """The case's log, recorded into ``cache`` unless already there."""
+    """The case's log in ``cache``: its seed rendered once with true stamps, re-stamped with
+    the case's latency (both made unless already there)."""
+    true = Case(case.kind, case.seed, 0.0)
+    rendered = cache / f"{true.key}-{RESOLUTION}.mcap"
+    if not rendered.exists():
+        cache.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory() as tmp, contextlib.redirect_stdout(io.StringIO()):
+            code = camlog(["record", str(_spec(true, Path(tmp))), "-o", str(rendered),
+                           "--seed", str(case.seed), "--duration",
+                           f"{DURATION_S[case.kind]:g}", "--resolution", RESOLUTION,
+                           "--no-progress"])
+        if code:
+            raise SystemExit(f"error: recording {true.key} failed")
+    if case.offset_ms == 0.0:
+        return rendered
     path = cache / f"{case.key}-{RESOLUTION}.mcap"
-    if path.exists():
-        return path
-    cache.mkdir(parents=True, exist_ok=True)
-    duration = RIG_DURATION_S if case.kind == "true" or (
-        case.kind == "board" and case.offset_ms == RIG_OFFSET_MS) else DURATION_S
-    with tempfile.TemporaryDirectory() as tmp, contextlib.redirect_stdout(io.StringIO()):
-        latency = [] if case.kind == "true" else ["--latency", f"right:{case.offset_ms:g}"]
-        code = camlog(["record", str(_spec(case, Path(tmp))), "-o", str(path), "--seed",
-                       str(case.seed), "--duration", f"{duration:g}", "--resolution",
-                       RESOLUTION, "--no-progress", *latency])
-    if code:
-        raise SystemExit(f"error: recording {case.key} failed")
+    if not path.exists():
+        restamped(rendered, path, camera="right", latency_ms=case.offset_ms)
     return path
+
+
+def restamped(log: Path, out: Path, *, camera: str, latency_ms: float) -> None:
+    """A copy of a recording with true stamps whose ``camera`` stamps its messages (image,
+    camera_info, ground truth) ``latency_ms`` after their exposure, as ``camlog record
+    --latency CAMERA:MS`` makes it: messages in stamp order (log time = stamp), the latency
+    in the scenario record."""
+    from replay import open_reader, open_writer
+    from replay.records import Scenario, ScenarioLatency
+    from replay.topics import SCENARIO
+
+    shift_ns = round(latency_ms * 1e6)
+    with open_reader(log) as reader:
+        messages = [(raw.topic, raw.log_time_ns, reader.decode(raw))
+                    for raw in reader.raw_messages()]
+    (record,) = [Scenario.from_message(m) for t, _, m in messages if t == SCENARIO]
+    (moved,) = [c for c in record.cameras if c.name == camera]
+    record = dataclasses.replace(record, latencies=[
+        ScenarioLatency(camera=camera, namespace=moved.namespace, latency_ms=latency_ms)])
+    out_messages: list[tuple[str, int, Any]] = []
+    for topic, log_time_ns, message in messages:
+        if topic == SCENARIO:
+            out_messages.append((topic, log_time_ns + min(shift_ns, 0), record.to_message()))
+        elif topic.startswith(moved.namespace + "/"):
+            stamped: Any = message
+            stamp = int(stamped.stamp_ns) + shift_ns
+            out_messages.append((topic, stamp, dataclasses.replace(stamped, stamp_ns=stamp)))
+        else:
+            out_messages.append((topic, log_time_ns, message))
+    out_messages.sort(key=lambda item: item[1])
+    with open_writer(out) as writer:
+        for topic, log_time_ns, message in out_messages:
+            writer.write(topic, message, log_time_ns=log_time_ns)
 
 
 def row_speed_px_s(case: Case) -> float:
@@ -128,10 +175,10 @@ def row_speed_px_s(case: Case) -> float:
     motion = scenario.rig_motion
     scaled = type(motion)(motion.segment_s, motion.translation_m * case.scale,
                           motion.rotation_rad * case.scale)
-    path = plan_rig_path(scaled, DURATION_S, rng_for(scenario, RIG_STREAM, 0))
+    path = plan_rig_path(scaled, DURATION_S["natural"], rng_for(scenario, RIG_STREAM, 0))
     model = scenario.cameras[0].model
     focal = model.fx * int(RESOLUTION.split("x", maxsplit=1)[0]) / model.width
-    times = np.arange(0.0, DURATION_S, 1 / 30)
+    times = np.arange(0.0, DURATION_S["natural"], 1 / 30)
     rates = []
     for t in times:
         a, b = path.rest_from_moved(float(t)), path.rest_from_moved(float(t) + 1e-3)
@@ -186,7 +233,7 @@ def _rig_errors(summary: dict[str, Any]) -> dict[str, float]:
 def calibrate_rig(seed: int, cache: Path) -> dict[str, Any]:
     """The rig of one seed calibrated three ways (see the module's text)."""
     late = recording(Case("board", seed, RIG_OFFSET_MS), cache)
-    true = recording(Case("true", seed, 0.0), cache)
+    true = recording(Case("board", seed, 0.0), cache)
     out: dict[str, Any] = {"key": f"rig-s{seed}"}
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -324,16 +371,14 @@ def run(*, seeds: int, cases: list[str], cache: Path, keep: Path, write_docs: bo
         if kind not in cases:
             continue
         plan = {Case(kind, seed, offset).key: Case(kind, seed, offset)
-                for offset in OFFSETS_MS
-                for seed in range(1000 * (1 + OFFSETS_MS.index(offset)),
-                                  1000 * (1 + OFFSETS_MS.index(offset)) + seeds)}
+                for seed in range(FIRST_SEED, FIRST_SEED + seeds) for offset in OFFSETS_MS}
         results = list(_results(list(plan), lambda key, p=plan: measure(p[key], cache), keep))
         tables[f"time_offset_{kind}"] = offset_table(kind, results)
         print("\n".join(tables[f"time_offset_{kind}"]))
         if kind == "natural" and write_docs:
             natural_figure(results, FIGURE)
     if "rig" in cases:
-        rig_seeds = range(3000, 3000 + seeds)  # the board case's 17 ms seeds
+        rig_seeds = range(FIRST_SEED, FIRST_SEED + seeds)
         results = list(_results([f"rig-s{s}" for s in rig_seeds],
                                 lambda key: calibrate_rig(int(key.split("-s")[1]), cache),
                                 keep))

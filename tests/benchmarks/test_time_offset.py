@@ -68,3 +68,38 @@ def test_a_run_resumes_from_its_kept_results(tmp_path: Path) -> None:
     assert [r["value"] for r in results] == [1, 2]
     assert [r["key"] for r in list(_results(["a", "b"], run, keep))] == ["a", "b"]
     assert ran == ["b"]
+
+
+def test_a_restamped_copy_is_what_the_recorder_writes_with_a_latency(tmp_path: Path) -> None:
+    from camlog.cli import main
+    from replay import Image, open_reader
+    from replay.records import Scenario
+    from replay.topics import SCENARIO
+
+    from benchmarks.time_offset import restamped
+
+    def record(out: Path, *options: str) -> Path:
+        assert main(["record", str(_spec(Case("board", 3, 0.0), tmp_path)), "-o", str(out),
+                     "--frames", "6", "--resolution", "80x60", "--no-progress", *options]) == 0
+        return out
+
+    copy = tmp_path / "copy.mcap"
+    restamped(record(tmp_path / "true.mcap"), copy, camera="right", latency_ms=17.0)
+    late = record(tmp_path / "late.mcap", "--latency", "right:17")
+
+    def contents(path: Path) -> list[tuple[str, int, object]]:
+        with open_reader(path) as reader:
+            out = []
+            for raw in reader.raw_messages():
+                message = reader.decode(raw)
+                if raw.topic == SCENARIO:
+                    record = Scenario.from_message(message)
+                    message = (record.latencies, [c.dropped_frames for c in record.cameras])
+                elif isinstance(message, Image):
+                    message = (message.stamp_ns, message.pixels.tobytes())
+                else:
+                    message = repr(message)
+                out.append((raw.topic, raw.log_time_ns, message))
+            return out
+
+    assert contents(copy) == contents(late)
