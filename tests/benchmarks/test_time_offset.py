@@ -14,10 +14,15 @@ from benchmarks.time_offset import (
     _results,
     _spec,
     offset_table,
+    restamped,
     rig_table,
     row_speed_px_s,
 )
+from camlog.cli import main
 from recorder.scenario import load_scenario
+from replay import Image, open_reader
+from replay.records import Scenario
+from replay.topics import SCENARIO
 
 
 def test_the_natural_case_scales_the_rig_motion(tmp_path: Path) -> None:
@@ -71,12 +76,6 @@ def test_a_run_resumes_from_its_kept_results(tmp_path: Path) -> None:
 
 
 def test_a_restamped_copy_is_what_the_recorder_writes_with_a_latency(tmp_path: Path) -> None:
-    from camlog.cli import main
-    from replay import Image, open_reader
-    from replay.records import Scenario
-    from replay.topics import SCENARIO
-
-    from benchmarks.time_offset import restamped
 
     def record(out: Path, *options: str) -> Path:
         assert main(["record", str(_spec(Case("board", 3, 0.0), tmp_path)), "-o", str(out),
