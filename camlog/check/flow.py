@@ -196,10 +196,13 @@ def _pair_matches(matcher: StereoMatcher, sample: Sample) -> PairMatches:
     raw_left, raw_right = matcher.match_raw(*sample.grays)
     before, after = sample.around
     tracked, kept = track_rows([before, sample.grays[0], after], 1, raw_left)
+    if not kept.any():
+        none = np.zeros(0)
+        return PairMatches(np.zeros((0, 2)), np.zeros((0, 2)), none, none, none)
     left_px, right_px = matcher.rectify(raw_left[kept], raw_right[kept])
     model, info = matcher.left_model, matcher.left
     rows = np.stack([model.rectify_points(tracked[kept][:, k], info.r, info.p)[:, 1]
-                     if kept.any() else np.zeros(0) for k in range(3)])  # (3, N)
+                     for k in range(3)])  # (3, N)
     centre_ns = sample.stamps_ns[0]
     times_s = np.array([sample.around_stamps_ns[0] - centre_ns, 0,
                         sample.around_stamps_ns[1] - centre_ns]) * 1e-9
