@@ -10,7 +10,8 @@ process wall; target <= 1.25) and each engine's time to its first finished log.
 
 from __future__ import annotations
 
-from camlog.batch.run import BatchResult, Engine, run_batch
+from camlog.batch.run import BatchResult, run_batch
+from camlog.requests.batch import BatchRequest
 
 from .batch_speedup import batch_inputs
 from .report import emit, write_summary_rows
@@ -20,8 +21,9 @@ def main() -> None:
     with batch_inputs(__doc__, "batch_ray") as inputs:
         runs: dict[str, BatchResult] = {}
         for engine in ("process", "ray"):
-            runs[engine] = run_batch(inputs.pipeline, inputs.logs, inputs.folder / f"out_{engine}",
-                                     jobs=2, engine=Engine(engine), progress=False)
+            runs[engine] = run_batch(BatchRequest(
+                pipeline=inputs.pipeline, logs=tuple(inputs.logs),
+                output=inputs.folder / f"out_{engine}", jobs=2, engine=engine, progress=False))
             assert not runs[engine].failed, runs[engine].failed
     args = inputs.args
     process, ray = runs["process"], runs["ray"]

@@ -10,14 +10,15 @@ on 2 cores.
 from __future__ import annotations
 
 import argparse
+import json
 import tempfile
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
-from camlog.batch.pipeline import Pipeline, parse_pipeline
 from camlog.batch.run import run_batch
+from camlog.requests.batch import BatchRequest
 from recorder.record import record
 from recorder.scenario import load_scenario
 
@@ -36,11 +37,11 @@ PIPELINE = {
 
 @dataclass(frozen=True)
 class BatchInputs:
-    """A batch benchmark's command line, its pipeline, and the logs recorded for it in a
-    temporary ``folder``."""
+    """A batch benchmark's command line, its pipeline file, and the logs recorded for it in
+    a temporary ``folder``."""
 
     args: argparse.Namespace
-    pipeline: Pipeline
+    pipeline: Path
     folder: Path
     logs: list[str | Path]
 
@@ -54,9 +55,10 @@ def batch_inputs(doc: str | None, name: str) -> Iterator[BatchInputs]:
     parser.add_argument("--frames", type=int, default=450, help="frames per camera per log")
     add_write_docs(parser)
     args = parser.parse_args()
-    pipeline = parse_pipeline(PIPELINE, name)
     with tempfile.TemporaryDirectory() as tmp_name:
         folder = Path(tmp_name)
+        pipeline = folder / f"{name}.yaml"  # JSON is YAML
+        pipeline.write_text(json.dumps(PIPELINE))
         logs: list[str | Path] = []
         for seed in range(args.logs):
             path = folder / f"unsynced_{seed}.mcap"
@@ -70,8 +72,9 @@ def main() -> None:
     with batch_inputs(__doc__, "batch_speedup") as inputs:
         walls = {}
         for jobs in (1, 2):
-            result = run_batch(inputs.pipeline, inputs.logs, inputs.folder / f"out_j{jobs}",
-                               jobs=jobs, progress=False)
+            result = run_batch(BatchRequest(pipeline=inputs.pipeline, logs=tuple(inputs.logs),
+                                            output=inputs.folder / f"out_j{jobs}", jobs=jobs,
+                                            progress=False))
             assert not result.failed, result.failed
             walls[jobs] = result.wall_s
     args = inputs.args

@@ -30,6 +30,7 @@ from .lean import pandas_hidden, without_pandas
 from .processing.process_log import process_log
 from .processing.resync_log import resync_log
 from .requests.calibrate import CalibrateRequest
+from .requests.demo import DemoRequest
 from .requests.processing import ProcessRequest, ResyncRequest
 
 
@@ -56,7 +57,8 @@ def red_block_chain(out_dir: Path, seed: int) -> list[tuple[str, Path, str]]:
     processed = out_dir / "red_block_processed.mcap"
     proc = process_log(ProcessRequest(
         log=red, output=processed, topic=("/stereo_camera/left/image_raw",),
-        processors=(configure("red_pixels"), configure("edges")), overwrite=True))
+        processors=(configure("red_pixels"), configure("edges")), overwrite=True,
+        progress=False))
     return [("record", red, f"{sum(rec.frames.values())} frames, {rec.wall_s:.1f} s"),
             ("process", processed, f"red pixels + edges on {proc.frames_processed} frames, "
                                    f"{proc.wall_s:.1f} s")]
@@ -83,7 +85,8 @@ def _stereo_chain(out_dir: Path, duration_s: float, seed: int, progress: bool | 
          f"{rec.wall_s:.1f} s")
 
     synced = out_dir / "stereo_synced.mcap"
-    sync = resync_log(ResyncRequest(log=unsynced, output=synced, overwrite=True))
+    sync = resync_log(ResyncRequest(log=unsynced, output=synced, overwrite=True,
+                                    progress=progress))
     done("resync", synced, f"{sync.stats.pairs} pairs re-stamped")
 
     calibration = out_dir / "calibration"
@@ -101,10 +104,11 @@ def _stereo_chain(out_dir: Path, duration_s: float, seed: int, progress: bool | 
     return calibration
 
 
-def run_demo(out_dir: Path, *, duration_s: float = 8.0, seed: int = 0,
-             progress: bool | None = None,
-             say: Callable[[str], None] = print) -> DemoResult:
-    """Run the whole demo into ``out_dir``; ``say`` reports each step as it finishes."""
+def run_demo(request: DemoRequest, *, say: Callable[[str], None] = print) -> DemoResult:
+    """Run the whole demo into the request's ``output`` folder; ``say`` reports each step as
+    it finishes."""
+    out_dir, duration_s, seed, progress = (request.output, request.duration, request.seed,
+                                           request.progress)
     started = time.perf_counter()
     out_dir.mkdir(parents=True, exist_ok=True)
     result = DemoResult()

@@ -8,6 +8,7 @@ from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
+import numpy.typing as npt
 
 from replay.geometry import invert, rotation_about
 from replay.messages import F64
@@ -26,6 +27,11 @@ REFERENCE_WIDTH_PX = 640
 #: another anchor), up to MAX_ROUNDS times, before the scene counts as unable to show it
 MAX_TRIES = 5000
 MAX_ROUNDS = len(ANCHORS)
+#: world-aimed draws judged at once (numpy over the batch; a stereo rig accepts about one
+#: draw in 400), and how far (px, metres) the batch's arithmetic may stray from one draw's
+#: own before a draw it rejects is looked at again
+BATCH = 512
+BATCH_SLACK = 1e-6
 
 
 @dataclass(frozen=True)
@@ -172,9 +178,83 @@ def _no_pose(target: TargetSpec, *, partly: bool, where: str, hint: str) -> Scen
         f"{hint}")
 
 
-def _world_draw(target: TargetSpec, rng: np.random.Generator) -> tuple[F64, F64]:
-    parameters = _random_parameters(target, rng)
-    return parameters, _pose(target, parameters)
+def _batch_parameters(target: TargetSpec, u: F64) -> F64:
+    """:func:`_random_parameters` of rows of six uniform draws ``u`` ``(B, 6)`` (each row's
+    the very values one call draws, with the same arithmetic)."""
+    motion = target.motion
+    r, (z_low, z_high) = motion.xy_range_m, motion.z_range_m
+    return np.column_stack([
+        motion.center_m[0] + (-r + (r - -r) * u[:, 0]),
+        motion.center_m[1] + (-r + (r - -r) * u[:, 1]),
+        z_low + (z_high - z_low) * u[:, 2],
+        -math.pi + (math.pi - -math.pi) * u[:, 3],
+        0 + (2 * math.pi - 0) * u[:, 4],
+        motion.max_tilt_rad * np.sqrt(u[:, 5]),
+    ])
+
+
+def _batch_rotations(axes: F64, angles: F64) -> F64:
+    """Rotations ``(B, 3, 3)`` by ``angles`` ``(B,)`` about unit ``axes`` ``(B, 3)``."""
+    k = np.zeros((len(axes), 3, 3))
+    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -axes[:, 2], axes[:, 1], -axes[:, 0]
+    k[:, 1, 0], k[:, 2, 0], k[:, 2, 1] = axes[:, 2], -axes[:, 1], axes[:, 0]
+    return (np.eye(3) + np.sin(angles)[:, None, None] * k
+            + (1 - np.cos(angles))[:, None, None] * (k @ k))
+
+
+def _maybe_seen(target: TargetSpec, parameters: F64, outline: F64,
+                cameras: tuple[CameraSpec, ...], *, partly: bool) -> npt.NDArray[np.bool_]:
+    """``(B,)`` which draws :func:`_seen_as_asked` may accept, judged for the whole batch at
+    once: every draw it accepts is among them (the bounds are widened by
+    :data:`BATCH_SLACK`), so the first of them it accepts is the first draw it accepts."""
+    yaw = _batch_rotations(np.tile([0.0, 0.0, 1.0], (len(parameters), 1)), parameters[:, 3])
+    tilt = _batch_rotations(np.column_stack([np.cos(parameters[:, 4]), np.sin(parameters[:, 4]),
+                                             np.zeros(len(parameters))]), parameters[:, 5])
+    rotation = tilt @ yaw @ np.diag([1.0, -1.0, -1.0])
+    translation = parameters[:, :3] - rotation @ center_in_target(target)
+    points_in_world = outline @ rotation.transpose(0, 2, 1) + translation[:, None, :]
+    lowest = 0.25 if partly else 1.0
+    maybe = np.ones(len(parameters), dtype=bool)
+    short = np.zeros(len(parameters), dtype=bool)  # a camera may see less than all of it
+    slack = BATCH_SLACK
+    for camera in cameras:
+        rows = np.flatnonzero(maybe)  # draws an earlier camera rejected stay rejected
+        margin = IN_VIEW_MARGIN_PX * min(1.0, camera.model.width / REFERENCE_WIDTH_PX)
+        camera_from_world = invert(camera.world_from_camera)
+        pts = points_in_world[rows] @ camera_from_world[:3, :3].T + camera_from_world[:3, 3]
+        in_front = (pts[..., 2] > 0.01 - slack).all(axis=1)
+        uv = np.full((*pts.shape[:2], 2), -np.inf)
+        if in_front.any():
+            uv[in_front] = camera.model.project(pts[in_front].reshape(-1, 3)).reshape(
+                -1, len(outline), 2)
+        w, h = camera.model.width, camera.model.height
+        loose = ((uv[..., 0] >= margin - slack) & (uv[..., 0] <= w - 1 - margin + slack)
+                 & (uv[..., 1] >= margin - slack) & (uv[..., 1] <= h - 1 - margin + slack))
+        strict = ((uv[..., 0] >= margin + slack) & (uv[..., 0] <= w - 1 - margin - slack)
+                  & (uv[..., 1] >= margin + slack) & (uv[..., 1] <= h - 1 - margin - slack))
+        maybe[rows] = in_front & (loose.mean(axis=1) >= lowest)
+        short[rows] |= ~strict.all(axis=1) | (pts[..., 2] <= 0.01 + slack).any(axis=1)
+    return maybe & short if partly else maybe
+
+
+def _first_visible_in_world(target: TargetSpec, cameras: tuple[CameraSpec, ...],
+                            outline: F64, rng: np.random.Generator, *,
+                            partly: bool) -> F64 | None:
+    """The parameters of the first of ``MAX_TRIES`` draws (:func:`_random_parameters`)
+    that ``cameras`` see as asked, drawn and judged :data:`BATCH` at a time; ``rng`` is left
+    where one draw after another would leave it."""
+    for start in range(0, MAX_TRIES, BATCH):
+        before = rng.bit_generator.state
+        parameters = _batch_parameters(target, rng.random((min(BATCH, MAX_TRIES - start), 6)))
+        for index in np.flatnonzero(_maybe_seen(target, parameters, outline, cameras,
+                                                partly=partly)):
+            if _seen_as_asked(_pose(target, parameters[index]), outline, cameras,
+                              partly=partly):
+                rng.bit_generator.state = before
+                rng.random((int(index) + 1, 6))  # the draws up to this one, no further
+                found: F64 = parameters[index]
+                return found
+    return None
 
 
 def _world_parameters(target: TargetSpec, cameras: tuple[CameraSpec, ...], count: int,
@@ -182,12 +262,11 @@ def _world_parameters(target: TargetSpec, cameras: tuple[CameraSpec, ...], count
     """Pose parameters (:func:`_random_parameters`) ``(count, 6)``, each fully in view of
     every camera (or deliberately partly); a slot whose draws all miss is drawn again."""
     outline = outline_in_target(target)
-    draw = partial(_world_draw, target, rng)
     chosen = []
     for _ in range(count):
         partly = rng.uniform() < target.motion.partial_view_probability
         for _round in range(MAX_ROUNDS):
-            found = _first_visible(draw, outline, cameras, partly=partly)
+            found = _first_visible_in_world(target, cameras, outline, rng, partly=partly)
             if found is not None:
                 chosen.append(found)
                 break

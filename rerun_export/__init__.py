@@ -17,7 +17,7 @@ if TYPE_CHECKING:
     from .paths import default_output
     from .scene import ScenePlan, plan_scene
     from .sink import RecordingSink
-    from .view import Reading, Viewer, ViewResult, view_logs
+    from .view import ViewResult, view_logs
 
 #: public name -> the module that defines it
 _MODULES = {
@@ -25,7 +25,7 @@ _MODULES = {
     "default_output": ".paths",
     **dict.fromkeys(("ScenePlan", "plan_scene"), ".scene"),
     "RecordingSink": ".sink",
-    **dict.fromkeys(("Reading", "ViewResult", "Viewer", "view_logs"), ".view"),
+    **dict.fromkeys(("ViewResult", "view_logs"), ".view"),
 }
 
 
@@ -35,13 +35,11 @@ __getattr__ = lazy_names(__name__, _MODULES, globals())
 
 __all__ = [
     "LoggerOptions",
-    "Reading",
     "RecordingSink",
     "RerunExportError",
     "SceneLogger",
     "ScenePlan",
     "ViewResult",
-    "Viewer",
     "ViewerError",
     "default_output",
     "plan_scene",

@@ -40,7 +40,6 @@ from .columns import ClearRow, PointsRow
 from .emitter import Emitter, Flush
 from .frames import CameraFrames
 from .images import image_archetype, is_keyframe, still_frame, video_sample
-from .options import LoggerOptions
 from .overlays import (
     CLASSES,
     edge_classes,
@@ -57,6 +56,17 @@ from .topics import Kind, Route
 __all__ = ["LoggerOptions", "SceneLogger"]
 
 Decoded = TypeVar("Decoded")
+
+
+@dataclass(frozen=True)
+class LoggerOptions:
+    """What to draw and how: ``every`` keeps every N-th image of a camera; ``jpeg_quality``
+    stores raw 8-bit images as JPEG; residual arrows are drawn ``residual_scale`` times long."""
+
+    every: int = 1
+    jpeg_quality: int | None = None
+    residual_scale: float = 50.0
+    ground_truth: bool = True
 
 #: draw orders: overlays above the image, the annotated calibration image between
 ORDER_DETECTIONS, ORDER_MASK, ORDER_EDGES = -9.0, -8.0, -7.0

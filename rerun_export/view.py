@@ -34,8 +34,7 @@ from .sink import Destination, RecordingSink
 from .survey import Survey, survey
 from .viewer import DEFAULT_PORT, LOCALHOST
 
-__all__ = ["ExportSession", "Reading", "ViewResult", "Viewer", "image_bytes", "open_logs",
-           "size_note", "view_logs"]
+__all__ = ["ExportSession", "ViewResult", "image_bytes", "open_logs", "size_note", "view_logs"]
 
 
 @dataclass(frozen=True)
@@ -125,45 +124,29 @@ def _session(readers: list[LogReader], chosen: list[list[str]], start_s: float |
                          found.duplicates, found)
 
 
-@dataclass(frozen=True)
-class Viewer:
-    """A live viewer to stream to instead of a file: a spawned one (listening on
-    ``bind:port``) or a running one at ``connect``."""
-
-    spawn: bool = False
-    connect: str | None = None
-    bind: str = LOCALHOST
-    port: int = DEFAULT_PORT
-
-
-@dataclass(frozen=True)
-class Reading:
-    """What is read of the logs: ``topics`` (names or globs; None: all), the window
-    ``start_s``..``end_s`` after the first message, damaged logs ``recover``-ed."""
-
-    topics: Sequence[str] | None = None
-    start_s: float | None = None
-    end_s: float | None = None
-    recover: bool = False
-
-
 def view_logs(
     paths: Sequence[Path],
     *,
     output: Path | None = None,
-    viewer: Viewer = Viewer(),
+    spawn: bool = False,
+    connect: str | None = None,
+    bind: str = LOCALHOST,
+    port: int = DEFAULT_PORT,
     overwrite: bool = False,
-    reading: Reading = Reading(),
+    topics: Sequence[str] | None = None,
+    start_s: float | None = None,
+    end_s: float | None = None,
+    recover: bool = False,
     options: LoggerOptions | None = None,
     progress: bool | None = None,
     say: Callable[[str], None] | None = None,
 ) -> ViewResult:
     """Export ``paths`` to an ``.rrd`` (default: the first log's name with ``.rrd``) or a
-    ``viewer``. ``progress``: None shows a bar only on a terminal. ``say`` is told, before
-    anything is written, how large the images will be."""
-    spawn, connect, bind, port = viewer.spawn, viewer.connect, viewer.bind, viewer.port
-    topics, start_s, end_s = reading.topics, reading.start_s, reading.end_s
-    recover = reading.recover
+    live viewer: a spawned one (``spawn``, listening on ``bind:port``) or a running one at
+    ``connect``. What is read: ``topics`` (names or globs; None: all), the window
+    ``start_s``..``end_s`` after the first message, damaged logs ``recover``-ed.
+    ``progress``: None shows a bar only on a terminal. ``say`` is told, before anything is
+    written, how large the images will be."""
     started = time.perf_counter()
     options = options or LoggerOptions()
     paths = [Path(p) for p in paths]

@@ -1,4 +1,6 @@
-"""Fixtures shared by every test package."""
+"""Fixtures shared by every test package, and the fast tier: a test is ``slow`` when it is
+marked so or uses a fixture tagged with :func:`tests.slow.renders` (directly or through
+other fixtures), so that ``pytest -m "not slow"`` runs only what takes no scene."""
 
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ from tests.recordings import (  # noqa: F401  (session fixtures: small logs made
     red_processed_log,
     resynced_log,
 )
+from tests.slow import uses_a_slow_fixture
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 
@@ -36,3 +39,10 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 def update_goldens(request: pytest.FixtureRequest) -> bool:
     """Whether ``--update-goldens`` asked to regenerate the golden outputs."""
     return bool(request.config.getoption("--update-goldens"))
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Mark ``slow`` every test that uses a fixture tagged with :func:`tests.slow.renders`."""
+    for item in items:
+        if uses_a_slow_fixture(item):
+            item.add_marker(pytest.mark.slow)

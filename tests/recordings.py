@@ -10,19 +10,16 @@ from pathlib import Path
 
 import pytest
 
-from camlog.cli import main
+from tests.cli import cli
+from tests.slow import renders
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "datasets" / "scenarios"
 LEFT = "/stereo_camera/left"
 RED_FRAMES = 20
 
 
-def cli(*argv: str) -> None:
-    """Run a camlog command that must succeed."""
-    assert main(list(argv)) == 0, argv
-
-
 @pytest.fixture(scope="session")
+@renders
 def red_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """red_block, 20 frames per camera at 320x240: scenario, camera_info, ground truth."""
     path = tmp_path_factory.mktemp("red") / "red.mcap"
@@ -41,6 +38,7 @@ def red_processed_log(red_log: Path) -> Path:
 
 
 @pytest.fixture(scope="session")
+@renders
 def mono_calibration_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """``camlog calibrate``'s calibration.mcap of 120 frames of mono_checkerboard (board
     held 0.1 s per pose, so about 40 poses) at 320x240."""
@@ -58,6 +56,7 @@ def mono_calibration_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture(scope="session")
+@renders
 def resynced_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """stereo_unsynced, 20 frames at 320x240, and its /stereo_sync pairs."""
     tmp = tmp_path_factory.mktemp("resynced")

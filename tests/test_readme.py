@@ -197,6 +197,7 @@ def folder(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return tmp_path_factory.mktemp("docs")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("block", [b for b in BLOCKS if b.skip is None],
                          ids=lambda b: f"{b.page}:{b.line}")
 def test_block_runs_and_writes_its_outputs(block: Block, folder: Path) -> None:

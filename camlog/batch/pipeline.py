@@ -64,12 +64,12 @@ from replay.bounded import read_text, toml_loads, yaml_load
 from replay.storage import Location
 
 from ..errors import PipelineError
-from ..requests.fields import RequestError, batch_keys
+from ..requests.fields import RequestError
 from ..requests.table import keyed, request_from_table
-from .steps import STEPS, StepKind, StepOutcome, keys_worded, step_processors
+from .steps import STEPS, StepKind, StepOutcome
 
-__all__ = ["STEPS", "Pipeline", "Step", "StepKind", "StepOutcome", "keys_worded",
-           "load_pipeline", "parse_pipeline", "run_step", "step_processors"]
+__all__ = ["STEPS", "Pipeline", "Step", "StepKind", "StepOutcome", "load_pipeline",
+           "parse_pipeline", "run_step"]
 
 
 @dataclass(frozen=True)
@@ -104,7 +104,7 @@ def run_step(step: Step, log: Location, out: Path, workers: int) -> StepOutcome:
     kind = STEPS[step.run]
     request = dataclasses.replace(step.request, **kind.given(log, out))
     try:
-        return kind.runner(request, step.options, out, workers)
+        return kind.runner(request, out, workers)
     except RequestError as err:  # found with the log (its cameras, the board's spacing)
         raise PipelineError(f"{step.run}: {keyed(err)}") from None
 
@@ -168,11 +168,8 @@ def parse_pipeline(raw: Any, source: str) -> Pipeline:
                                 f"(options: {', '.join(sorted(keys)) or 'none'})")
         for key, value in options.items():
             _check_value(where, key, value)
-        request_class = STEPS[kind].request
-        own = batch_keys(request_class)
-        request: Any = request_from_table(request_class,
-                                     {k: v for k, v in options.items() if k in own},
-                                     step=f"{where}: {kind}")
+        request: Any = request_from_table(STEPS[kind].request, options,
+                                          step=f"{where}: {kind}")
         steps.append(Step(name, kind, source_step, options, request))
     return Pipeline(tuple(steps), source)
 

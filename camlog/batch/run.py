@@ -22,12 +22,11 @@ from replay import storage
 from replay.storage import Location
 
 from ..errors import UsageError
+from ..requests.batch import DEFAULT_JOBS, BatchRequest
 from .jobs import BatchJob
-from .pipeline import Pipeline
+from .pipeline import Pipeline, load_pipeline
 
-ENGINES = ("process", "ray")
 SUMMARY_FILE = "batch_summary.json"
-DEFAULT_JOBS = 2
 
 
 def log_name(log: Location) -> str:
@@ -67,39 +66,16 @@ class BatchResult:
         return [s for s in self.statuses if s["status"] == "failed"]
 
 
-@dataclass(frozen=True)
-class Engine:
-    """Where the logs run: local processes or Ray (``name``); ``address``: an existing Ray
-    cluster (``host:port`` or ``auto``); ``cpus_per_log``: the CPUs each log's Ray task asks
-    for; ``retries``: how often a log whose worker or node died is run again."""
-
-    name: str = "process"
-    address: str | None = None
-    cpus_per_log: float = 1.0
-    retries: int = 2
-
-
-def run_batch(pipeline: Pipeline, logs: Sequence[Location], out_dir: Location, *,
-              jobs: int | None = None, engine: Engine = Engine(),
-              progress: bool | None = None) -> BatchResult:
-    """Run ``pipeline`` over ``logs`` on ``engine``; statuses come back in the order of
-    ``logs``.
-
-    ``jobs``: logs at once (default 2; on an existing Ray cluster, as many as its CPUs
-    hold).
-    """
-    address, cpus_per_log, retries = engine.address, engine.cpus_per_log, engine.retries
-    engine_name = engine.name
-    if engine_name not in ENGINES:
-        raise UsageError(f"unknown engine {engine_name!r} (use {' or '.join(ENGINES)})")
-    if jobs is not None and jobs < 1:
-        raise UsageError(f"-j must be at least 1, got {jobs}")
-    if cpus_per_log <= 0:
-        raise UsageError(f"--cpus-per-log must be positive, got {cpus_per_log}")
-    if retries < 0:
-        raise UsageError(f"--retries must be 0 or more, got {retries}")
-    if address is not None and engine_name != "ray":
-        raise UsageError("--address needs --engine ray")
+def run_batch(request: BatchRequest) -> BatchResult:
+    """Run the request's pipeline over its logs on its engine; statuses come back in the
+    order of the logs. On Ray without an address, ``RAY_ADDRESS`` names the cluster (else a
+    local instance starts)."""
+    pipeline = load_pipeline(request.pipeline)
+    engine_name, jobs, out_dir = request.engine, request.jobs, request.output
+    cpus_per_log, retries, progress = request.cpus_per_log, request.retries, request.progress
+    address = (request.address or os.environ.get("RAY_ADDRESS") or None) \
+        if engine_name == "ray" else None
+    logs: Sequence[Location] = request.logs
     logs = [found for log in logs for found in storage.expand(str(log))] \
         if any(storage.is_remote(log) for log in logs) else logs
     if not logs:

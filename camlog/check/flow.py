@@ -16,7 +16,6 @@ command's exit status is that of its worst log (:func:`exit_status`).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -30,6 +29,7 @@ from processors.time_offset.features import track_rows
 from processors.time_offset.interpolation import lagrange_weights
 from replay.camera import CameraModel
 from replay.formats import open_reader
+from replay.progress import progress_bar
 
 from ..errors import InputError
 from ..requests.check import CheckRequest
@@ -154,9 +154,9 @@ class _Window:
     reprojection_px: list[float] = field(default_factory=list)
 
 
-def check_drift(log: Path | str, options: CheckOptions,
-              on_window: Callable[[], None] | None = None) -> LogCheck:
-    """Check one log (a path or an object-storage URI)."""
+def check_drift(log: Path | str, options: CheckOptions, *,
+                progress: bool | None = False) -> LogCheck:
+    """Check one log (a path or an object-storage URI); the bar counts the log's seconds."""
     with open_reader(log) as reader:
         checks, unchecked = checkable(reader, cameras=options.cameras, board=options.board,
                                       calibration=options.calibration)
@@ -165,17 +165,22 @@ def check_drift(log: Path | str, options: CheckOptions,
                                    / options.window_s - 1e-9))
         seen = [[_Window() for _ in range(windows)] for _ in checks]
         matchers = [StereoMatcher(*c.infos) if c.kind == "stereo" else None for c in checks]
-        for sample in samples(reader, checks, rate_hz=options.rate_hz):
-            index = min(windows - 1, int((sample.log_time_ns - start_ns) * 1e-9
-                                         / options.window_s))
-            window = seen[sample.check][index]
-            matcher = matchers[sample.check]
-            if matcher is not None:
-                window.matches.append(_pair_matches(matcher, sample))
-            else:
-                _board_view(window, sample.grays[0], checks[sample.check], options.board)
-            if on_window is not None:
-                on_window()
+        span_s = math.ceil(((reader.end_ns or start_ns) - start_ns) * 1e-9)
+        with progress_bar(total=span_s, unit="s", desc=f"check {Path(str(log)).name}",
+                          progress=progress) as bar:
+            shown_s = 0
+            for sample in samples(reader, checks, rate_hz=options.rate_hz):
+                at_s = (sample.log_time_ns - start_ns) * 1e-9
+                index = min(windows - 1, int(at_s / options.window_s))
+                window = seen[sample.check][index]
+                matcher = matchers[sample.check]
+                if matcher is not None:
+                    window.matches.append(_pair_matches(matcher, sample))
+                else:
+                    _board_view(window, sample.grays[0], checks[sample.check], options.board)
+                if int(at_s) > shown_s:
+                    bar.update(int(at_s) - shown_s)
+                    shown_s = int(at_s)
     series: list[Series] = []
     for check, found in zip(checks, seen, strict=True):
         if check.kind == "stereo":

@@ -17,17 +17,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Check every log, write the report and print one line per log; the exit status says
     whether any drifted (:func:`camlog.check.flow.exit_status`)."""
-    from ..check.flow import check_drift, exit_status, options_of
-    from ..check.report import write_report
+    from ..check.flow import exit_status
+    from ..check.run import check_logs
 
     request = request_from_args(CheckRequest, args)
-    options = options_of(request)
-    checks = []
-    for log in request.logs:
-        checked = check_drift(log, options)
-        print(checked.summary(), flush=True)
-        checks.append(checked)
-    write_report(checks, request.output)
+    done = check_logs(request, on_log=lambda checked: print(checked.summary(), flush=True))
     print(f"wrote {request.output / 'check.csv'}, {request.output / 'report.md'} and "
           f"{request.output / 'check.rrd'}")
-    return exit_status(checks)
+    return exit_status(done.checks)

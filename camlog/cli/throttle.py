@@ -7,31 +7,23 @@ decode of pixels, no re-encoding), and every other topic is copied whole.
 from __future__ import annotations
 
 import argparse
-import dataclasses
-
-from processors.registry import spec_of
 
 from ..requests.arguments import request_from_args
 from ..requests.processing import ThrottleRequest
 from .args import add_request
-from .processor_args import add_processor_arguments, chosen_processors, worded
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
     """Register the ``throttle`` arguments."""
     add_request(p, ThrottleRequest)
-    add_processor_arguments(p, [spec_of("throttle")], required=True)
 
 
 def run(args: argparse.Namespace) -> int:
     """Thin the topics with the throttle the command line configured."""
     from ..processing.process_log import process_log
 
-    spec = spec_of("throttle")
-    request = dataclasses.replace(request_from_args(ThrottleRequest, args),
-                                  processors=tuple(chosen_processors(args, [spec])))
-    with worded({spec.name: spec}):
-        result = process_log(request.processing())
+    request = request_from_args(ThrottleRequest, args)
+    result = process_log(request.processing())
     print(f"kept {result.frames_processed} of {result.frames_read} messages of "
           f"{', '.join(request.topic)} in {result.wall_s:.2f} s")
     print(f"wrote {result.output}")

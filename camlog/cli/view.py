@@ -24,19 +24,16 @@ def run(args: argparse.Namespace) -> int:
                   live=request.spawn or request.connect is not None, overwrite=request.overwrite)
     if getattr(args, "as_program", False):
         without_pandas()
-    from rerun_export import LoggerOptions, Reading, Viewer, view_logs
+    from rerun_export import LoggerOptions, view_logs
 
     options = LoggerOptions(every=request.every, jpeg_quality=request.jpeg_quality,
                             residual_scale=request.residual_scale,
                             ground_truth=request.ground_truth)
     result = view_logs(
-        request.logs, output=request.output,
-        viewer=Viewer(spawn=request.spawn, connect=request.connect, bind=request.bind,
-                      port=request.port),
-        overwrite=request.overwrite,
-        reading=Reading(topics=request.topics, start_s=request.start, end_s=request.end,
-                        recover=request.recover),
-        options=options, progress=request.progress, say=print)
+        request.logs, output=request.output, spawn=request.spawn, connect=request.connect,
+        bind=request.bind, port=request.port, overwrite=request.overwrite,
+        topics=request.topics, start_s=request.start, end_s=request.end,
+        recover=request.recover, options=options, progress=request.progress, say=print)
     images = sum(n for entity, n in result.counts.items() if entity.endswith("/image"))
     print(f"logged {result.messages} messages ({images} images, {len(result.cameras)} cameras: "
           f"{', '.join(result.cameras) or 'none'}) in {result.wall_s:.2f} s")

@@ -33,6 +33,7 @@ from replay.topics import SCENARIO, read_record
 
 from ..errors import GoldenError
 from ..requests.calibrate import CalibrateRequest
+from ..requests.golden import GoldenRequest
 from ..requests.processing import ProcessRequest, ResyncRequest
 from .artifacts import (
     Artifacts,
@@ -49,6 +50,7 @@ __all__ = [
     "Artifacts",
     "Difference",
     "GoldenInput",
+    "GoldenRun",
     "artifacts_equal",
     "check",
     "compare",
@@ -58,6 +60,7 @@ __all__ = [
     "opencv_threads",
     "record_inputs",
     "regenerate",
+    "run_golden",
     "update",
     "verify_inputs",
 ]
@@ -303,3 +306,34 @@ def regenerate(inputs_dir: Path, expected_dir: Path, *, work_dir: Path | None = 
     """Verify, compute and :func:`update` the expected outputs; what changed, per line."""
     artifacts, stems = _computed(inputs_dir, work_dir, workers, only)
     return update(expected_dir, artifacts, stems=stems)
+
+
+@dataclass(frozen=True)
+class GoldenRun:
+    """What a golden request did: the inputs' and the expected outputs' folders, the lines
+    ``record`` and ``update`` report, and the differences ``check`` found."""
+
+    inputs: Path
+    expected: Path
+    lines: list[str] = field(default_factory=list)
+    differences: list[Difference] = field(default_factory=list)
+
+
+def run_golden(request: GoldenRequest) -> GoldenRun:
+    """Check, update or re-record the goldens, as the request's ``action`` says; rewriting
+    the committed files needs a checkout (or ``inputs`` given)."""
+    if request.action != "check" and request.inputs is None and not in_checkout():
+        raise GoldenError(
+            f"camlog golden {request.action} rewrites the committed golden files: run it in a "
+            "camlog checkout (they live in datasets/golden there), or give --inputs DIR")
+    inputs = request.inputs or golden_dir()
+    expected = request.expected or inputs / "expected"
+    only = list(request.only) or None
+    if request.action == "record":
+        return GoldenRun(inputs, expected, record_inputs(inputs, only))
+    if request.action == "update":
+        return GoldenRun(inputs, expected, regenerate(inputs, expected, work_dir=request.work_dir,
+                                                      workers=request.workers, only=only))
+    return GoldenRun(inputs, expected, differences=check(
+        inputs, expected, diff_dir=request.diff_dir, work_dir=request.work_dir,
+        workers=request.workers, only=only))

@@ -9,6 +9,7 @@ their encoding and size. :func:`format_summary` renders the result as text.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import io
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -21,13 +22,16 @@ from replay.buffer_layout import check_buffer
 from replay.errors import ReplayError
 from replay.formats.base import ROS_SERIALIZATIONS, LogReader, RawMessage
 from replay.msgtypes import CAMERA_INFO, CAMERA_INFO_TYPES, CDR, DECODABLE, FRAME_TYPES, IMAGE
+from replay.progress import progress_bar
 from replay.sizes import bytes_on_disk, format_size
 
 if TYPE_CHECKING:
     from replay.frames import FrameStream
 
-__all__ = ["FrameCheck", "LogSummary", "TopicSummary", "format_size", "format_summary",
-           "size_on_disk", "summarize"]
+    from ..requests.logs import InfoRequest
+
+__all__ = ["FrameCheck", "InfoReport", "LogSummary", "TopicSummary", "describe_log",
+           "format_size", "format_summary", "size_on_disk", "summarize"]
 
 #: topics whose first messages lie this close in log time are read together
 FIRST_MESSAGES_WINDOW_NS = 1_000_000_000
@@ -97,10 +101,12 @@ class LogSummary:
         return (self.end_ns - self.start_ns) / 1e9
 
 
-def summarize(reader: LogReader, *, verify: bool = False) -> LogSummary:
+def summarize(reader: LogReader, *, verify: bool = False,
+              progress: bool | None = False) -> LogSummary:
     """Summary of an open log; reads the index, or (``verify``, or a log without one) every
-    raw message once, which finds damage anywhere in the log; ``verify`` also decodes every
-    image frame and counts those that do not decode, else few messages are decoded."""
+    raw message once, which finds damage anywhere in the log (the bar counts them);
+    ``verify`` also decodes every image frame and counts those that do not decode, else few
+    messages are decoded."""
     counts: dict[str, int] = {}
     first_ns: dict[str, int] = {}
     last_ns: dict[str, int] = {}
@@ -122,17 +128,20 @@ def summarize(reader: LogReader, *, verify: bool = False) -> LogSummary:
         for raw in first_messages(reader, described):
             details[raw.topic] = describe(reader, raw)
     else:
-        for raw in reader.raw_messages():
-            topic = raw.topic
-            counts[topic] = counts.get(topic, 0) + 1
-            if topic not in first_ns:
-                first_ns[topic] = raw.log_time_ns
-                detail = _detail(reader, raw)
-                if detail is not None:
-                    details[topic] = detail
-            last_ns[topic] = raw.log_time_ns
-            if check is not None and raw.msgtype in FRAME_TYPES:
-                check(reader, raw)
+        with progress_bar(total=reader.message_count, unit="msg", desc="read",
+                          progress=progress) as bar:
+            for raw in reader.raw_messages():
+                bar.update()
+                topic = raw.topic
+                counts[topic] = counts.get(topic, 0) + 1
+                if topic not in first_ns:
+                    first_ns[topic] = raw.log_time_ns
+                    detail = _detail(reader, raw)
+                    if detail is not None:
+                        details[topic] = detail
+                last_ns[topic] = raw.log_time_ns
+                if check is not None and raw.msgtype in FRAME_TYPES:
+                    check(reader, raw)
     msgtypes = {name: info.msgtype for name, info in reader.topics.items()}
     topics = tuple(
         TopicSummary(
@@ -331,3 +340,36 @@ def format_summary(summary: LogSummary) -> str:
         lines.append(("  " + "  ".join(cells)).rstrip())
     lines.extend(f"warning: {warning}" for warning in summary.warnings)
     return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class InfoReport:
+    """What ``camlog info`` says: its text (the summary, or a folder's unfinished outputs)
+    and what is wrong with the log (damage, recovery, unfinished outputs beside it)."""
+
+    text: str
+    warnings: tuple[str, ...] = ()
+
+
+def describe_log(request: InfoRequest) -> InfoReport:
+    """The summary of the request's log; for a folder that is not a log, the temporary
+    outputs unfinished camlog runs left in it."""
+    from replay.errors import LogFormatError
+    from replay.formats import detect_format, open_reader
+    from replay.leftovers import describe_leftovers, format_leftovers, leftovers_in, leftovers_of
+
+    log = Path(request.log)
+    if log.is_dir():
+        try:
+            detect_format(log)
+        except LogFormatError as err:
+            leftovers = leftovers_in(log)
+            if not leftovers:
+                raise LogFormatError(f"{err}, and holds no output an unfinished camlog run "
+                                     "left") from None
+            return InfoReport(format_leftovers(log, leftovers))
+    with open_reader(log, recover=request.recover) as reader:
+        summary = summarize(reader, verify=request.verify, progress=request.progress)
+    inside = leftovers_in(log) if log.is_dir() else []
+    return InfoReport(format_summary(dataclasses.replace(summary, warnings=())),
+                      (*summary.warnings, *describe_leftovers(inside + leftovers_of(log))))

@@ -15,13 +15,13 @@ from processors.spec import Configured
 from replay.msgtypes import COMPRESSED_IMAGE, IMAGE
 
 from ..errors import UsageError
-from ..requests.processing import CHAPTER_NS, COMPRESSIONS
+from ..requests.processing import CHAPTER_NS
 
 if TYPE_CHECKING:  # the command line imports this module: records load numpy
     from replay.records import ProcessedOutput
 
 
-__all__ = ["CHAPTER_NS", "COMPRESSIONS", "input_namespace", "output_namespace", "plan_outputs"]
+__all__ = ["CHAPTER_NS", "input_namespace", "output_namespace", "plan_outputs"]
 
 
 

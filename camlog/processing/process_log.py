@@ -19,12 +19,13 @@ from collections.abc import Mapping, Sequence
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import cv2
 
 from processors.base import Processor
-from processors.errors import ProcessorError
-from processors.spec import Configured, OptionKind
+from processors.errors import OptionValueError, ProcessorError
+from processors.spec import Configured
 from processors.throttle import Throttle
 from replay._version import VERSION
 from replay.atomic import check_not_input
@@ -32,13 +33,14 @@ from replay.errors import EncodingError, ReplayError, UnsupportedEncodingError
 from replay.formats import LogReader, LogWriter, RawMessage, open_reader, open_writer
 from replay.frames import Frame, FrameStream, decode_frame, encode_compressed
 from replay.messages import CompressedVideo, Image, Message
+from replay.progress import progress_bar
 from replay.records import ProcessedOutput, ProcessedOutputs
 from replay.storage import local_paths
 from replay.topics import PROCESSED
 from replay.wire import msgtype_of, serialize
 
-from ..errors import ProcessingError, UsageError
-from ..requests.processing import ProcessRequest
+from ..errors import ProcessingError
+from ..requests.processing import ProcessRequest, option_error
 from .checks import (
     IMAGE_TYPES,
     STAMPED_TYPES,
@@ -46,7 +48,7 @@ from .checks import (
     require_messages,
     require_topic,
 )
-from .outputs import COMPRESSIONS, plan_outputs
+from .outputs import plan_outputs
 
 
 @dataclass(frozen=True)
@@ -132,23 +134,6 @@ class _Counts:
     pending: deque[tuple[_TopicRun, Future[list[RawMessage] | None]]] = field(default_factory=deque)
 
 
-def _check_options(processors: Sequence[Configured], topics: Sequence[str],
-                   compress: str | None, thin: bool) -> None:
-    if not processors:
-        raise UsageError("no processor chosen")
-    if not topics or len(set(topics)) != len(topics):
-        raise UsageError("give each topic to process once")
-    for configured in processors:
-        if len(topics) > 1 and any(o.kind is OptionKind.CAMERA_INFO
-                                   for o in configured.spec.options):
-            raise UsageError(f"{configured.name} takes one camera's calibration: process "
-                              "one topic with it per run")
-    if thin and any(not c.spec.selects for c in processors):
-        raise UsageError("thinning passes frames through: use only selecting processors")
-    if compress is not None and compress not in COMPRESSIONS:
-        raise UsageError(f"unknown compression {compress!r} (use {' or '.join(COMPRESSIONS)})")
-
-
 def _record(plans: Mapping[str, list[list[tuple[str, ProcessedOutput]]]],
             processors: Sequence[Configured]) -> ProcessedOutputs:
     outputs = [o for per_topic in plans.values() for per in per_topic for _, o in per]
@@ -157,6 +142,15 @@ def _record(plans: Mapping[str, list[list[tuple[str, ProcessedOutput]]]],
 
 
 def process_log(request: ProcessRequest) -> ProcessResult:
+    """Run the request's processors over its topics (:func:`_process_log`); a processor's
+    option error is worded as the request's."""
+    try:
+        return _process_log(request)
+    except OptionValueError as err:
+        raise option_error(ProcessRequest, err) from None
+
+
+def _process_log(request: ProcessRequest) -> ProcessResult:
     """Run ``processors`` over the ``topic`` list of the request's log and write its ``output``
     atomically.
 
@@ -173,7 +167,7 @@ def process_log(request: ProcessRequest) -> ProcessResult:
     fmt, overwrite, workers, recover = (request.format, request.overwrite, request.workers,
                                         request.recover)
     started = time.perf_counter()
-    _check_options(processors, topics, compress, thin)
+    request.require_processors()
     check_not_input(output, local_paths(input_path))
     computing = [c for c in processors if not c.spec.selects]
     plans = plan_outputs(topics, computing, output_ns=output_ns, compress=compress)
@@ -198,8 +192,10 @@ def process_log(request: ProcessRequest) -> ProcessResult:
             if computing:
                 _warm_up(reader, jobs)
                 writer.write(PROCESSED, record.to_message(), log_time_ns=reader.start_ns or 0)
-            counts = _stream(reader, writer, jobs, workers=workers, drop_input=drop_input,
-                             thin=thin, max_frames=max_frames)
+            with progress_bar(total=reader.message_count, unit="msg", desc="process",
+                              progress=request.progress) as bar:
+                counts = _stream(reader, writer, jobs, workers=workers, drop_input=drop_input,
+                                 thin=thin, max_frames=max_frames, bar=bar)
     return ProcessResult(output, counts.read, counts.processed, counts.written + bool(computing),
                          time.perf_counter() - started, tuple(record.outputs),
                          {t: s.undecodable for t, s in jobs.items() if s.undecodable})
@@ -222,7 +218,7 @@ def _warm_up(reader: LogReader, jobs: Mapping[str, _TopicRun]) -> None:
 
 
 def _stream(reader: LogReader, writer: LogWriter, jobs: Mapping[str, _TopicRun], *, workers: int,
-            drop_input: bool, thin: bool, max_frames: int | None) -> _Counts:
+            drop_input: bool, thin: bool, max_frames: int | None, bar: Any) -> _Counts:
     """The copy-and-process pass over the log."""
     counts = _Counts()
     in_flight = 2 * workers + 2
@@ -247,6 +243,7 @@ def _stream(reader: LogReader, writer: LogWriter, jobs: Mapping[str, _TopicRun],
     with ThreadPoolExecutor(workers, thread_name_prefix="camlog-process") as pool:
         try:
             for raw in reader.raw_messages():
+                bar.update()
                 state = jobs.get(raw.topic)
                 if state is None:
                     copy(raw)

@@ -17,6 +17,7 @@ import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -33,6 +34,7 @@ from replay.messages import (
     Message,
     PointStamped,
 )
+from replay.progress import progress_bar
 from replay.records import ResyncStats, TimeOffset
 from replay.storage import local_paths
 from replay.topics import ResyncTopics
@@ -233,9 +235,12 @@ def resync_log(request: ResyncRequest) -> ResyncResult:
                                 [pairing.left_index, pairing.right_index])
         with open_writer(output, fmt=fmt, overwrite=overwrite,
                          inputs=local_paths(input_path)) as writer:
-            stats = dataclasses.replace(stats, peak_buffered_messages=_write_pairs(
-                reader, writer=writer, sides=sides, pair_of=pair_of, needed=needed,
-                common_ns=common_ns.tolist(), offset_topic=offset_topic, moved_ns=moved_ns))
+            with progress_bar(total=reader.message_count, unit="msg", desc="resync",
+                              progress=request.progress) as bar:
+                stats = dataclasses.replace(stats, peak_buffered_messages=_write_pairs(
+                    reader, writer=writer, sides=sides, pair_of=pair_of, needed=needed,
+                    common_ns=common_ns.tolist(), offset_topic=offset_topic, bar=bar,
+                    moved_ns=moved_ns))
             writer.write(stats_topic, stats.to_message(),
                          log_time_ns=reader.end_ns or int(common_ns[-1]))
     return ResyncResult(output, stats, time.perf_counter() - started, offset_file)
@@ -267,6 +272,7 @@ def _write_pairs(
     needed: list[set[tuple[int, str]]],
     common_ns: list[int],
     offset_topic: str,
+    bar: Any,
     moved_ns: int,
 ) -> int:
     """Pass 2: copy everything, write each pair once complete; returns the peak buffer
@@ -281,6 +287,7 @@ def _write_pairs(
     info_used: list[set[int]] = [set(), set()]
     buffered = peak = 0
     for raw in reader.raw_messages():
+        bar.update()
         writer.write_raw(raw)
         role = roles.get(raw.topic)
         if role is None:

@@ -15,14 +15,20 @@ R = TypeVar("R")
 
 
 def add_request_arguments(parser: argparse.ArgumentParser, request: type) -> None:
-    """One argument per declared field of ``request`` (its ``dest`` is the field's name)."""
+    """One argument per declared field of ``request`` (its ``dest`` is the field's name),
+    under its help group's heading when it has one."""
+    headings: dict[str, Any] = {}
     groups: dict[str, Any] = {}
     for field in request_fields(request):
         arg = arg_of(field)
         where: Any = parser
+        if arg.group:
+            if arg.group not in headings:
+                headings[arg.group] = parser.add_argument_group(arg.group, arg.group_help or None)
+            where = headings[arg.group]
         if arg.exclusive:
             if arg.exclusive not in groups:
-                groups[arg.exclusive] = parser.add_mutually_exclusive_group()
+                groups[arg.exclusive] = where.add_mutually_exclusive_group()
             where = groups[arg.exclusive]
         kwargs: dict[str, Any] = {"help": arg.help}
         if arg.flags:

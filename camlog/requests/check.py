@@ -9,6 +9,7 @@ from typing import ClassVar
 
 from processors.calibration.patterns import PATTERNS
 
+from . import fields as common
 from .fields import RequestError, option
 from .values import number, positive
 
@@ -58,6 +59,7 @@ class CheckRequest:
                                   help="a board in view: its square side in metres")
     pattern: str = option("chessboard", "-p", "--pattern", choices=PATTERNS,
                           help="the board's kind (default chessboard)")
+    progress: bool | None = common.progress()
 
     def __post_init__(self) -> None:
         if (self.size is None) != (self.square is None):

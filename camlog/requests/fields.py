@@ -21,9 +21,9 @@ from ..errors import UsageError
 from .values import bounded_int, name, non_negative, output_path
 
 __all__ = ["Arg", "RequestError", "arg_of", "batch_keys", "bind", "connect", "end", "flag_words",
-           "input_log", "log_format", "option", "output", "overwrite", "port", "progress",
-           "recover", "request_fields", "required", "spawn", "start", "topics", "viewer_output",
-           "workers"]
+           "input_log", "key_of", "log_format", "option", "output", "overwrite", "port",
+           "progress", "recover", "request_fields", "required", "spawn", "start", "topics",
+           "viewer_output", "workers"]
 
 #: the metadata key of a field's :class:`Arg`
 ARG = "arg"
@@ -39,20 +39,25 @@ class Arg:
     group of options that may not be given together. ``batch`` False: a pipeline step does
     not take it as a key (the batch runner sets it: input, output, overwrite, progress).
     ``required``: the command line needs it although the field has a default (a runner
-    sets it otherwise).
+    sets it otherwise). ``key``: how a pipeline step names it (default: the field's name;
+    ``edges.low`` is the key ``low`` of the table ``edges = {...}``). ``group``: the heading
+    it is listed under in help (``group_help``: that group's description).
     """
 
     flags: tuple[str, ...] = ()
     help: str = ""
     metavar: str | None = None
     type: Callable[[str], Any] | None = None
-    choices: tuple[str, ...] | None = None
+    choices: tuple[Any, ...] | None = None
     action: str = "store"
     nargs: str | None = None
     const: Any = None
     exclusive: str = ""
     batch: bool = True
     required: bool = False
+    key: str = ""
+    group: str = ""
+    group_help: str = ""
 
 
 def option(default: Any, *flags: str, **arg: Any) -> Any:
@@ -84,9 +89,16 @@ def request_fields(request: type) -> tuple[dataclasses.Field[Any], ...]:
     return tuple(f for f in dataclasses.fields(request) if ARG in f.metadata)
 
 
+def key_of(field: dataclasses.Field[Any]) -> str:
+    """How a pipeline step names a request field: its :attr:`Arg.key`, or its name."""
+    return arg_of(field).key or field.name
+
+
 def batch_keys(request: type) -> frozenset[str]:
-    """The keys a pipeline step of ``request`` takes: its fields the runner does not set."""
-    return frozenset(f.name for f in request_fields(request) if arg_of(f).batch)
+    """The keys a pipeline step of ``request`` takes: its fields the runner does not set
+    (a dotted key is a key of a table, ``edges.low`` of ``edges = {low = ...}``)."""
+    return frozenset(key_of(f) for f in request_fields(request)
+                     if arg_of(f).batch and "." not in key_of(f))
 
 
 class RequestError(UsageError):

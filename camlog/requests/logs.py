@@ -28,6 +28,7 @@ class InfoRequest:
     verify: bool = option(False, "--verify", action="store_true",
                           help="read every message (checksums included) instead of the log's "
                                "index, so that damage anywhere is found")
+    progress: bool | None = common.progress()
 
 
 @dataclass(frozen=True, kw_only=True)

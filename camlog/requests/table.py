@@ -9,7 +9,7 @@ from collections.abc import Mapping
 from typing import Any, TypeVar
 
 from ..errors import PipelineError
-from .fields import Arg, RequestError, arg_of, batch_keys, request_fields
+from .fields import Arg, RequestError, arg_of, batch_keys, key_of, request_fields
 
 __all__ = ["keyed", "request_from_table", "table_value"]
 
@@ -51,22 +51,33 @@ def _one(arg: Arg, value: Any) -> Any:
 
 def request_from_table(request: type[R], table: Mapping[str, Any], *, step: str,
                        **given: Any) -> R:
-    """``request`` from a step's ``table`` (key = field name) and what the runner ``given``
-    (input, output, overwrite, progress). Errors: :class:`PipelineError` ``STEP: KEY: ...``.
+    """``request`` from a step's ``table`` (keys: :func:`~.fields.key_of`; a table value
+    gives the keys of a table, ``edges = {low = 40}``) and what the runner ``given`` (input,
+    output, overwrite, progress). Errors: :class:`PipelineError` ``STEP: KEY: ...``.
     """
     allowed = batch_keys(request)
-    fields = {f.name: f for f in request_fields(request)}
+    fields = {key_of(f): f for f in request_fields(request) if arg_of(f).batch}
     values: dict[str, Any] = {}
     for key, value in table.items():
         if key not in allowed:
             raise PipelineError(f"{step}: no option {key!r} (options: "
                                 f"{', '.join(sorted(allowed)) or 'none'})")
-        try:
-            values[key] = table_value(arg_of(fields[key]), value)
-        except ValueError as err:
-            raise PipelineError(f"{step}: {key}: {err}") from None
-    missing = [name for name in sorted(allowed) if name not in values
-               and fields[name].default is dataclasses.MISSING]
+        inner = sorted(k.partition(".")[2] for k in fields if k.startswith(f"{key}."))
+        if inner and isinstance(value, dict):
+            values[fields[key].name] = True
+            for sub, item in value.items():
+                if sub not in inner:
+                    raise PipelineError(f"{step}: {key}.{sub}: no such option (options: "
+                                        f"{', '.join(inner)})")
+                values[fields[f"{key}.{sub}"].name] = _value(fields[f"{key}.{sub}"], item,
+                                                              f"{step}: {key}.{sub}")
+        elif inner and not isinstance(value, bool):
+            raise PipelineError(f"{step}: {key}: expected true, false or a table of its "
+                                f"options ({', '.join(inner)}), got {value!r}")
+        else:
+            values[fields[key].name] = _value(fields[key], value, f"{step}: {key}")
+    missing = [key for key in sorted(allowed) if fields[key].name not in values
+               and fields[key].default is dataclasses.MISSING]
     if missing:
         raise PipelineError(f"{step}: give {' and '.join(missing)}")
     try:
@@ -75,6 +86,13 @@ def request_from_table(request: type[R], table: Mapping[str, Any], *, step: str,
         raise PipelineError(f"{step}: {keyed(err)}") from None
 
 
+def _value(field: dataclasses.Field[Any], value: Any, where: str) -> Any:
+    try:
+        return table_value(arg_of(field), value)
+    except ValueError as err:
+        raise PipelineError(f"{where}: {err}") from None
+
+
 def keyed(err: RequestError) -> str:
     """A request's error worded with pipeline keys (the field names)."""
-    return err.worded({f.name: f.name for f in request_fields(err.request)})
+    return err.worded({f.name: key_of(f) for f in request_fields(err.request)})

@@ -7,9 +7,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
+
 from benchmarks.fleet_check import ONSET_S, judge, plan_fleet, run_fleet
 
 
+@pytest.mark.slow
 def test_a_small_fleet_is_judged_alike_on_both_engines(tmp_path: Path) -> None:
     fleet = plan_fleet(6, drifted=2, seed=1, axes=("pitch", "roll"))
     assert sorted(log.drift.axis for log in fleet if log.drift) == ["pitch", "roll"]

@@ -1,4 +1,5 @@
-"""Simulated calibration recordings shared by the CLI tests: each is rendered once per session.
+"""Simulated calibration recordings shared by the camlog tests, each rendered once per
+session, and calibrations of them made by the flow (``calibrate_log``).
 
 The scenarios hold the board 0.5 s per pose; these variants hold it 0.1 s (3 frames at
 30 Hz), so a few hundred frames show about a hundred poses, at the 640x480 the calibration
@@ -7,11 +8,16 @@ accuracy is stated for.
 
 from __future__ import annotations
 
+import json
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pytest
 
-from camlog.cli import main
+from replay.records import CalibrationSummary, CameraSummary
+from tests.cli import cli
+from tests.slow import renders
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "datasets" / "scenarios"
 HOLD = "hold_s = 0.5"
@@ -30,12 +36,13 @@ def spec_variant(name: str, folder: Path, replacements: dict[str, str]) -> Path:
 
 
 def record(spec: Path | str, output: Path, *options: str) -> Path:
-    assert main(["record", str(spec), "-o", str(output), "--resolution", "640x480",
-                 "--no-progress", *options]) == 0
+    """``camlog record`` of a spec at 640x480 into ``output``."""
+    cli("record", spec, "-o", output, "--resolution", "640x480", "--no-progress", *options)
     return output
 
 
 @pytest.fixture(scope="session")
+@renders
 def rig_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """stereo_checkerboard, 330 frames per camera: 110 poses seen by an ideal 0.02 m rig."""
     tmp = tmp_path_factory.mktemp("rig")
@@ -44,6 +51,7 @@ def rig_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture(scope="session")
+@renders
 def plumb_bob_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """mono_checkerboard through a k1 = -0.2, k2 = 0.05 lens, 330 frames (110 poses)."""
     tmp = tmp_path_factory.mktemp("plumb_bob")
@@ -53,6 +61,7 @@ def plumb_bob_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture(scope="session")
+@renders
 def unsynced_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """stereo_unsynced (own stamps, 7 ms phase, jitter, drops), 120 frames (40 poses), and
     the board cut by the image border in 30 % of the poses."""
@@ -63,10 +72,66 @@ def unsynced_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 @pytest.fixture(scope="session")
+@renders
 def few_poses_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """mono_checkerboard as built in (0.5 s per pose), 30 frames: two board poses."""
     tmp = tmp_path_factory.mktemp("few_poses")
     return record("mono_checkerboard", tmp / "few.mcap", "--frames", "30")
+
+
+# --- calibrations of those recordings, made by the flow ----------------------------------------
+
+LEFT, RIGHT = "/stereo_camera/left", "/stereo_camera/right"
+
+
+@dataclass(frozen=True)
+class Calibrated:
+    """A calibration's output folder and its summary (what calibration.json holds)."""
+
+    folder: Path
+    summary: CalibrationSummary
+
+    def camera(self, namespace: str) -> CameraSummary:
+        """The summary of one calibrated camera."""
+        (camera,) = (c for c in self.summary.cameras if c.namespace == namespace)
+        return camera
+
+
+def scenario(log: Path) -> dict[str, Any]:
+    """The log's scenario record (``/camlog/scenario``) as JSON data."""
+    from replay import Text, open_reader
+
+    with open_reader(log) as reader:
+        (record,) = list(reader.messages(["/camlog/scenario"]))
+    assert isinstance(record.message, Text)
+    data: dict[str, Any] = json.loads(record.message.data)
+    return data
+
+
+def calibrate(log: Path, output: Path, **fields: Any) -> Calibrated:
+    """``calibrate_log`` of a 7x6 board of 0.01 m squares (unless ``fields`` say otherwise)
+    into ``output``, without progress bars."""
+    from camlog.calibrate.flow import calibrate_log
+    from camlog.requests.calibrate import CalibrateRequest
+
+    request = CalibrateRequest(**{"log": log, "output": output, "size": "7x6", "square": 0.01,
+                                  "progress": False, **fields})
+    run = calibrate_log(request)
+    return Calibrated(run.output_dir, run.summary)
+
+
+@pytest.fixture(scope="session")
+def rig_left(rig_log: Path, tmp_path_factory: pytest.TempPathFactory) -> Calibrated:
+    """The rig's left camera alone, default options (tangential distortion if the views
+    show it: this simulated lens has none)."""
+    return calibrate(rig_log, tmp_path_factory.mktemp("calibrated") / "mono", camera=(LEFT,))
+
+
+@pytest.fixture(scope="session")
+def rig_stereo(rig_log: Path, tmp_path_factory: pytest.TempPathFactory) -> Calibrated:
+    """The rig as a stereo pair."""
+    return calibrate(rig_log, tmp_path_factory.mktemp("calibrated") / "stereo", left=LEFT,
+                     right=RIGHT)
 
 
 @pytest.fixture(scope="session")

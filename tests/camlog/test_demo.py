@@ -11,6 +11,7 @@ from camlog.cli import main
 from replay import open_reader
 
 
+@pytest.mark.slow
 def test_demo_runs_every_step_and_says_where_outputs_went(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -37,6 +38,7 @@ def test_demo_runs_every_step_and_says_where_outputs_went(
     assert main(["demo", "-o", str(out), "--duration", "4", "--no-progress"]) == 0
 
 
+@pytest.mark.slow
 def test_demo_rejects_a_bad_duration_in_one_line(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

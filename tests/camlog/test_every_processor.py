@@ -102,6 +102,7 @@ def test_process_records_and_view_draws_every_output(spec: ProcessorSpec,
         assert rec.count(entity, column) == FRAMES, (entity, sorted(rec.rows))
 
 
+@pytest.mark.slow
 def test_a_pipeline_runs_every_processor(tiny: tuple[Path, Path], tmp_path: Path) -> None:
     log, yaml = tiny
     steps = []

@@ -133,6 +133,7 @@ def test_flags_and_pipeline_keys_are_unique() -> None:
     build_parser()  # argparse refuses a flag that clashes with the command's own
 
 
+@pytest.mark.slow
 def test_declarations_load_no_numerical_library() -> None:
     """The registry is read to build the command line: it must not import OpenCV, numpy or
     rerun beyond what the log layer itself imports."""

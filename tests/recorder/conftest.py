@@ -8,6 +8,8 @@ from typing import Any
 
 import pytest
 
+from tests.slow import renders
+
 from .logs import Log, record_log
 
 #: a spec name or path plus sorted overrides -> its recording
@@ -15,6 +17,7 @@ RecordingKey = tuple[str, tuple[tuple[str, Any], ...]]
 
 
 @pytest.fixture(scope="session")
+@renders
 def recording(tmp_path_factory: pytest.TempPathFactory) -> Callable[..., Log]:
     """``recording(scenario, **overrides)``: a cached MCAP recording, read back."""
     cache: dict[RecordingKey, Log] = {}

@@ -135,6 +135,7 @@ def _stamps_and_indices(log: Log, table: dict[str, object]) -> tuple[list[int], 
     return stamps, frame_indices(stamps, log.scenario["spec"]["rate_hz"], phase)
 
 
+@pytest.mark.slow
 def test_same_seed_same_recording(
     recording: Callable[..., Log], lossy_spec: Path, tmp_path: Path
 ) -> None:

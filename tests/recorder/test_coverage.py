@@ -125,6 +125,7 @@ def test_charuco_views_are_partial_as_asked() -> None:
     assert abs(partial.mean() - p) < 4 * math.sqrt(p * (1 - p) / n)
 
 
+@pytest.mark.slow
 def test_fisheye_poses_stay_within_the_view_angle() -> None:
     scenario, trajectory = planned("mono_fisheye")
     (camera,) = scenario.cameras
@@ -148,6 +149,7 @@ def stereo_heldout_visible_in(visible_in: str, **motion_changes: object) -> Scen
     return parse_scenario(raw, "test")
 
 
+@pytest.mark.slow
 def test_anchors_both_stereo_cameras_cannot_see_move_to_others(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:

@@ -174,6 +174,7 @@ def test_a_board_behind_the_image_plane_is_in_the_image(log: Log) -> None:
     assert (corners[:, 2] < 0).sum() >= len(corners) // 2
 
 
+@pytest.mark.slow
 def test_views_render_a_pinhole_as_its_direct_render_does(spec: Path) -> None:
     """The multi-view machinery (MuJoCo view intrinsics, atlas, sampling) on a 120-degree
     pinhole camera gives the image of the direct render: corners agree on average within

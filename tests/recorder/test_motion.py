@@ -62,6 +62,7 @@ def in_image(s: ScenarioSpec, world_from_target: F64, points_in_target: F64) -> 
     return True
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["mono_checkerboard", "stereo_checkerboard"])
 def test_random_poses_are_in_view_but_a_partial_share(name: str) -> None:
     s = scenario(name)
@@ -178,6 +179,7 @@ def test_stereo_scenarios_sharing_poses_are_grouped() -> None:
     assert ["stereo_checkerboard", "stereo_unsynced"] in groups
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", SEEDS)
 @pytest.mark.parametrize("names", moving_stereo_scenarios(), ids="+".join)
 def test_long_stereo_recordings_plan_every_pose_as_asked(names: list[str], seed: int) -> None:
@@ -207,3 +209,26 @@ def test_long_stereo_recordings_plan_every_pose_as_asked(names: list[str], seed:
         assert (fractions[partial] >= 0.25).all()
         p = spec.partial_view_probability
         assert abs(partial.mean() - p) < 4 * math.sqrt(p * (1 - p) / len(fractions))
+
+
+@pytest.mark.parametrize("partly", [False, True])
+def test_world_draws_judged_in_batches_are_the_draws_one_at_a_time(partly: bool) -> None:
+    """Batches only speed the search up: the pose chosen, and where the generator is left,
+    are those of drawing and judging one pose after another."""
+    s = load_scenario("stereo_checkerboard")
+    target = s.targets[0]
+    outline = outline_in_target(target)
+    one, batched = np.random.default_rng(7), np.random.default_rng(7)
+    for _slot in range(12):
+        expected = None
+        for _try in range(motion.MAX_TRIES):
+            parameters = motion._random_parameters(target, one)
+            if motion._seen_as_asked(motion._pose(target, parameters), outline, s.cameras,
+                                     partly=partly):
+                expected = parameters
+                break
+        found = motion._first_visible_in_world(target, s.cameras, outline, batched,
+                                               partly=partly)
+        assert expected is not None and found is not None
+        np.testing.assert_array_equal(found, expected)
+        assert batched.bit_generator.state == one.bit_generator.state

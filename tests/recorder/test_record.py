@@ -213,6 +213,7 @@ def format_reference(recording: Callable[..., Log]) -> Log:
     return recording("stereo_checkerboard", frames=3, **SMALL)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fmt", sorted(FORMATS))
 def test_every_format_reads_back_the_same_messages(
     tmp_path: Path, fmt: str, format_reference: Log
@@ -249,6 +250,7 @@ def _fail_on_call(n: int, error: BaseException, original: Callable[..., Any]) ->
     return wrapper
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("where", ["render", "write"])
 def test_a_failure_mid_recording_leaves_no_output_and_no_thread(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, where: str
@@ -269,6 +271,7 @@ def test_a_failure_mid_recording_leaves_no_output_and_no_thread(
     assert _writer_threads() == []
 
 
+@pytest.mark.slow
 def test_record_refuses_to_overwrite(tmp_path: Path) -> None:
     output = tmp_path / "log.mcap"
     output.write_bytes(b"keep me")

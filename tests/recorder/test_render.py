@@ -19,6 +19,7 @@ def _failing_renderer(error: Exception) -> Any:
     return make
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("error, expected", [
     # ctypes (PyOpenGL's EGL calls) wraps a Ctrl-C during argument conversion
     (ctypes.ArgumentError("argument 2: KeyboardInterrupt: "), KeyboardInterrupt),

@@ -103,6 +103,7 @@ writer.close()
 """
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("moment", ["start", "close"])
 def test_ctrl_c_leaves_no_temporary_file(tmp_path: Path, moment: str) -> None:
     done = subprocess.run([sys.executable, "-c", INTERRUPTED, moment, str(tmp_path)],

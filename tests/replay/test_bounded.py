@@ -32,6 +32,7 @@ DEEP = 3000
 TOO_DEEP = f"nests lists or tables more than {MAX_DEPTH} levels deep"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("load", "text"), [
     (toml_loads, "a = " + "[" * DEEP + "]" * DEEP),
     (toml_loads, "a = " + "{b = " * DEEP + "1" + "}" * DEEP),
@@ -104,6 +105,7 @@ def camlog(*args: str) -> subprocess.CompletedProcess[str]:
                           capture_output=True, text=True, timeout=120, check=False)
 
 
+@pytest.mark.slow
 def test_a_deep_json_manifest_is_one_line(tmp_path: Path) -> None:
     manifest = tmp_path / "manifest.json"
     manifest.write_text('{"inputs": ' + "[" * DEEP + "]" * DEEP + "}")
@@ -112,6 +114,7 @@ def test_a_deep_json_manifest_is_one_line(tmp_path: Path) -> None:
     assert result.stderr.splitlines() == [f"camlog golden: error: {manifest} {TOO_DEEP}: refused"]
 
 
+@pytest.mark.slow
 def test_a_deep_scenario_spec_is_one_line(tmp_path: Path) -> None:
     spec = tmp_path / "deep.toml"
     spec.write_text("seed = " + "[" * DEEP + "]" * DEEP + "\n")
@@ -120,6 +123,7 @@ def test_a_deep_scenario_spec_is_one_line(tmp_path: Path) -> None:
     assert result.stderr.splitlines() == [f"camlog record: error: {spec} {TOO_DEEP}: refused"]
 
 
+@pytest.mark.slow
 def test_a_deep_json_record_in_a_log_is_left_out_with_a_warning(red_log: Path,
                                                                 tmp_path: Path) -> None:
     residuals = CameraTopics("/stereo_camera/left").residuals

@@ -50,6 +50,7 @@ def only_entry(folder: Path) -> Path:
     return entries[0]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fmt", WRITE_FORMATS)
 def test_killed_writer_keeps_all_but_the_last_second(tmp_path: Path, fmt: str) -> None:
     assert FLUSH_INTERVAL_S <= 0.5  # leaves half a second for the writer to get there
@@ -79,6 +80,7 @@ def test_killed_writer_keeps_all_but_the_last_second(tmp_path: Path, fmt: str) -
     assert recovered == numbered_images(len(recovered))
 
 
+@pytest.mark.slow
 def test_sqlite_recording_killed_mid_transaction_reads_its_commits(tmp_path: Path) -> None:
     """The killed writer leaves a hot journal: the reader rolls back a copy, never the input."""
     script = tmp_path / "child.py"
@@ -186,6 +188,7 @@ def test_unsupported_compression_is_one_line_and_writes_nothing(
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 def test_disk_errors_name_the_output_and_leave_nothing(tmp_path: Path) -> None:
     """A write the OS refuses (here: beyond RLIMIT_FSIZE, EFBIG) is one error naming the
     output, and the temporary output is gone."""

@@ -66,6 +66,7 @@ print(json.dumps(dataclasses.asdict(tally)))
 """
 
 
+@pytest.mark.slow
 def test_the_bounds_catch_what_they_bound() -> None:
     result = subprocess.run([sys.executable, "-c", BOUNDS_CHECK % MEMORY_BOUND_BYTES],
                             cwd=ROOT, capture_output=True, text=True, timeout=120, check=True)
@@ -75,6 +76,7 @@ def test_the_bounds_catch_what_they_bound() -> None:
     assert [f.split(":")[0] for f in tally.failures] == ["2 GiB", "sleep", "key"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(SEEDS))
 def test_damaged_logs_read_or_fail_in_one_line(name: str, tmp_path: Path) -> None:
     # a fresh process: its peak virtual memory is the fuzzed reads' alone. One malloc arena:
@@ -129,6 +131,7 @@ def _camlog(*args: str | Path) -> subprocess.CompletedProcess[str]:
                           env={**os.environ, "MUJOCO_GL": "egl"}, check=False)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", list(SEEDS))
 def test_damaged_logs_through_the_cli(name: str, seeds: dict[str, Path], tmp_path: Path) -> None:
     """info and convert on mutants: exit 0 with an output that opens, or exit 1 with one

@@ -173,6 +173,7 @@ def _rerun(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
                           timeout=120, check=False)
 
 
+@pytest.mark.slow
 def test_rerun_converts_our_mcap(tmp_path: Path) -> None:
     write_log(tmp_path / "log.mcap", every_kind())
     convert = _rerun("mcap", "convert", "log.mcap", "-o", "log.rrd", cwd=tmp_path)

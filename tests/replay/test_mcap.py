@@ -82,6 +82,7 @@ CHILD = textwrap.dedent(
 ).format(t0=T0_NS)
 
 
+@pytest.mark.slow
 def test_killed_writer_leaves_a_readable_partial(tmp_path: Path) -> None:
     script = tmp_path / "child.py"
     script.write_text(CHILD)
@@ -196,6 +197,7 @@ def test_a_chunk_written_twice_is_read_once(tmp_path: Path) -> None:
     assert got == entries
 
 
+@pytest.mark.slow
 def test_reading_a_long_log_keeps_memory_flat(tmp_path: Path) -> None:
     """300 VGA rgb8 frames (276 MB raw) are read with a few chunks in memory at a time."""
     rng = np.random.default_rng(0)

@@ -89,6 +89,7 @@ def test_chunks_indexes_and_crcs_read_back_in_order() -> None:
     assert [m.name for m in reader.iter_metadata()] == ["before", "after"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "fast", "small"), [("zstd", 1, 19), ("lz4", 0, 12)])
 def test_a_compression_level_changes_the_chunks_not_the_messages(tmp_path: Path, name: str,
                                                                  fast: int, small: int) -> None:

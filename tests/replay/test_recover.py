@@ -147,6 +147,7 @@ def test_rosbag2_mcap_storage_recover_skips_a_damaged_chunk(tmp_path: Path) -> N
     assert any(f"{len(lost)} messages lost" in w for w in warnings)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name", ["rosbag2 (sqlite3)", "rosbag2 (mcap)"])
 def test_a_repeated_metadata_line_loses_no_messages(tmp_path: Path, name: str) -> None:
     seed = write_seed(name, tmp_path)

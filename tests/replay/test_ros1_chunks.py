@@ -35,6 +35,7 @@ def write_sample(writer: Writer, compression: Writer.CompressionFormat | None) -
     writer.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("compression", [Writer.CompressionFormat.LZ4,
                                          Writer.CompressionFormat.BZ2, None])
 def test_same_bytes_as_rosbags_writer(compression: Writer.CompressionFormat | None,

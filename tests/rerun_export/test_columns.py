@@ -78,6 +78,7 @@ def feed_rows(out: Emitter) -> None:
         out.emit("cam/truth", PointsRow(rng.random((3, 2))))
 
 
+@pytest.mark.slow
 def test_columns_store_what_a_log_call_per_row_stores(tmp_path: Path,
                                                       monkeypatch: pytest.MonkeyPatch) -> None:
     # small batches: every reason to send a batch happens

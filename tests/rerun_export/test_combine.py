@@ -29,6 +29,7 @@ def part(path: Path, recording_id: str, frames: int = 4) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_recordings_stay_apart_in_one_verified_file(tmp_path: Path,
                                                      monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(combine, "BLOCK_BYTES", 4096)  # many blocks, each paced

@@ -10,12 +10,13 @@ from pathlib import Path
 
 import numpy as np
 import pyarrow as pa
+import pytest
 from rerun.chunk import RrdReader
 from rerun.error_utils import RerunWarning
 
 from replay import Image, Text, open_writer
 from replay.camera import CameraModel
-from rerun_export import Viewer, view_logs
+from rerun_export import view_logs
 from tests.rrd import Receiver, rerun_cli
 
 T0 = 1_700_000_000_000_000_000
@@ -53,6 +54,7 @@ def image_stamps(path: Path) -> dict[str, list[int]]:
     return out
 
 
+@pytest.mark.slow
 def test_unrelated_logs_keep_their_own_recordings(tmp_path: Path) -> None:
     morning = camera_log(tmp_path / "morning.mcap", "/front", T0)
     evening = camera_log(tmp_path / "evening.mcap", "/front", T0 + 10 * HOUR_NS, frames=2)
@@ -105,8 +107,7 @@ def test_a_viewer_receives_each_recording(tmp_path: Path) -> None:
     other_rig = camera_log(tmp_path / "rig.mcap", "/rear", T0)
     receiver = Receiver(tmp_path)  # a headless rerun that saves what it receives
     try:
-        result = view_logs([morning, other_rig], viewer=Viewer(connect=receiver.url),
-                           progress=False)
+        result = view_logs([morning, other_rig], connect=receiver.url, progress=False)
         deadline, received = time.monotonic() + 30, received_images(receiver.path)
         while len(received) < 2 and time.monotonic() < deadline:
             time.sleep(0.3)

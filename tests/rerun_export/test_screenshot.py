@@ -17,6 +17,7 @@ from rerun_export import view_logs
 T0 = 1_700_000_000_000_000_000
 
 
+@pytest.mark.slow
 def test_the_viewer_draws_the_camera_image(tmp_path: Path) -> None:
     missing = vulkan_driver()
     if missing:

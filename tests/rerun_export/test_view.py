@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from replay import CameraInfo, Image, PointStamped, Text, open_reader, open_writer
-from rerun_export import LoggerOptions, Reading, view_logs
+from rerun_export import LoggerOptions, view_logs
 from rerun_export.overlays import CENTROID_MARKER, MASK_PIXEL
 from tests.rrd import load_rrd, rerun_cli
 
@@ -86,7 +86,7 @@ def test_mask_classes_survive_in_the_recording(red_processed_log: Path, tmp_path
 
     out = tmp_path / "mask.rrd"
     view_logs([red_processed_log], output=out,
-              reading=Reading(topics=[f"{SOURCE}/output_video"], end_s=0.01), progress=False)
+              topics=[f"{SOURCE}/output_video"], end_s=0.01, progress=False)
     (store,) = RrdReader(out).recordings()
     buffers = [chunk.to_record_batch().column("SegmentationImage:buffer").to_pylist()
                for chunk in RrdReader(out).stream(store=store)
@@ -97,6 +97,7 @@ def test_mask_classes_survive_in_the_recording(red_processed_log: Path, tmp_path
     assert f"{LEFT}/red_pixels/mask" in [c.entity_path for c in RrdReader(out).stream(store=store)]
 
 
+@pytest.mark.slow
 def test_calibration_corners_residuals_and_errors(mono_calibration_log: Path,
                                                   tmp_path: Path) -> None:
     out = tmp_path / "calibration.rrd"
@@ -151,9 +152,8 @@ def test_resync_offsets_and_shared_frames(resynced_log: Path, tmp_path: Path) ->
 
 def test_every_jpeg_window_and_topics(red_processed_log: Path, tmp_path: Path) -> None:
     out = tmp_path / "small.rrd"
-    result = view_logs([red_processed_log], output=out, progress=False,
-                       reading=Reading(start_s=0.1, end_s=0.5,
-                                       topics=["/stereo_camera/left/*"]),
+    result = view_logs([red_processed_log], output=out, progress=False, start_s=0.1,
+                       end_s=0.5, topics=["/stereo_camera/left/*"],
                        options=LoggerOptions(every=3, jpeg_quality=80))
     rec = load_rrd(out)
     # 0.1 s <= t < 0.5 s at 30 Hz: frames 3..14 (12 frames), every third kept

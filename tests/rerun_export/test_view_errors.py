@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from replay import LogFormatError, LogReadError, OutputError, TopicError
-from rerun_export import Reading, Viewer, view_logs
+from rerun_export import view_logs
 from rerun_export.errors import ViewerError
 from tests.outputs import temp_outputs
 from tests.recordings import chunked_camera_log, corrupt_middle_chunk
@@ -30,7 +30,7 @@ def test_recover_shows_everything_but_the_damaged_chunk(tmp_path: Path) -> None:
     stamps = chunked_camera_log(log)
     damaged_from = corrupt_middle_chunk(log)
     out = tmp_path / "bad.rrd"
-    result = view_logs([log], output=out, progress=False, reading=Reading(recover=True))
+    result = view_logs([log], output=out, progress=False, recover=True)
     (skipped,) = [w for w in result.warnings if "skipped the damaged chunk" in w]
     first_ns, last_ns = (int(t) for t in re.findall(r"log times (\d+) to (\d+) ns", skipped)[0])
     assert first_ns == damaged_from
@@ -73,9 +73,9 @@ def test_output_rules(red_log: Path, tmp_path: Path) -> None:
     with pytest.raises(ViewerError, match=r"must end in \.rrd"):
         view_logs([red_log], output=tmp_path / "x.mcap", progress=False)
     with pytest.raises(ViewerError, match="not a viewer address"):
-        view_logs([red_log], viewer=Viewer(connect="nowhere"), progress=False)
+        view_logs([red_log], connect="nowhere", progress=False)
     with pytest.raises(TopicError, match="no topic matching '/nope'"):
-        view_logs([red_log], output=tmp_path / "y.rrd", reading=Reading(topics=["/nope"]),
+        view_logs([red_log], output=tmp_path / "y.rrd", topics=["/nope"],
                   progress=False)
 
 
@@ -86,4 +86,4 @@ def test_connect_needs_a_listening_viewer(red_log: Path) -> None:
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
     with pytest.raises(ViewerError, match=f"no rerun viewer is listening at .*:{port}/proxy"):
-        view_logs([red_log], viewer=Viewer(connect=f"127.0.0.1:{port}"), progress=False)
+        view_logs([red_log], connect=f"127.0.0.1:{port}", progress=False)

@@ -57,6 +57,7 @@ def missing_x_display() -> str:
     return f":{number}"
 
 
+@pytest.mark.slow
 def test_spawn_without_a_display_fails_at_once(red_log: Path, tmp_path: Path) -> None:
     result, took_s = camlog("view", str(red_log), "--spawn", "--port", str(free_port()),
                             env=without_display())
@@ -66,6 +67,7 @@ def test_spawn_without_a_display_fails_at_once(red_log: Path, tmp_path: Path) ->
     assert took_s < 30
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("bind", "listens_on"), [([], "127.0.0.1"),
                                                    (["--bind", "0.0.0.0"], "0.0.0.0")])
 def test_spawned_viewer_that_cannot_open_a_window(
@@ -93,6 +95,7 @@ def test_spawned_viewer_that_cannot_open_a_window(
     assert "Failed to open connection to X server" in text or listening, text
 
 
+@pytest.mark.slow
 def test_spawn_uses_a_viewer_already_listening(red_log: Path, tmp_path: Path) -> None:
     receiver = Receiver(tmp_path)
     try:
@@ -156,6 +159,7 @@ def fake_viewer(behaviour: str) -> Iterator[int]:
         server.close()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("behaviour", "said"), [
     (SILENT, "accepted the connection but did not answer within 5 s"),
     (CLOSES, "closed the connection without answering"),

@@ -14,6 +14,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.slow import renders
+
 from .faults import record_logs
 from .test_run import PIPELINE
 
@@ -30,6 +32,7 @@ def temporary_home() -> Iterator[Path]:
 
 
 @pytest.fixture(scope="session")
+@renders
 def short_logs(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
     """Six short stereo_unsynced logs (40 frames per camera, 160x120), ``pipe.toml`` (the
     resync, process, info pipeline) next to them."""

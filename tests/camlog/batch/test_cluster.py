@@ -27,8 +27,9 @@ from pathlib import Path
 
 import pytest
 
-from camlog.batch.pipeline import load_pipeline
 from camlog.batch.run import run_batch
+from camlog.requests.batch import BatchRequest
+from tests.slow import renders
 
 from .faults import alive, cmdline, output_files, start_batch, wait_for
 from .test_s3 import free_port
@@ -93,6 +94,7 @@ def end_session(session: int) -> None:
 
 
 @pytest.fixture(scope="module")
+@renders
 def cluster() -> Iterator[Cluster]:
     """Head (127.0.0.1) and a second node, one CPU each, token auth with a fresh token."""
     temp = Path(tempfile.mkdtemp(prefix="rc", dir="/tmp"))  # Ray's socket paths are short
@@ -125,6 +127,7 @@ def cluster_logs(short_logs: list[Path]) -> list[Path]:
     return short_logs
 
 
+@pytest.mark.slow
 def test_a_cluster_without_a_needed_filesystem_is_one_line(
     cluster: Cluster, cluster_logs: list[Path], tmp_path: Path
 ) -> None:
@@ -139,6 +142,7 @@ def test_a_cluster_without_a_needed_filesystem_is_one_line(
     assert "cannot run camlog on node" in errors[0] and "gcsfs" in errors[0]
 
 
+@pytest.mark.slow
 def test_a_batch_without_the_clusters_token_says_authentication_failed(
     cluster: Cluster, cluster_logs: list[Path], tmp_path: Path
 ) -> None:
@@ -161,13 +165,14 @@ def test_a_batch_without_the_clusters_token_says_authentication_failed(
     assert not (home / ".ray").exists()
 
 
+@pytest.mark.slow
 def test_a_node_killed_mid_batch_changes_no_output(
     cluster: Cluster, cluster_logs: list[Path], tmp_path: Path
 ) -> None:
     pipeline_file = cluster_logs[0].parent / "pipe.toml"
     reference = tmp_path / "reference"
-    assert not run_batch(load_pipeline(pipeline_file), list(cluster_logs), reference, jobs=2,
-                         progress=False).failed
+    assert not run_batch(BatchRequest(pipeline=pipeline_file, logs=tuple(cluster_logs),
+                                      output=reference, jobs=2, progress=False)).failed
     out = tmp_path / "out"
     started = time.monotonic()
     # the cluster named as users do, through RAY_ADDRESS
@@ -210,6 +215,7 @@ class _SlowRay:
 GCS_WAIT = "RAY_gcs_server_port_wait_time_s"
 
 
+@pytest.mark.slow
 def test_a_local_ray_that_misses_its_start_is_stopped_and_one_line(
         monkeypatch: pytest.MonkeyPatch) -> None:
     from camlog.batch.cluster import GCS_START_WAIT_S, _connect

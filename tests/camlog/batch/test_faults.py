@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from camlog.batch.pipeline import load_pipeline
 from camlog.batch.run import run_batch
+from camlog.requests.batch import BatchRequest
 
 from .faults import (
     alive,
@@ -28,12 +28,13 @@ def fault_logs(short_logs: list[Path]) -> list[Path]:
     return short_logs[:3]
 
 
+@pytest.mark.slow
 def test_a_killed_worker_is_retried_and_outputs_are_complete(fault_logs: list[Path],
                                                              tmp_path: Path) -> None:
     pipeline_file = fault_logs[0].parent / "pipe.toml"
     reference = tmp_path / "reference"
-    clean = run_batch(load_pipeline(pipeline_file), fault_logs, reference, jobs=2,
-                      progress=False)
+    clean = run_batch(BatchRequest(pipeline=pipeline_file, logs=tuple(fault_logs),
+                                   output=reference, jobs=2, progress=False))
     assert not clean.failed
     out = tmp_path / "out"
     batch = start_batch([str(pipeline_file), *map(str, fault_logs), "-o", str(out), "-j", "2"])
@@ -55,6 +56,7 @@ def test_a_killed_worker_is_retried_and_outputs_are_complete(fault_logs: list[Pa
     assert output_files(out) == output_files(reference)
 
 
+@pytest.mark.slow
 def test_workers_end_with_the_batch_process(fault_logs: list[Path], tmp_path: Path) -> None:
     pipeline_file = fault_logs[0].parent / "pipe.toml"
     batch = start_batch([str(pipeline_file), *map(str, fault_logs), "-o", str(tmp_path / "o"),

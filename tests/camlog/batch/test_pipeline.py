@@ -105,30 +105,43 @@ def test_process_keys_come_from_the_registry() -> None:
 ])
 def test_process_step_options_configure_processors(options: dict[str, object],
                                                    chosen: list[tuple[str, object]]) -> None:
-    from camlog.batch.pipeline import step_processors
-    from processors.registry import SPECS
-
-    got = step_processors(dict(options), SPECS)
-    assert [(c.name, dict(c.options)) for c in got] == chosen
+    (step,) = parse_pipeline({"steps": [{"run": "process", "topic": "/c/image_raw",
+                                         **options}]}, "p.toml").steps
+    assert [(c.name, dict(c.options)) for c in step.request.processors] == chosen
 
 
 @pytest.mark.parametrize(("options", "message"), [
     ({"edges": {"low": -1}}, "process: edges.low: must be >= 0"),
     ({"edges": {"low": 200, "high": 100}}, "process: edges.low, edges.high: Canny"),
     ({"edges": {"sigma": 1}}, "process: edges.sigma: no such option"),
-    ({"red_pixels": "yes"}, "red_pixels must be true, false or a table"),
+    ({"red_pixels": "yes"}, "process: red_pixels: expected true, false or a table"),
     ({"every": 0}, "process: every: must be >= 1"),
-    ({"rectify": 3}, "process: rectify: expected a camera model"),
+    ({"rectify": 3}, "process: rectify: expected text, got 3"),
+    ({"low": 3}, "process has no option 'low'"),
 ])
 def test_process_step_option_errors_name_the_keys(options: dict[str, object],
                                                   message: str) -> None:
-    from camlog.batch.pipeline import keys_worded, step_processors
-    from processors.registry import SPECS
+    from camlog.requests.processing import ProcessRequest, option_error
+    from camlog.requests.table import keyed
+    from processors.errors import OptionValueError
 
-    with pytest.raises(PipelineError, match=message) as err, keys_worded("process", SPECS):
-        for configured in step_processors(dict(options), SPECS):
-            configured.build()
+    with pytest.raises(PipelineError, match=message) as err:
+        (step,) = parse_pipeline({"steps": [{"run": "process", "topic": "/c/image_raw",
+                                             **options}]}, "p.toml").steps
+        for configured in step.request.processors:
+            try:  # found by building the processor: process_log and run_step word it so
+                configured.build()
+            except OptionValueError as found:
+                raise PipelineError(f"process: {keyed(option_error(ProcessRequest, found))}"
+                                    ) from None
     assert "--" not in str(err.value)
+
+
+def test_the_batch_epilog_names_every_step_kind() -> None:
+    from camlog.batch.pipeline import STEPS
+    from camlog.requests.batch import BatchRequest
+
+    assert f"step kinds: {', '.join(STEPS)}." in BatchRequest.epilog
 
 
 def camlog_batch(pipeline: Path, tmp_path: Path) -> subprocess.CompletedProcess[str]:
@@ -138,6 +151,7 @@ def camlog_batch(pipeline: Path, tmp_path: Path) -> subprocess.CompletedProcess[
                           check=False)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "text"), [
     ("deep.toml", "a = " + "[" * 3000 + "]" * 3000 + "\n"),
     ("dotted.toml", ".".join(["a"] * 3000) + " = 1\n"),
@@ -155,6 +169,7 @@ def test_a_deeply_nested_pipeline_is_one_line(tmp_path: Path, name: str, text: s
         f"{MAX_DEPTH} levels deep: refused"]
 
 
+@pytest.mark.slow
 def test_a_pipeline_file_of_many_megabytes_is_refused(tmp_path: Path) -> None:
     path = tmp_path / "huge.toml"
     path.write_text("# padding\n" * (MAX_FILE_BYTES // 10 + 1))

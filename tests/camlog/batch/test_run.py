@@ -9,9 +9,10 @@ from pathlib import Path
 
 import pytest
 
-from camlog.batch.pipeline import load_pipeline
-from camlog.batch.run import Engine, run_batch
+from camlog.batch.run import run_batch
 from camlog.cli import main
+from camlog.requests.batch import BatchRequest
+from tests.slow import renders
 
 SCENARIOS = Path(__file__).resolve().parents[3] / "datasets" / "scenarios"
 PIPELINE = """
@@ -29,6 +30,7 @@ run = "info"
 
 
 @pytest.fixture(scope="module")
+@renders
 def logs(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
     tmp = tmp_path_factory.mktemp("batch_logs")
     made = []
@@ -82,20 +84,24 @@ def test_rerun_skips_completed_logs_and_redoes_changed_ones(
 ) -> None:
     good = logs[:2]
     out = tmp_path / "out"
-    first = run_batch(load_pipeline(pipeline), good, out, jobs=1, progress=True)
+    first = run_batch(BatchRequest(pipeline=pipeline, logs=tuple(good), output=out, jobs=1,
+                                         progress=True))
     assert [s["status"] for s in first.statuses] == ["ok", "ok"]
     bar = capsys.readouterr().err
     assert "running 1, queued 1, failed 0" in bar  # live counts beside the bar
     assert all(s["node"] and s["seconds"] > 0 for s in first.statuses)
-    second = run_batch(load_pipeline(pipeline), good, out, jobs=1, progress=False)
+    second = run_batch(BatchRequest(pipeline=pipeline, logs=tuple(good), output=out, jobs=1,
+                                          progress=False))
     assert [s["status"] for s in second.statuses] == ["skipped", "skipped"]
     # a changed pipeline redoes everything
     pipeline.write_text(PIPELINE.replace("edges = true", "edges = {low = 10, high = 30}"))
-    third = run_batch(load_pipeline(pipeline), good, out, jobs=1, progress=False)
+    third = run_batch(BatchRequest(pipeline=pipeline, logs=tuple(good), output=out, jobs=1,
+                                         progress=False))
     assert [s["status"] for s in third.statuses] == ["ok", "ok"]
     # a missing output redoes that log only
     Path(third.statuses[0]["steps"][1]["files"][0]).unlink()
-    fourth = run_batch(load_pipeline(pipeline), good, out, jobs=1, progress=False)
+    fourth = run_batch(BatchRequest(pipeline=pipeline, logs=tuple(good), output=out, jobs=1,
+                                          progress=False))
     assert [s["status"] for s in fourth.statuses] == ["ok", "skipped"]
 
 
@@ -118,10 +124,10 @@ def test_ray_engine_gives_the_same_results(logs: list[Path], pipeline: Path,
 
     assert ray.__version__
     before = listing(REAL_HOME / ".ray")
-    local = run_batch(load_pipeline(pipeline), logs, tmp_path / "local", jobs=2,
-                      progress=False)
-    ray_run = run_batch(load_pipeline(pipeline), logs, tmp_path / "ray", jobs=2,
-                        engine=Engine("ray"), progress=False)
+    local = run_batch(BatchRequest(pipeline=pipeline, logs=tuple(logs),
+                                   output=tmp_path / "local", jobs=2, progress=False))
+    ray_run = run_batch(BatchRequest(pipeline=pipeline, logs=tuple(logs), output=tmp_path / "ray",
+                                     jobs=2, engine="ray", progress=False))
     assert listing(REAL_HOME / ".ray") == before
     assert Path.home() == temporary_home
     assert (temporary_home / ".ray" / "auth_token").is_file()
@@ -142,7 +148,7 @@ def test_bad_batch_arguments_are_one_line(
     assert len(err) == 1 and err[0].startswith("camlog batch: error:") and "fly" in err[0]
     assert main(["batch", str(pipeline), str(logs[0]), "-o", str(tmp_path / "o"),
                  "-j", "0"]) == 1
-    assert "-j must be at least 1" in capsys.readouterr().err
+    assert "--jobs must be at least 1" in capsys.readouterr().err
 
 
 def test_an_unreachable_cluster_is_one_line(

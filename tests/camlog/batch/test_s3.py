@@ -16,6 +16,7 @@ import pytest
 from mcap.reader import make_reader
 
 from camlog.cli import main
+from tests.slow import renders
 
 from .test_run import PIPELINE, SCENARIOS
 
@@ -30,6 +31,7 @@ def free_port() -> int:
 
 
 @pytest.fixture(scope="module")
+@renders
 def s3_endpoint() -> Iterator[str]:
     """A moto S3 server bound to 127.0.0.1 for this module."""
     port = free_port()
@@ -68,6 +70,7 @@ def s3(s3_endpoint: str, monkeypatch: pytest.MonkeyPatch) -> object:
     return client
 
 
+@pytest.mark.slow
 def test_batch_reads_and_writes_s3_uris(s3: object, tmp_path: Path,
                                          capsys: pytest.CaptureFixture[str]) -> None:
     client: object = s3

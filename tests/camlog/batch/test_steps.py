@@ -14,6 +14,7 @@ from mcap.reader import make_reader
 from camlog.cli import main
 from replay import open_reader
 from tests.camlog.conftest import record, spec_variant
+from tests.slow import renders
 
 FRAMES = 90
 PIPELINE = """
@@ -46,6 +47,7 @@ format = "jpg"
 
 
 @pytest.fixture(scope="module")
+@renders
 def charuco_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """mono_charuco (rational_polynomial lens), 90 frames at 640x480: 30 poses."""
     tmp = tmp_path_factory.mktemp("charuco_batch")

@@ -9,6 +9,7 @@ from types import SimpleNamespace
 
 import cv2
 import numpy as np
+import pytest
 
 from benchmarks.ideal_board import ideal_image, tilted_pose
 from camlog.calibrate.instants import ViewsOfRig
@@ -30,6 +31,7 @@ TOPIC = "/cam/image_raw"
 T0 = 1_700_000_000_000_000_000
 
 
+@pytest.mark.slow
 def test_views_are_measured_again_from_their_own_frames(tmp_path: Path) -> None:
     rng = np.random.default_rng(4)
     points = BOARD.points_in_board()
@@ -92,6 +94,7 @@ def test_views_are_measured_again_from_their_own_frames(tmp_path: Path) -> None:
     np.testing.assert_allclose(kept.views[0].corners_px, expected, atol=1e-9)
 
 
+@pytest.mark.slow
 def test_charuco_views_are_measured_on_the_edges_between_the_markers(tmp_path: Path) -> None:
     """A ChArUco view (the mono_charuco lens and board) is measured again with the edge-band
     estimator, and ends closer to the truth than OpenCV's small-window refinement."""

@@ -19,6 +19,7 @@ from replay.geometry import transform_from_pose
 from replay.messages import PoseStamped
 from replay.records import Scenario
 from replay.topics import SCENARIO
+from tests.slow import renders
 
 LOG = golden_dir() / "mono_checkerboard-seed0-640x480-f240.mcap"
 NAMESPACE = "/simple_camera"
@@ -26,6 +27,7 @@ BOARD = Board(7, 6, 0.01)
 
 
 @pytest.fixture(scope="module")
+@renders
 def run(tmp_path_factory: pytest.TempPathFactory) -> CalibrationRun:
     return calibrate_log(CalibrateRequest(
         log=LOG, size="7x6", square=0.01, camera=(NAMESPACE,),

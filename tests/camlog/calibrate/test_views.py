@@ -19,6 +19,7 @@ from replay import Image, PoseStamped, open_reader, open_writer
 from replay.geometry import rotation_from_quat_xyzw
 from replay.records import Scenario
 from replay.topics import SCENARIO
+from tests.slow import renders
 
 from ..conftest import record, spec_variant
 
@@ -27,6 +28,7 @@ BOARD = make_board("8x6", 0.011, "charuco", marker_m=0.008)
 
 
 @pytest.fixture(scope="module")
+@renders
 def charuco_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """mono_charuco (strongly distorted rational lens), 60 frames: 20 poses, a third of them
     cut by the image border."""

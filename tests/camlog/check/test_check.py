@@ -16,6 +16,7 @@ from camlog.check.recording import TIMELINE
 from camlog.cli import main
 from processors.calibration.board import make_board
 from tests.rrd import load_rrd, rerun_cli
+from tests.slow import renders
 
 DRIFT_S, DRIFT_DEG = 3.0, 0.1
 RIGHT = "/stereo_camera/right"
@@ -28,6 +29,7 @@ def _record(path: Path, *args: str) -> Path:
 
 
 @pytest.fixture(scope="module")
+@renders
 def logs(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """stereo_checkerboard, 6 s at 320x240: seed 0 with the right camera pitched 0.1° from
     3 s on, and a clean seed 1; mono_checkerboard, 2 s."""
@@ -201,6 +203,7 @@ def test_exit_status_2_for_a_usage_error(logs: dict[str, Path], tmp_path: Path,
     assert len(capsys.readouterr().err.splitlines()) == 1
 
 
+@pytest.mark.slow
 def test_the_rerun_recording_holds_the_check(report: tuple[Path, list[str]],
                                              logs: dict[str, Path], tmp_path: Path) -> None:
     path = report[0] / "check.rrd"

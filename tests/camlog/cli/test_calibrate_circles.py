@@ -11,9 +11,10 @@ import pytest
 
 from processors.calibration.board import make_board
 from replay import CameraInfo, Image, open_writer
+from tests.cli import run_cli
+from tests.slow import renders
 
 from ...processors.calibration.synthetic import K_TRUE, circle_texture, pose, warp_texture
-from .test_calibrate import run
 
 BOARD = make_board("4x11", 0.01, "acircles")
 FLAGS = ["-s", "4x11", "-q", "0.01", "-p", "acircles", "--camera", "/cam", "--no-progress",
@@ -22,6 +23,7 @@ PX_PER_M = 4000.0
 
 
 @pytest.fixture(scope="module")
+@renders
 def circles_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """Sixteen pinhole views (K_TRUE) of discs 1 cm across, tilted every way."""
     path = tmp_path_factory.mktemp("circles") / "circles.mcap"
@@ -40,7 +42,7 @@ def circles_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def test_the_diameter_is_measured_from_the_images(circles_log: Path, tmp_path: Path) -> None:
-    result = run("calibrate", circles_log, *FLAGS, "-o", tmp_path / "out")
+    result = run_cli("calibrate", circles_log, *FLAGS, "-o", tmp_path / "out")
     assert result.code == 0, result.err
     assert "circle diameter 0.0100" in result.out and "(measured from the images)" in result.out
     board = json.loads((tmp_path / "out" / "calibration.json").read_text())["board"]
@@ -49,7 +51,8 @@ def test_the_diameter_is_measured_from_the_images(circles_log: Path, tmp_path: P
 
 
 def test_a_given_diameter_is_used_and_checked(circles_log: Path, tmp_path: Path) -> None:
-    result = run("calibrate", circles_log, *FLAGS, "--diameter", "0.008", "-o", tmp_path / "out")
+    result = run_cli("calibrate", circles_log, *FLAGS, "--diameter", "0.008", "-o",
+                     tmp_path / "out")
     assert result.code == 0, result.err
     assert "circle diameter 0.00800 m (given; the images show 0.0100" in result.out
     assert "--diameter 0.008 m, but the images show circles 0.0100" in result.err
@@ -67,12 +70,12 @@ def test_check_predicts_the_discs_centroids(circles_log: Path, tmp_path: Path) -
     """``--check`` models the circles as ``calibrate`` does: with the diameter the images show
     the reprojection is that of the discs' centroids; with circles far too small (nearly
     points) the offset of the centroids from the centres shows as error."""
-    assert run("calibrate", circles_log, *FLAGS, "-o", tmp_path / "out").code == 0
+    assert run_cli("calibrate", circles_log, *FLAGS, "-o", tmp_path / "out").code == 0
     check = [*FLAGS, "--check", "--calibration", tmp_path / "out" / "ost.yaml"]
-    measured = run("calibrate", circles_log, *check)
+    measured = run_cli("calibrate", circles_log, *check)
     assert measured.code == 0, measured.err
     assert "circle diameter 0.0100" in measured.out and "(measured from the images)" in measured.out
-    points = run("calibrate", circles_log, *check, "--diameter", "0.001")
+    points = run_cli("calibrate", circles_log, *check, "--diameter", "0.001")
     assert points.code == 0, points.err
     assert "circle diameter 0.00100 m (given; the images show 0.0100" in points.out
     assert reprojection_median(measured.out) < 0.6 * reprojection_median(points.out)

@@ -16,9 +16,12 @@ from ruamel.yaml import YAML
 from camlog.cli import main
 from processors.calibration.rotation import rotation_vectors
 from replay.calibration_yaml import load_calibration
+from tests.camlog.conftest import scenario
+from tests.cli import CliRun
+from tests.slow import renders
 
 from ..conftest import record
-from .test_calibrate import BOARD, FIGURES, Run, calibrate, scenario, summary
+from .test_calibrate import BOARD, FIGURES, calibrate, summary
 
 #: three synchronised cameras along a 0.06 m bar, each turned its own way; the board's held
 #: poses cover each camera's image in turn (fully visible in the camera aimed at)
@@ -82,6 +85,7 @@ CAMERAS = ["/rig/a", "/rig/b", "/rig/c"]
 
 
 @pytest.fixture(scope="module")
+@renders
 def rig3_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """36 frames per camera: 12 held poses."""
     tmp = tmp_path_factory.mktemp("rig3")
@@ -195,7 +199,7 @@ def test_rig_usage_errors(rig3_log: Path, tmp_path: Path, options: list[str],
                          "--no-progress", *options])
         except SystemExit as exit_:  # argparse's own errors
             code = exit_.code
-    result = Run(code if isinstance(code, int) else 1, "", err.getvalue())
+    result = CliRun(code if isinstance(code, int) else 1, "", err.getvalue())
     assert result.code != 0 and message in result.err
     assert "Traceback" not in result.err and len(result.err.strip().splitlines()) <= 3
     assert not (tmp_path / "out").exists()

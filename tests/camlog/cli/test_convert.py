@@ -38,6 +38,7 @@ def test_convert_with_compression(red_log: Path, tmp_path: Path,
     assert usage.value.code == 2 and "not allowed with" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 @pytest.mark.realdata
 def test_real_ros1_bag_to_mcap_and_back(realdata_dir: Path, tmp_path: Path) -> None:
     bag = realdata_dir / "t265_ros1_bag" / "trimmed_locoffice.bag"

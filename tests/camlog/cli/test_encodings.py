@@ -75,6 +75,7 @@ def test_process_finds_the_red_square(case: Case, encodings_log: Path, tmp_path:
         assert tuple(centroid.point[:2]) == pytest.approx(RED_CENTROID, abs=within)
 
 
+@pytest.mark.slow
 def test_view_shows_every_topic_and_depth_as_depth(encodings_log: Path, tmp_path: Path
                                                     ) -> None:
     out = tmp_path / "enc.rrd"
@@ -87,6 +88,7 @@ def test_view_shows_every_topic_and_depth_as_depth(encodings_log: Path, tmp_path
     assert meter == pytest.approx(1000.0)  # 16UC1: millimetres
 
 
+@pytest.mark.slow
 def test_rerun_reads_the_log_too(encodings_log: Path, tmp_path: Path) -> None:
     converted = rerun_cli("mcap", "convert", str(encodings_log), "-o", "enc.rrd", cwd=tmp_path)
     assert converted.returncode == 0, converted.stderr

@@ -152,6 +152,7 @@ def test_convert_copies_channels_it_does_not_understand(
             " only; write MCAP to keep it") in err
 
 
+@pytest.mark.slow
 def test_view_shows_foxglove_images_with_their_calibration(foxglove_log: Path,
                                                           tmp_path: Path) -> None:
     out = tmp_path / "fox.rrd"
@@ -195,6 +196,7 @@ def _moving_square_log(path: Path, *, frames: int) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_h264_video_through_convert_process_and_view(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     frames = 12

@@ -14,6 +14,7 @@ from camlog.cli import main
 from tests.rrd import load_rrd, rerun_cli
 
 
+@pytest.mark.slow
 def test_import_a_mono_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     folder = tmp_path / "frames"
     folder.mkdir()
@@ -32,6 +33,7 @@ def test_import_a_mono_folder(tmp_path: Path, capsys: pytest.CaptureFixture[str]
     assert err.startswith("camlog import: error: ") and err.count("\n") == 1
 
 
+@pytest.mark.slow
 @pytest.mark.realdata
 def test_real_wide_stereo_imports_calibrates_and_views(
         realdata_dir: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -56,6 +56,7 @@ def test_import_refuses_a_compressed_topic(frames: Path, tmp_path: Path,
     assert not log.exists()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("camera", ["/fisheye", "/fisheye/image_raw"])
 def test_an_imported_camera_calibrates_by_namespace_or_image_topic(
         frames: Path, tmp_path: Path, camera: str,
@@ -84,6 +85,7 @@ def bare_topic_log(path: Path, frames: Path) -> None:
                          log_time_ns=stamp_ns)
 
 
+@pytest.mark.slow
 def test_a_bare_image_topic_is_a_camera(frames: Path, tmp_path: Path,
                                         capsys: pytest.CaptureFixture[str]) -> None:
     log = tmp_path / "bare.mcap"

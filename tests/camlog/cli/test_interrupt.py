@@ -33,6 +33,7 @@ COMMANDS = {
 FINISHED = {"calibrate": (1, "no 7x6 board found")}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("delay_s", [0.1, 0.7, 1.6])
 @pytest.mark.parametrize("command", sorted(COMMANDS))
 def test_ctrl_c_ends_every_command_cleanly(

@@ -28,6 +28,7 @@ def _faults(mode: str) -> int:
     return int(done.stdout.split()[-1])
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(platform.libc_ver()[0] != "glibc", reason="glibc's malloc thresholds")
 def test_freed_blocks_are_reused_instead_of_faulted_in_again() -> None:
     pages = 3 * 8 * 1024 * 1024 // 4096  # of one round's blocks

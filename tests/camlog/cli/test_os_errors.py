@@ -15,12 +15,14 @@ from pathlib import Path
 import pytest
 
 from tests.conftest import REPO_ROOT
+from tests.slow import renders
 
 LIMIT_BYTES = 60_000
 IMAGES = "/stereo_camera/left/image_raw"
 
 
 @pytest.fixture(scope="module")
+@renders
 def noisy_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """red_block with sensor noise (incompressible): 10 frames per camera, 840 kB."""
     path = tmp_path_factory.mktemp("noisy") / "noisy.mcap"
@@ -68,6 +70,7 @@ CASES = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("case", sorted(CASES))
 def test_write_refused_by_the_os_is_one_line_and_leaves_nothing(
     tmp_path: Path, noisy_log: Path, mono_calibration_log: Path, image_folder: Path, case: str

@@ -40,6 +40,7 @@ def killed_recording(folder: Path, final_name: str) -> tuple[Path, int]:
     return leftover, images
 
 
+@pytest.mark.slow
 def test_record_leaves_earlier_leftovers_and_user_files_alone(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     output = tmp_path / "run.mcap"

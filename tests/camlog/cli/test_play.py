@@ -15,6 +15,7 @@ from tests.recordings import RED_FRAMES
 from tests.rrd import Receiver, load_rrd, rerun_cli
 
 
+@pytest.mark.slow
 def test_play_into_a_log_at_a_high_rate(red_log: Path, tmp_path: Path,
                                         capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / "played.mcap"

@@ -18,6 +18,7 @@ from replay.frames import decode_frame, decompress, encode_compressed
 from replay.geometry import rotation_from_quat_xyzw
 from replay.topics import PROCESSED
 from tests.outputs import temp_outputs
+from tests.slow import renders
 
 LEFT = "/stereo_camera/left"
 IMAGE = f"{LEFT}/image_raw"
@@ -50,6 +51,7 @@ def moving_block_spec(tmp: Path) -> Path:
 
 
 @pytest.fixture(scope="module")
+@renders
 def red_block(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The chapter's scene at the chapter's 640x480 (the centroid claim depends on it)."""
     return record(tmp_path_factory.mktemp("red") / "red_block.mcap", "red_block",
@@ -143,6 +145,7 @@ def test_edges_lie_on_the_projected_block_outline(processed: Path) -> None:
     assert np.all(to_edge[v, u] <= 1.5)
 
 
+@pytest.mark.slow
 def test_moving_block_centroid_follows_the_ground_truth(tmp_path: Path) -> None:
     log = record(tmp_path / "moving.mcap", str(moving_block_spec(tmp_path)),
                  "--frames", "24", "--resolution", "320x240")
@@ -174,6 +177,7 @@ def test_moving_block_centroid_follows_the_ground_truth(tmp_path: Path) -> None:
     assert len(positions) >= 6  # the block really moved
 
 
+@pytest.mark.slow
 def test_every_third_frame_and_rate_limit(tmp_path: Path) -> None:
     log = record(tmp_path / "red.mcap", "red_block", "--frames", "10", "--resolution",
                  "320x240")

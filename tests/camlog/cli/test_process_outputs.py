@@ -101,7 +101,7 @@ def run_failing(capsys: pytest.CaptureFixture[str], out: Path, *argv: str) -> st
 @pytest.mark.parametrize(("flags", "needle"), [
     (["--edges", "--low", "-1"], "--low: must be >= 0, got -1.0"),
     (["--edges", "--low", "abc"], "--low: expected a finite number, got 'abc'"),
-    (["--edges", "--low", "200", "--high", "100"], "--low/--high: Canny thresholds need"),
+    (["--edges", "--low", "200", "--high", "100"], "--low, --high: Canny thresholds need"),
     (["--red-pixels", "--ratio", "2.5"], "--ratio: expected an integer, got '2.5'"),
     (["--ratio", "3", "--edges"], "--ratio needs --red-pixels"),
     (["--edges", "--every", "0"], "--every: must be >= 1, got 0"),

@@ -71,6 +71,7 @@ def test_top_level_help_lists_each_command_with_a_summary(
         assert len(summary.split()) >= 4, line
 
 
+@pytest.mark.slow
 def test_record_help_documents_every_option(capsys: pytest.CaptureFixture[str]) -> None:
     with pytest.raises(SystemExit) as info:
         main(["record", "--help"])
@@ -94,6 +95,7 @@ def test_record_help_documents_every_option(capsys: pytest.CaptureFixture[str]) 
 
 # --- outputs --------------------------------------------------------------------------------
 
+@pytest.mark.slow
 def test_record_writes_the_output_and_no_partial(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -108,6 +110,7 @@ def test_record_writes_the_output_and_no_partial(
     assert all(isinstance(i, Image) and i.pixels.shape == (48, 64, 3) for i in images)
 
 
+@pytest.mark.slow
 def test_record_a_fisheye_from_the_command_line(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -124,6 +127,7 @@ def test_record_a_fisheye_from_the_command_line(
     assert info.k[0, 0] == pytest.approx(32 / 0.6)  # equidistant: fx = (W / 2) / (hfov / 2)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "fmt"), [("run.bag", "ros1"), ("run", "rosbag2")])
 def test_output_format_follows_the_name(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], name: str, fmt: str
@@ -137,6 +141,7 @@ def test_output_format_follows_the_name(
     assert temp_outputs(tmp_path) == []
 
 
+@pytest.mark.slow
 def test_existing_output_needs_overwrite(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
@@ -159,6 +164,7 @@ def _size(path: Path) -> int:
     return path.stat().st_size if path.exists() else 0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("name", "written"), [("crash.mcap", 300_000),
                                                ("crash.bag", 2_500_000),  # 1 MiB chunks
                                                ("crash", 300_000)],
@@ -271,6 +277,7 @@ def test_unknown_output_suffix(tmp_path: Path, capsys: pytest.CaptureFixture[str
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("args", [
     ["--resolution", "abc"],
     ["--intrinsics", "1,2,3"],
@@ -287,6 +294,7 @@ def test_usage_errors_exit_2(capsys: pytest.CaptureFixture[str], args: list[str]
     assert "Traceback" not in err
 
 
+@pytest.mark.slow
 def test_missing_gl_backend_is_one_line(tmp_path: Path) -> None:
     env = {**os.environ, "MUJOCO_GL": "nonexistent_backend"}
     result = camlog("record", "-o", str(tmp_path / "x.mcap"), *QUICK, env=env)

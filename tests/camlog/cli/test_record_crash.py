@@ -76,6 +76,7 @@ def record_until_killed(output: Path, *, fmt: str, seconds: float) -> list[tuple
     return rendered
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("fmt", ["mcap", "rosbag2", "rosbag2-sqlite3", "ros1"])
 def test_killed_recording_keeps_all_but_the_last_second(tmp_path: Path, fmt: str) -> None:
     out = tmp_path / "out"
@@ -102,6 +103,7 @@ def camlog(*args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
                           capture_output=True, text=True, timeout=300, check=False)
 
 
+@pytest.mark.slow
 def test_a_killed_recordings_leftover_is_found_and_recovered(tmp_path: Path) -> None:
     record_until_killed(tmp_path / "rec.mcap", fmt="mcap", seconds=1.5)
     leftover = only_entry(tmp_path)
@@ -139,6 +141,7 @@ LAUNCH = ("import sys; from camlog.cli import main; print('started', flush=True)
           "sys.exit(main())")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("delay_s", INTERRUPT_AFTER_S)
 def test_ctrl_c_at_any_moment_ends_cleanly(tmp_path: Path, delay_s: float) -> None:
     out = tmp_path / "out"

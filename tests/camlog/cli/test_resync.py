@@ -11,12 +11,14 @@ import pytest
 from camlog.cli import main
 from replay import CameraInfo, Image, PointStamped, Text, open_reader
 from tests.outputs import temp_outputs
+from tests.slow import renders
 
 SCENARIOS = Path(__file__).resolve().parents[3] / "datasets" / "scenarios"
 FRAMES = 90
 
 
 @pytest.fixture(scope="module")
+@renders
 def unsynced(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """stereo_unsynced with many drops and 0.5 ms jitter.
 

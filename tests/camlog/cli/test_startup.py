@@ -40,6 +40,7 @@ def loaded_by(*argv: str) -> set[str]:
     return set(json.loads(done.stdout.splitlines()[-1]))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("argv", [
     ["--help"],
     [],
@@ -59,6 +60,7 @@ def test_help_and_argument_errors_load_no_heavy_library(argv: list[str]) -> None
     assert loaded_by(*argv) & set(HEAVY) == set()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", sorted(COMMANDS))
 def test_every_command_s_help_loads_no_heavy_library(command: str) -> None:
     """Each command's parser takes its choices and defaults from light modules
@@ -66,6 +68,7 @@ def test_every_command_s_help_loads_no_heavy_library(command: str) -> None:
     assert loaded_by(command, "--help") & set(HEAVY) == set()
 
 
+@pytest.mark.slow
 def test_the_parser_is_built_without_heavy_libraries() -> None:
     script = ("import sys; from camlog.cli import build_parser; build_parser(['view', 'info']); "
               "print(' '.join(sorted(sys.modules)))")
@@ -76,6 +79,7 @@ def test_the_parser_is_built_without_heavy_libraries() -> None:
     assert "camlog" in loaded  # the parser did load camlog's own modules
 
 
+@pytest.mark.slow
 def test_info_on_a_log_loads_no_opencv_protobuf_or_viewer() -> None:
     log = GOLDEN / "red_block-seed0-640x480-f10.mcap"
     assert log.is_file()
@@ -84,6 +88,7 @@ def test_info_on_a_log_loads_no_opencv_protobuf_or_viewer() -> None:
     assert "mcap" in loaded  # the log was read
 
 
+@pytest.mark.slow
 def test_info_on_an_mcap_log_loads_neither_numpy_nor_rosbags() -> None:
     """Counts and spans come from the index, the first image is described from its bytes."""
     log = GOLDEN / "stereo_unsynced-seed0-640x480-f240.mcap"
@@ -92,6 +97,7 @@ def test_info_on_an_mcap_log_loads_neither_numpy_nor_rosbags() -> None:
     assert "mcap_ros2" in loaded  # the first image and camera info were decoded
 
 
+@pytest.mark.slow
 def test_convert_without_progress_loads_neither_tqdm_nor_an_image_codec(tmp_path: Path) -> None:
     """Messages are copied as bytes: no image is decoded, no bar is shown."""
     log = GOLDEN / "red_block-seed0-640x480-f10.mcap"
@@ -101,6 +107,7 @@ def test_convert_without_progress_loads_neither_tqdm_nor_an_image_codec(tmp_path
     assert "rosbags" in loaded
 
 
+@pytest.mark.slow
 def test_reading_an_mcap_log_loads_no_other_format_library() -> None:
     log = GOLDEN / "red_block-seed0-640x480-f10.mcap"
     loaded = loaded_by("info", str(log))
@@ -116,6 +123,7 @@ def run_loading(*argv: str) -> tuple[subprocess.CompletedProcess[str], set[str]]
     return done, set(json.loads(done.stdout.splitlines()[-1]))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("command", ["view", "convert", "record"])
 def test_an_existing_output_is_refused_before_the_heavy_start_up(
         command: str, tmp_path: Path) -> None:
@@ -131,6 +139,7 @@ def test_an_existing_output_is_refused_before_the_heavy_start_up(
     assert set(HEAVY) & loaded == set()
 
 
+@pytest.mark.slow
 def test_view_refuses_to_write_over_its_log_before_loading_rerun(tmp_path: Path) -> None:
     log = tmp_path / "run.mcap"
     log.write_bytes((GOLDEN / "red_block-seed0-640x480-f10.mcap").read_bytes())
@@ -140,6 +149,7 @@ def test_view_refuses_to_write_over_its_log_before_loading_rerun(tmp_path: Path)
     assert "rerun" not in loaded
 
 
+@pytest.mark.slow
 def test_view_keeps_pyarrow_from_loading_pandas(tmp_path: Path) -> None:
     """pyarrow imports an installed pandas on its first list conversion (0.3-0.4 s); the
     test extra installs pandas (with rerun-sdk[catalog]), so the check below is live."""
@@ -157,6 +167,7 @@ def test_view_keeps_pyarrow_from_loading_pandas(tmp_path: Path) -> None:
     assert done.stderr == ""  # e.g. no RerunWarning: every component converted
 
 
+@pytest.mark.slow
 def test_main_called_by_other_code_leaves_its_pandas_importable(tmp_path: Path) -> None:
     """Code that calls camlog's main() keeps its pandas (pyarrow would remember it absent)."""
     script = ("import sys; from camlog.cli import main; main(sys.argv[1:]); import pandas; "
@@ -168,6 +179,7 @@ def test_main_called_by_other_code_leaves_its_pandas_importable(tmp_path: Path) 
     assert done.stdout.splitlines()[-1] == "pandas"
 
 
+@pytest.mark.slow
 def test_calibrate_with_its_report_loads_no_bar_plotting_or_viewer_library(
         mono_calibration_log: Path, tmp_path: Path) -> None:
     """The figures are drawn with OpenCV; no bar is shown without a terminal."""
@@ -193,6 +205,7 @@ print(native, os.environ.get("OPENBLAS_NUM_THREADS"))
 """
 
 
+@pytest.mark.slow
 @pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="counts threads in /proc")
 def test_numpy_loads_with_one_blas_thread_unless_told_otherwise() -> None:
     """camlog's linear algebra is small: OpenBLAS starts no thread of its own."""
@@ -207,6 +220,7 @@ def test_numpy_loads_with_one_blas_thread_unless_told_otherwise() -> None:
     assert threads == {None: 1, "2": 2}
 
 
+@pytest.mark.slow
 def test_a_caller_of_main_keeps_its_blas_threads() -> None:
     """Called from other code with its arguments, main() leaves the process's settings."""
     env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}

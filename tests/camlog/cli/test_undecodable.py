@@ -301,6 +301,7 @@ def _damaged_stills_log(path: Path) -> Path:
     return path
 
 
+@pytest.mark.slow
 def test_decoders_own_messages_stay_off_the_terminal(tmp_path: Path) -> None:
     log = _damaged_stills_log(tmp_path / "damaged.mcap")
     done = subprocess.run(

@@ -12,6 +12,7 @@ from tests.recordings import chunked_camera_log, corrupt_middle_chunk
 from tests.rrd import load_rrd, rerun_cli
 
 
+@pytest.mark.slow
 def test_view_writes_an_rrd_beside_the_log(red_processed_log: Path, tmp_path: Path,
                                            capsys: pytest.CaptureFixture[str]) -> None:
     log = tmp_path / "run.mcap"
@@ -68,6 +69,7 @@ def test_bad_option_values_are_usage_errors(red_log: Path,
         assert "expected" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 @pytest.mark.realdata
 def test_real_t265_bag(realdata_dir: Path, tmp_path: Path,
                        capsys: pytest.CaptureFixture[str]) -> None:

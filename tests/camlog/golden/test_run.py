@@ -23,6 +23,7 @@ from camlog.golden.tolerances import TOLERANCES, tolerance_for
 from processors import red_pixels
 from processors.edges import Edges
 from replay.messages import Image
+from tests.slow import renders
 
 GOLDEN = golden.golden_dir()
 EXPECTED = GOLDEN / "expected"
@@ -30,6 +31,7 @@ RED = "red_block-seed0-640x480-f10"
 
 
 @pytest.fixture(scope="module")
+@renders
 def artifacts(tmp_path_factory: pytest.TempPathFactory) -> golden.Artifacts:
     """Every golden output, computed once from the committed inputs (one camlog worker)."""
     assert golden.verify_inputs(GOLDEN) == []
@@ -71,6 +73,7 @@ def test_outputs_do_not_depend_on_workers(artifacts: golden.Artifacts, tmp_path:
     assert golden.artifacts_equal(artifacts, again) == []
 
 
+@pytest.mark.slow
 def test_a_one_pixel_centroid_shift_fails_with_the_numbers(
         monkeypatch: pytest.MonkeyPatch, tmp_path: Path, update_goldens: bool) -> None:
     skip_when_updating(update_goldens)
@@ -100,6 +103,7 @@ def test_a_one_pixel_centroid_shift_fails_with_the_numbers(
     assert not (tmp_path / "after").exists()
 
 
+@pytest.mark.slow
 def test_edges_shifted_by_one_pixel_fail_by_rms(
         monkeypatch: pytest.MonkeyPatch, tmp_path: Path, update_goldens: bool) -> None:
     skip_when_updating(update_goldens)
@@ -185,6 +189,7 @@ def test_a_changed_input_byte_is_refused(tmp_path: Path) -> None:
         golden.compute_outputs(tmp_path, tmp_path / "work", only=[RED])
 
 
+@pytest.mark.slow
 def test_record_writes_the_input_and_its_manifest_entry(
         monkeypatch: pytest.MonkeyPatch, tmp_path: Path) -> None:
     tiny = golden.GoldenInput("red_block", seed=3, width=64, height=48, frames=2)
@@ -198,6 +203,7 @@ def test_record_writes_the_input_and_its_manifest_entry(
     assert golden.verify_inputs(tmp_path) == []
 
 
+@pytest.mark.slow
 def test_cli_check(capsys: pytest.CaptureFixture[str], update_goldens: bool) -> None:
     skip_when_updating(update_goldens)
     assert main(["golden", "check", "--only", "red_block", "--workers", "2"]) == 0

@@ -64,6 +64,7 @@ def test_round_trip_through_every_format_is_byte_exact(
         assert anyreader_count(back) == len(original)
 
 
+@pytest.mark.slow
 def test_rerun_reads_converted_mcap_logs(sample_log: Path, tmp_path: Path) -> None:
     bag = tmp_path / "bag2"
     convert_log(ConvertRequest(input=sample_log, output=bag, format="rosbag2", progress=False))

@@ -14,14 +14,19 @@ import pytest
 from camlog.batch.pipeline import STEPS, parse_pipeline
 from camlog.cli import build_parser
 from camlog.golden.jobs import Calibrate, Process, Resync
+from camlog.requests.batch import BatchRequest
 from camlog.requests.calibrate import CalibrateRequest
 from camlog.requests.check import CheckRequest
-from camlog.requests.fields import Arg, arg_of, request_fields
+from camlog.requests.demo import DemoRequest
+from camlog.requests.fields import Arg, arg_of, key_of, request_fields
+from camlog.requests.golden import GoldenRequest
 from camlog.requests.logs import ConvertRequest, ExportRequest, ImportRequest, InfoRequest
 from camlog.requests.play import PlayRequest, ViewRequest
 from camlog.requests.processing import ProcessRequest, ResyncRequest, ThrottleRequest
+from camlog.requests.record import RecordRequest
 from camlog.requests.table import table_value
 from camlog.requests.values import namespaces
+from tests.conftest import REPO_ROOT
 
 #: command -> (its request, the smallest command line it accepts)
 COMMANDS: dict[str, tuple[type, list[str]]] = {
@@ -29,8 +34,7 @@ COMMANDS: dict[str, tuple[type, list[str]]] = {
     "resync": (ResyncRequest, ["in.mcap", "-o", "out.mcap"]),
     "process": (ProcessRequest, ["in.mcap", "-o", "out.mcap", "--topic", "/c/image_raw",
                                  "--edges"]),
-    "throttle": (ThrottleRequest, ["in.mcap", "-o", "out.mcap", "--topic", "/c/image_raw",
-                                   "--every", "2"]),
+    "throttle": (ThrottleRequest, ["in.mcap", "-o", "out.mcap", "--topic", "/c/image_raw"]),
     "convert": (ConvertRequest, ["in.mcap", "out.mcap"]),
     "export": (ExportRequest, ["in.mcap", "--topic", "/c/image_raw", "-o", "frames"]),
     "info": (InfoRequest, ["in.mcap"]),
@@ -38,6 +42,10 @@ COMMANDS: dict[str, tuple[type, list[str]]] = {
     "play": (PlayRequest, ["in.mcap"]),
     "view": (ViewRequest, ["in.mcap"]),
     "import": (ImportRequest, ["frames", "-o", "out.mcap"]),
+    "record": (RecordRequest, ["red_block"]),
+    "batch": (BatchRequest, ["p.toml", "in.mcap"]),
+    "golden": (GoldenRequest, ["update"]),
+    "demo": (DemoRequest, []),
 }
 
 #: the fields a batch step does not take as keys, and why
@@ -58,6 +66,10 @@ NO_STEP = {
     "import": "reads a folder of images, not a log: a batch runs over logs",
     "view": "a recording of many logs at once, for a person to look at: run it on the "
             "batch's outputs",
+    "record": "simulates a scenario: its input is a scenario, not a log",
+    "batch": "runs the steps: a batch is not a step of its own",
+    "golden": "runs over the committed golden inputs, not over a batch's logs",
+    "demo": "records its own inputs and runs the other commands' flows in one folder",
 }
 
 #: command -> its golden job (building the job from the request)
@@ -79,6 +91,12 @@ NO_GOLDEN = {
     "play": "real-time pacing: its wall-clock timing is not a regression artifact",
     "import": "its input is a folder of images, not a golden log",
     "view": "rerun's recordings change with rerun; the docs' view examples read them back",
+    "record": "the golden inputs are its recordings (camlog golden record), checked by their "
+              "sha256",
+    "batch": "runs the flows of resync, calibrate and process, which have golden jobs",
+    "golden": "it is the golden check",
+    "demo": "runs the flows of record, resync, calibrate, process and view: its wall time is "
+            "a benchmark (demo_time)",
 }
 
 #: (command, field) -> the fields it needs beside it, for the request's own checks
@@ -91,11 +109,23 @@ COMPANIONS: dict[tuple[str, str], dict[str, Any]] = {
 }
 
 
+#: a calibration file, for the options that read one (rectify, undistort)
+CALIBRATION = str(REPO_ROOT / "datasets" / "golden" / "expected" /
+                  "mono_checkerboard-seed0-640x480-f240" / "calibrate" / "ost.yaml")
+
+
+#: a word for the options whose value has a shape of its own (by metavar)
+WORDS = {"WxH": "64x48", "FX,FY,CX,CY": "60,60,31.5,23.5",
+         "MODEL:K1,K2,...": "equidistant:0,0,0,0", "CAMERA:AXIS:DEGREES@S": "left:roll:1@2"}
+
+
 def word(arg: Arg) -> str:
     """A command-line word the option's type accepts."""
     if arg.choices:
-        return arg.choices[-1]
-    return "/a,/b" if arg.type is namespaces else "3"
+        return str(arg.choices[-1])
+    if arg.metavar == "OST.YAML":
+        return CALIBRATION
+    return WORDS.get(arg.metavar or "", "/a,/b" if arg.type is namespaces else "3")
 
 
 def test_every_command_is_listed() -> None:
@@ -129,17 +159,37 @@ def _typed(arg: Arg) -> Any:
         return arg.action == "store_true"
     text = word(arg)
     value: Any = text
-    if arg.type is not None and not arg.choices and arg.type is not namespaces:
+    if arg.type is not None and not arg.choices and arg.type is not namespaces \
+            and arg.metavar != "OST.YAML":
         value = 3
     return [value] if arg.action in ("append", "extend") or arg.nargs == "+" else value
 
 
 def _with(command: str, field: Field[Any], value: Any) -> dict[str, Any]:
-    """``field = value`` and the fields a request of ``command`` needs beside it."""
+    """``field = value`` and the fields a request of ``command`` needs beside it (a
+    processor's option needs the processor's flag)."""
     required = {"size": "7x6", "square": 0.01, "topic": "/c/image_raw"}
-    return {**{f.name: required[f.name] for f in request_fields(COMMANDS[command][0])
+    processor, dot, _ = key_of(field).partition(".")
+    return {**{f.name: (required[f.name],) if arg_of(f).action in ("append", "extend")
+               else required[f.name] for f in request_fields(COMMANDS[command][0])
                if f.default is dataclasses.MISSING},
+            **({processor: True} if dot else {}),
             field.name: value, **COMPANIONS.get((command, field.name), {})}
+
+
+def _keyed(command: str, field: Field[Any], values: dict[str, Any]) -> dict[str, Any]:
+    """``values`` (by field name) as a pipeline step's table: a dotted key is a key of a
+    table (``edges.low`` of ``edges = {low = ...}``)."""
+    fields = {f.name: f for f in request_fields(COMMANDS[command][0])}
+    table: dict[str, Any] = {}
+    for name, value in values.items():
+        head, dot, tail = key_of(fields[name]).partition(".")
+        if dot:
+            table[head] = {**(table[head] if isinstance(table.get(head), dict) else {}),
+                           tail: value}
+        elif not isinstance(table.get(head), dict):
+            table[head] = value
+    return table
 
 
 @pytest.mark.parametrize(("command", "field"), CASES)
@@ -152,10 +202,13 @@ def test_a_pipeline_step_takes_the_field(command: str, field: Field[Any]) -> Non
         assert field.name in SET_BY_THE_BATCH
         assert field.name not in STEPS[command].keys
         return
-    table = {k: list(v) if isinstance(v, tuple) else v
-             for k, v in _with(command, field, _typed(arg)).items()}
-    processors = {"process": {"edges": True}, "throttle": {"every": 2}}.get(command, {})
-    (step,) = parse_pipeline({"steps": [{"run": command, **table, **processors}]},
+    table = _keyed(command, field, {k: list(v) if isinstance(v, tuple) else v
+                                    for k, v in _with(command, field, _typed(arg)).items()})
+    # a processor to run, unless the field chooses one (throttle's every and rate exclude
+    # each other)
+    processors = {"process": {"edges": True},
+                  "throttle": {} if arg.group else {"every": 2}}.get(command, {})
+    (step,) = parse_pipeline({"steps": [{"run": command, **processors, **table}]},
                              "p.toml").steps
     assert getattr(step.request, field.name) == table_value(arg, _typed(arg))
 

@@ -128,6 +128,7 @@ def test_rational_polynomial_lens_from_partial_views() -> None:
     assert_meets_the_targets(result, 0, RATIONAL)
 
 
+@pytest.mark.slow
 def test_rational_denominator_held_by_its_prior(monkeypatch: pytest.MonkeyPatch) -> None:
     """Boards over the middle 70 % of the image: numerator and denominator can grow together
     (the corners cannot tell), which the prior on k4, k5, k6 stops; without it the image
@@ -170,6 +171,7 @@ def test_circle_grid_on_a_distorted_lens() -> None:
     assert_meets_the_targets(result, 0, BARREL)
 
 
+@pytest.mark.slow
 def test_circle_grid_seen_as_disc_centroids() -> None:
     """What a detector measures of a circle is the centroid of its disc's image, up to
     0.4 px from the projected centre here. Taken for the centres, that biases the focal
@@ -199,6 +201,7 @@ def test_circle_grid_seen_as_disc_centroids() -> None:
     assert abs(result.models[0].fx - reference.models[0].fx) < 0.1 * reference.std[0]["fx"]
 
 
+@pytest.mark.slow
 def test_stereo_rig_and_both_cameras() -> None:
     """stereo_heldout's rig: two different narrow lenses, 1.2 degrees of yaw between them,
     its 7x6 board 0.15-0.32 m away. At this field of view (35 degrees) the principal point's

@@ -43,6 +43,7 @@ def _inwards(error_px: np.ndarray, at_px: np.ndarray) -> float:
     return float(np.mean(np.sum(error_px * towards, axis=1)))
 
 
+@pytest.mark.slow
 def test_board_plane_corners_lose_the_bias_of_corner_subpix_on_a_fisheye() -> None:
     image, pose, true_px = _near_the_corner()
     plain = refinement_error_px(FISHEYE, pose, BOARD, image=image)
@@ -63,6 +64,7 @@ def test_board_plane_corners_lose_the_bias_of_corner_subpix_on_a_fisheye() -> No
     assert rms_after < 0.7 * rms_before
 
 
+@pytest.mark.slow
 def test_a_corner_whose_patch_leaves_the_image_is_not_measured() -> None:
     image, pose, _ = _near_the_corner()
     points = BOARD.points_in_board()
@@ -104,6 +106,7 @@ def _saddle(corner: np.ndarray, *, marker: float, noise: float, rng: np.random.G
     return (image + rng.normal(0.0, noise, image.shape)).astype(np.float32)
 
 
+@pytest.mark.slow
 def test_cross_corners_use_the_edges_beyond_the_markers() -> None:
     """Around a ChArUco corner (markers 29/40 of a square), the two edges alone locate the
     corner with less noise than cornerSubPix in the small window that stays clear of the
@@ -125,6 +128,7 @@ def test_cross_corners_use_the_edges_beyond_the_markers() -> None:
     assert np.abs(np.mean(found_cross, axis=0)).max() < 0.015
 
 
+@pytest.mark.slow
 def test_charuco_corners_on_the_board_plane_are_not_pulled_by_the_markers() -> None:
     """On the mono_charuco lens, noise-free: cornerSubPix on the board plane with a
     chessboard's window is pulled by the markers; the edge bands are not."""

@@ -62,6 +62,7 @@ def test_mono_recovers_the_camera_within_its_uncertainty() -> None:
                                    atol=1e-3)
 
 
+@pytest.mark.slow
 def test_uncertainty_matches_the_spread_over_noise_draws() -> None:
     """error / sigma has RMS about 1 over repeated noise draws: the covariance is honest."""
     z = []
@@ -131,6 +132,7 @@ def test_views_of_one_camera_alone_still_count() -> None:
     assert max(abs(v) for v in errors_in_sigma(result, 1, true_model()).values()) < 3.5
 
 
+@pytest.mark.slow
 def test_a_camera_placed_through_another() -> None:
     """Camera 2 never shares an instant with camera 0: it is placed through camera 1."""
     placements = [np.eye(4), RIGHT_FROM_LEFT, RIGHT_FROM_LEFT @ RIGHT_FROM_LEFT]

@@ -80,11 +80,13 @@ def chosen(corners: list[F64]) -> str:
     return order_label(choice_of(corners).options)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_a_sizeable_k3_is_chosen(seed: int) -> None:
     assert chosen(board_views(WITH_K3, seed)) == "plumb_bob k1 k2 k3"
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_without_k3_k1_k2_are_kept(seed: int) -> None:
     choice = choice_of(board_views(WITHOUT_K3, seed))
@@ -92,6 +94,7 @@ def test_without_k3_k1_k2_are_kept(seed: int) -> None:
     assert len(choice.candidates) == 2  # k3 not needed: rational_polynomial is not tried
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1, 2, 3, 4])
 def test_errors_shared_within_views_do_not_ask_for_more(seed: int) -> None:
     # each view's corners share an error 3x their own noise: the case in which a likelihood
@@ -99,10 +102,12 @@ def test_errors_shared_within_views_do_not_ask_for_more(seed: int) -> None:
     assert chosen(board_views(WITHOUT_K3, seed, shared_px=0.5)) == "plumb_bob k1 k2"
 
 
+@pytest.mark.slow
 def test_a_sizeable_k3_is_chosen_through_errors_shared_within_views() -> None:
     assert chosen(board_views(WITH_K3, 0, shared_px=0.05, count=40)) == "plumb_bob k1 k2 k3"
 
 
+@pytest.mark.slow
 def test_the_choice_states_every_candidate_held_out() -> None:
     choice = choice_of(board_views(WITH_K3, 0))
     assert choice.views == 30 and choice.folds == 5
@@ -123,6 +128,7 @@ def test_too_few_views_keep_the_smallest_order() -> None:
     assert "not cross-validated" in choice.describe()
 
 
+@pytest.mark.slow
 def test_every_camera_chooses_from_its_own_views() -> None:
     with_k3, without = board_views(WITH_K3, 0), board_views(WITHOUT_K3, 1)
     views = [BoardView(camera, i, IDS, c) for camera, corners in enumerate((with_k3, without))
@@ -134,6 +140,7 @@ def test_every_camera_chooses_from_its_own_views() -> None:
     assert choose_orders(POINTS, views, [(s.W, s.H)] * 2, CalibrationOptions()) == [None, None]
 
 
+@pytest.mark.slow
 def test_the_cameras_and_folds_on_threads_choose_as_one_after_another() -> None:
     per_camera = [board_views(WITH_K3, 2, count=20), board_views(WITHOUT_K3, 3, count=20)]
     views = [BoardView(camera, i, IDS, c) for camera, corners in enumerate(per_camera)

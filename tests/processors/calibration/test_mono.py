@@ -63,6 +63,7 @@ def test_recovers_the_camera_within_its_uncertainty(poses: list[np.ndarray]) -> 
         assert np.array_equal(result.camera_from_board(i), result.reference_from_board[i])
 
 
+@pytest.mark.slow
 def test_uncertainty_matches_the_spread_over_noise_draws(poses: list[np.ndarray]) -> None:
     """The reported sigma is the scatter a parameter really shows from one noise draw to the next:
     errors divided by sigma have RMS ≈ 1 over repeated draws."""
@@ -147,6 +148,7 @@ def test_too_few_views(poses: list[np.ndarray]) -> None:
         solve(views(true_model(), poses[:4], NOISE_PX, seed=3))
 
 
+@pytest.mark.slow
 def test_cross_validation_vanishes_without_noise_and_grows_with_it(
     poses: list[np.ndarray]
 ) -> None:
@@ -222,6 +224,7 @@ def test_auto_tangential_drops_p1_p2_when_the_lens_has_none(poses: list[np.ndarr
     assert abs(auto.models[0].cx - K_TRUE[0, 2]) < 3 * auto.std[0]["cx"]
 
 
+@pytest.mark.slow
 def test_auto_tangential_statistic_follows_chi_square_2(poses: list[np.ndarray]) -> None:
     """Without tangential distortion, the statistic is chi-square with 2 degrees of freedom
     (mean 2) over noise draws; with the lens's p1, p2 it is far above the threshold."""

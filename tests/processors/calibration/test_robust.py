@@ -83,6 +83,7 @@ def test_a_view_with_one_corner_where_its_seed_pose_puts_it_sits_the_first_solve
     assert problem.sigma_px < 1.3 * NOISE_PX
 
 
+@pytest.mark.slow
 def test_a_pair_showing_two_poses_leaves_the_rig_and_its_view_stays_in_its_camera() -> None:
     rng = np.random.default_rng(4)
     right_from_left = pose(np.array([0.0, 0.02, 0.0]), np.array([-0.1, 0.0, 0.0]))

@@ -33,6 +33,7 @@ def solve(noise_px: float, seed: int) -> tuple[object, uncertainty.UncertaintyMa
     return result, umap, error
 
 
+@pytest.mark.slow
 def test_true_errors_follow_the_predicted_covariance() -> None:
     """Mahalanobis distance squared of the true error averages 2 (two dimensions)."""
     squared = []
@@ -44,6 +45,7 @@ def test_true_errors_follow_the_predicted_covariance() -> None:
     assert 1.4 < mean < 2.8, mean
 
 
+@pytest.mark.slow
 def test_uncertainty_and_cross_validation_match_the_true_error_over_noise_draws() -> None:
     """Over draws, the true error of rays is as large as the uncertainty says (1 sigma in the
     worst direction: the 2-D error's RMS is 1 to sqrt(2) times it) and as the cross-validation

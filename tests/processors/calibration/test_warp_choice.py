@@ -59,6 +59,7 @@ def test_the_shapes_bow_the_middle_and_hold_the_edges() -> None:
     assert bowed[:, 2].max() == pytest.approx(0.0015 * shapes[:, 0].max(), abs=1e-3)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [1, 2])
 def test_a_bowed_board_is_chosen_and_its_warp_recovered(seed: int) -> None:
     result = calibrated(board_views(BOW_M, seed))
@@ -75,6 +76,7 @@ def test_a_bowed_board_is_chosen_and_its_warp_recovered(seed: int) -> None:
     assert result.rms_px < 0.15  # the bow is fitted away: noise of 0.1 px per coordinate
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("seed", "shared_px"), [(3, 0.0), (4, 0.0), (5, 0.3), (6, 0.3)])
 def test_a_flat_board_stays_flat(seed: int, shared_px: float) -> None:
     views = board_views(np.zeros(2), seed, shared_px=shared_px)
