@@ -34,6 +34,9 @@ TABLES = {
     "calibration_accuracy": "python -m benchmarks.calibrate_speed --write-docs",
     "vs_mrcal": "python -m benchmarks.vs_mrcal --write-docs",
     "corpus": "python -m benchmarks.corpus.run --write-docs",
+    "time_offset_board": "python -m benchmarks.time_offset --cases board --write-docs",
+    "time_offset_natural": "python -m benchmarks.time_offset --cases natural --write-docs",
+    "time_offset_rig": "python -m benchmarks.time_offset --cases rig --write-docs",
 }
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -111,3 +112,15 @@ def parse_camera(
                                    f"({1.0 / spec.rate_hz:.4g} s), got {spec.exposure_s}")
     f.check_unknown()
     return spec
+
+
+def named_camera(f: SpecTable, cameras: Sequence[CameraSpec], key: str = "camera") -> str:
+    """The name of the camera a table's ``key`` names by its name or namespace (an error
+    listing the cameras when none matches)."""
+    named = f.text(key)
+    matches = [c.name for c in cameras
+               if named in (c.name, c.namespace, c.namespace.rstrip("/"))]
+    if not matches:
+        known = ", ".join(f"{c.name} ({c.namespace})" for c in cameras)
+        raise f.fail(key, f"no camera {named!r} (cameras: {known})")
+    return matches[0]

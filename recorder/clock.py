@@ -8,15 +8,23 @@ from dataclasses import dataclass
 import numpy as np
 
 from .cameras import CameraSpec
+from .latency import LatencySpec, latency_at
 
 
 @dataclass(frozen=True)
 class Shot:
-    """Camera ``camera_index`` takes its ``frame_index``-th frame at ``t_s`` (sim time)."""
+    """Camera ``camera_index`` takes its ``frame_index``-th frame at ``t_s`` (sim time,
+    mid-exposure) and stamps it ``latency_s`` later (:mod:`recorder.latency`)."""
 
     t_s: float
     camera_index: int
     frame_index: int
+    latency_s: float = 0.0
+
+    @property
+    def stamp_s(self) -> float:
+        """The time the frame's messages are stamped with (sim time)."""
+        return self.t_s + self.latency_s
 
 
 def camera_times(
@@ -42,17 +50,20 @@ def camera_times(
 
 def schedule(
     cameras: tuple[CameraSpec, ...], frame_counts: Sequence[int],
-    rngs: list[np.random.Generator],
+    rngs: list[np.random.Generator], latencies: Sequence[LatencySpec] = (),
 ) -> tuple[list[Shot], dict[int, np.ndarray]]:
-    """All shots in time order (cameras in spec order at equal times), and drops per camera;
-    camera ``i`` takes ``frame_counts[i]`` frames before drops."""
+    """All shots in stamp order (cameras in spec order at equal stamps), and drops per
+    camera; camera ``i`` takes ``frame_counts[i]`` frames before drops and stamps them
+    after their exposure as ``latencies`` say (:mod:`recorder.latency`). Latencies do not
+    touch the clock's random draws: a camera exposes at the same times with or without."""
     shots: list[Shot] = []
     drops: dict[int, np.ndarray] = {}
     for index, (camera, frame_count, rng) in enumerate(zip(cameras, frame_counts, rngs,
                                                            strict=True)):
         times, dropped = camera_times(camera, frame_count, rng)
         kept = np.setdiff1d(np.arange(frame_count), dropped)
-        shots += [Shot(float(t), index, int(k)) for t, k in zip(times, kept, strict=True)]
+        shots += [Shot(float(t), index, int(k), latency_at(camera, latencies, float(t)))
+                  for t, k in zip(times, kept, strict=True)]
         drops[index] = dropped
-    shots.sort(key=lambda s: (s.t_s, s.camera_index))
+    shots.sort(key=lambda s: (s.stamp_s, s.camera_index))
     return shots, drops

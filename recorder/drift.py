@@ -21,7 +21,7 @@ import numpy as np
 from replay.geometry import rotation_about
 from replay.messages import F64
 
-from .cameras import CameraSpec
+from .cameras import CameraSpec, named_camera
 from .spec_table import SpecTable
 
 #: drift axis -> the optical-frame axis it turns about
@@ -49,13 +49,7 @@ def parse_drift(table: Any, where: str, source: str,
                 cameras: Sequence[CameraSpec]) -> DriftSpec:
     """Resolve one ``[[drifts]]`` table; ``camera`` is a camera's name or namespace."""
     f = SpecTable(table, where, source)
-    named = f.text("camera")
-    matches = [c.name for c in cameras
-               if named in (c.name, c.namespace, c.namespace.rstrip("/"))]
-    if not matches:
-        known = ", ".join(f"{c.name} ({c.namespace})" for c in cameras)
-        raise f.fail("camera", f"no camera {named!r} (cameras: {known})")
-    drift = DriftSpec(camera=matches[0], axis=f.text("axis", choices=tuple(AXES)),
+    drift = DriftSpec(camera=named_camera(f, cameras), axis=f.text("axis", choices=tuple(AXES)),
                       degrees=f.number("degrees", low=-MAX_DEGREES, high=MAX_DEGREES),
                       start_s=f.number("start_s", 0.0, low=0.0))
     f.check_unknown()

@@ -10,7 +10,8 @@ of that interval, ``n`` chosen per frame so that no target point moves more than
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
+from functools import partial
 from typing import Protocol
 
 import numpy as np
@@ -20,8 +21,8 @@ from replay.messages import F64
 
 from .cameras import CameraSpec
 from .clock import Shot
-from .drift import DriftSpec, world_from_camera_at
 from .render import SceneRenderer
+from .rig_motion import CameraPoses
 from .target_spec import TargetSpec
 from .targets import outline_in_target
 
@@ -43,18 +44,21 @@ def subframe_times(t_s: float, exposure_s: float, count: int) -> F64:
 
 
 def subframe_count(camera: CameraSpec, trajectories: Sequence[PoseSource],
-                   outlines: Sequence[F64], t_s: float) -> int:
+                   outlines: Sequence[F64], t_s: float, *,
+                   world_from_camera: Callable[[float], F64] | None = None) -> int:
     """Sub-frames that keep every target point within ``BLUR_STEP_PX`` between renders:
-    from how far its outline moves in the image from the start to the end of exposure."""
+    from how far its outline moves in the image from the start to the end of exposure
+    (``world_from_camera``: the camera's pose at a time, for a moving rig; default its
+    pose at rest)."""
     if camera.exposure_s <= 0:
         return 1
-    camera_from_world = invert(camera.world_from_camera)
     moved_px = 0.0
     half = camera.exposure_s / 2
     for trajectory, outline in zip(trajectories, outlines, strict=True):
         ends = []
         for t in (t_s - half, t_s + half):
-            pose = camera_from_world @ trajectory.at(t)
+            pose = invert(camera.world_from_camera if world_from_camera is None
+                          else world_from_camera(t)) @ trajectory.at(t)
             ends.append(outline @ pose[:3, :3].T + pose[:3, 3])
         ahead = (ends[0][:, 2] > 0.01) & (ends[1][:, 2] > 0.01)
         if ahead.any():
@@ -65,12 +69,18 @@ def subframe_count(camera: CameraSpec, trajectories: Sequence[PoseSource],
 
 def render_exposure(renderer: SceneRenderer, camera_index: int, camera: CameraSpec, *,
                     trajectories: Sequence[PoseSource], outlines: Sequence[F64],
-                    t_s: float) -> np.ndarray:
+                    t_s: float, poses: CameraPoses | None = None) -> np.ndarray:
     """The ideal render ``(Hr, Wr, 3)`` uint8 of one frame exposed around ``t_s`` (the
-    renderer's poses are left at the last sub-frame)."""
-    count = subframe_count(camera, trajectories, outlines, t_s)
+    renderer's poses are left at the last sub-frame); a moving rig's camera (``poses``)
+    moves over the exposure too."""
+    moving = poses is not None and poses.moving
+    at = partial(poses.world_from_camera, camera_index) if poses is not None and moving \
+        else None
+    count = subframe_count(camera, trajectories, outlines, t_s, world_from_camera=at)
     total: np.ndarray | None = None
     for t in subframe_times(t_s, camera.exposure_s, count):
+        if at is not None:
+            renderer.place_camera(camera_index, at(float(t)))
         renderer.set_poses([trajectory.at(float(t)) for trajectory in trajectories])
         frame = renderer.render(camera_index)
         total = frame.astype(np.uint32) if total is None else total + frame
@@ -81,26 +91,29 @@ def render_exposure(renderer: SceneRenderer, camera_index: int, camera: CameraSp
 def rendered_shots(
     renderer: SceneRenderer, cameras: Sequence[CameraSpec], targets: Sequence[TargetSpec],
     trajectories: Sequence[PoseSource], shots: Iterable[Shot], *,
-    drifts: Sequence[DriftSpec] = (),
+    camera_poses: CameraPoses | None = None,
 ) -> Iterator[tuple[Shot, np.ndarray, list[F64]]]:
-    """Each shot with its ideal render and the targets' ``world_from_target`` at its stamp
-    (mid-exposure); cameras at one instant share one pose update. A camera with ``drifts``
-    is turned as they say at the shot's stamp (for its whole exposure)."""
+    """Each shot with its ideal render and the targets' ``world_from_target`` at its
+    exposure (mid-exposure); cameras at one instant share one pose update. A camera is
+    where ``camera_poses`` puts it at the shot's exposure (turned by its drifts, for its
+    whole exposure; carried by a moving rig, over its exposure); default: at rest."""
     outlines = [outline_in_target(t) for t in targets]
     last_t: float | None = None
     poses: list[F64] = []
+    drifts = camera_poses.drifts if camera_poses is not None else ()
+    moving = camera_poses is not None and camera_poses.moving
     started = [0] * len(cameras)  # drifts each camera is turned by
     for shot in shots:
         camera = cameras[shot.camera_index]
         now = sum(d.camera == camera.name and shot.t_s >= d.start_s for d in drifts)
-        if now != started[shot.camera_index]:
-            renderer.turn_camera(shot.camera_index,
-                                 world_from_camera_at(camera, drifts, shot.t_s))
+        if camera_poses is not None and (moving or now != started[shot.camera_index]):
+            renderer.place_camera(shot.camera_index,
+                                  camera_poses.world_from_camera(shot.camera_index, shot.t_s))
             started[shot.camera_index] = now
         if camera.exposure_s > 0:
             rendered = render_exposure(renderer, shot.camera_index, camera,
                                        trajectories=trajectories, outlines=outlines,
-                                       t_s=shot.t_s)
+                                       t_s=shot.t_s, poses=camera_poses)
             poses = [trajectory.at(shot.t_s) for trajectory in trajectories]
             last_t = None
         else:

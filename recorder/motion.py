@@ -106,6 +106,18 @@ def _pose(target: TargetSpec, parameters: F64) -> F64:
     return pose
 
 
+def catmull_rom(waypoints: F64, segment_s: float, t_s: float) -> F64:
+    """The Catmull-Rom spline (continuous velocity) through ``waypoints`` ``(N, D)``, the
+    ``i``-th reached at ``i * segment_s``, at time ``t_s`` ``(D,)`` (held at the ends)."""
+    last = len(waypoints) - 1
+    position = min(max(t_s, 0.0) / segment_s, float(last))
+    k = min(int(position), last - 1)
+    u = position - k
+    p0, p1, p2, p3 = (waypoints[min(max(i, 0), last)] for i in range(k - 1, k + 3))
+    return np.asarray(0.5 * (2 * p1 + (p2 - p0) * u + (2 * p0 - 5 * p1 + 4 * p2 - p3) * u * u
+                             + (3 * p1 - p0 - 3 * p2 + p3) * u * u * u), dtype=np.float64)
+
+
 @dataclass(frozen=True)
 class SmoothTrajectory:
     """A board that never stops: a Catmull-Rom spline (continuous velocity) through random
@@ -117,13 +129,7 @@ class SmoothTrajectory:
 
     def at(self, t_s: float) -> F64:
         """``world_from_target`` (4, 4) at time ``t_s``."""
-        last = len(self.parameters) - 1
-        position = min(max(t_s, 0.0) / self.segment_s, float(last))
-        k = min(int(position), last - 1)
-        u = position - k
-        p0, p1, p2, p3 = (self.parameters[min(max(i, 0), last)] for i in range(k - 1, k + 3))
-        value = 0.5 * (2 * p1 + (p2 - p0) * u + (2 * p0 - 5 * p1 + 4 * p2 - p3) * u * u
-                       + (3 * p1 - p0 - 3 * p2 + p3) * u * u * u)
+        value = catmull_rom(self.parameters, self.segment_s, t_s)
         tilt_x, tilt_y = value[4], value[5]
         return _pose(self.target, np.array([*value[:4], math.atan2(tilt_y, tilt_x),
                                             math.hypot(tilt_x, tilt_y)]))

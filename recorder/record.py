@@ -22,21 +22,21 @@ from replay._version import VERSION
 from replay.formats import LogWriter
 from replay.formats.background import BackgroundWriter
 from replay.geometry import invert, quat_xyzw_from_rotation
-from replay.records import RenderView, Scenario, ScenarioCamera, ScenarioDrift
+from replay.records import RenderView, Scenario, ScenarioCamera, ScenarioDrift, ScenarioLatency
 from replay.topics import SCENARIO, CameraTopics
 
 from .clock import Shot, schedule
-from .drift import world_from_camera_at
 from .errors import RecorderError
 from .exposure import rendered_shots
 from .motion import plan_trajectory
 from .multiview import CameraOptics, MultiViewOptics, plan_camera_optics
 from .render import SceneRenderer, gl_backend
+from .rig_motion import CameraPoses, plan_rig_path
 from .scenario import ScenarioSpec
 from .targets import target_record
 
 #: seed streams, so that changing one aspect of a scenario does not reshuffle the others
-MOTION_STREAM, CLOCK_STREAM, NOISE_STREAM = 1, 2, 3
+MOTION_STREAM, CLOCK_STREAM, NOISE_STREAM, RIG_STREAM = 1, 2, 3, 4
 
 
 @dataclass
@@ -100,11 +100,14 @@ def scenario_record(
                             degrees=d.degrees, start_s=d.start_s,
                             start_stamp_ns=scenario.start_stamp_ns + round(d.start_s * 1e9))
               for d in scenario.drifts]
+    latencies = [ScenarioLatency(camera=latency.camera, namespace=namespaces[latency.camera],
+                                 latency_ms=latency.latency_ms, start_s=latency.start_s)
+                 for latency in scenario.latencies]
     return Scenario(
         scenario=scenario.name, source=scenario.source, seed=scenario.seed,
         camlog_version=VERSION, mujoco_version=mujoco.__version__,
         renderer=f"mujoco/{gl_backend()}", spec=scenario.spec, cameras=cameras,
-        targets=targets, drifts=drifts or None)
+        targets=targets, drifts=drifts or None, latencies=latencies or None)
 
 
 class _Pipeline:
@@ -136,7 +139,7 @@ class _Pipeline:
         self, writer: LogWriter, shot: Shot, rendered: np.ndarray, truth: list[np.ndarray]
     ) -> None:
         camera = self.scenario.cameras[shot.camera_index]
-        stamp_ns = self.scenario.start_stamp_ns + round(shot.t_s * 1e9)
+        stamp_ns = self.scenario.start_stamp_ns + round(shot.stamp_s * 1e9)
         pixels = self.optics[shot.camera_index].apply(rendered)
         if camera.noise_std > 0:
             rng = self.noise[shot.camera_index]
@@ -177,15 +180,22 @@ def record(
         plan_trajectory(t, scenario.cameras, duration_s, rng_for(scenario, MOTION_STREAM, i))
         for i, t in enumerate(scenario.targets)
     ]
+    camera_poses = CameraPoses(scenario.cameras, scenario.drifts, None if scenario.rig_motion
+                               is None else plan_rig_path(scenario.rig_motion, duration_s,
+                                                          rng_for(scenario, RIG_STREAM, 0)))
     shots, dropped = schedule(
         scenario.cameras, frame_counts,
         [rng_for(scenario, CLOCK_STREAM, i) for i in range(len(scenario.cameras))],
+        scenario.latencies,
     )
     renderer = SceneRenderer(scenario, optics)  # first: it sets MUJOCO_GL before the import
     header = scenario_record(scenario, optics, dropped).to_message()
     metadata = {"scenario": scenario.name, "seed": str(scenario.seed), "version": VERSION,
                 "renderer": f"mujoco/{gl_backend()}"}
 
+    # the scenario record comes first, before the stamp of a camera stamping early
+    first_ns = scenario.start_stamp_ns + min([0, *(round(latency.latency_s * 1e9)
+                                                   for latency in scenario.latencies)])
     storage: list[str] = []
 
     def open_log() -> LogWriter:
@@ -193,7 +203,7 @@ def record(
                              **writer_options)
         storage.append(f"{writer.format_name}, {writer.compression}")
         try:
-            writer.write(SCENARIO, header, log_time_ns=scenario.start_stamp_ns)
+            writer.write(SCENARIO, header, log_time_ns=first_ns)
             writer.set_metadata("camlog", metadata)
         except BaseException:
             writer.abort()
@@ -212,9 +222,9 @@ def record(
             try:
                 for shot, rendered, poses in rendered_shots(renderer, scenario.cameras,
                                                             scenario.targets, trajectories,
-                                                            shots, drifts=scenario.drifts):
-                    camera_from_world = invert(world_from_camera_at(
-                        scenario.cameras[shot.camera_index], scenario.drifts, shot.t_s))
+                                                            shots, camera_poses=camera_poses):
+                    camera_from_world = invert(camera_poses.world_from_camera(
+                        shot.camera_index, shot.t_s))
                     truth = [camera_from_world @ p for p in poses]
                     pipeline.put((shot, rendered, truth))
                     frames[scenario.cameras[shot.camera_index].name] += 1

@@ -14,7 +14,7 @@ from .errors import RenderError
 from .multiview import CameraOptics
 from .optics import Optics
 from .scenario import ScenarioSpec
-from .scene import build_mjcf, camera_light_name, view_camera_name
+from .scene import build_mjcf, camera_light_name, scene_assets, view_camera_name
 
 
 def _mj_quat(rotation: F64) -> list[float]:
@@ -58,7 +58,7 @@ class SceneRenderer:
                  if not isinstance(o, Optics)}
         self.xml = build_mjcf(scenario, offscreen_size=(width, height), views=views)
         try:
-            self.model = mj.MjModel.from_xml_string(self.xml)
+            self.model = mj.MjModel.from_xml_string(self.xml, scene_assets(scenario))
         except Exception as err:
             raise RenderError(f"cannot build the MuJoCo scene: {_line(err)}") from None
         self.data = mj.MjData(self.model)
@@ -100,9 +100,9 @@ class SceneRenderer:
             self.data.mocap_quat[mocap] = _mj_quat(pose[:3, :3])
         self.mujoco.mj_kinematics(self.model, self.data)
 
-    def turn_camera(self, camera_index: int, world_from_camera: F64) -> None:
-        """Turn a camera (its pinhole view, or every view and the light of a multi-view
-        camera) to the optical frame ``world_from_camera`` (4, 4) (its position unchanged)."""
+    def place_camera(self, camera_index: int, world_from_camera: F64) -> None:
+        """Move a camera (its pinhole view, or every view and the light of a multi-view
+        camera) to the optical frame ``world_from_camera`` (4, 4)."""
         name = self.camera_names[camera_index]
         o = self.optics[camera_index]
         world_from_optical = world_from_camera[:3, :3]
@@ -111,10 +111,13 @@ class SceneRenderer:
         else:
             turned = {view_camera_name(name, i): world_from_optical @ view.camera_from_view
                       @ OPTICAL_FROM_MJCAMERA for i, view in enumerate(o.views)}
-            self.model.light_dir[self.model.light(camera_light_name(name)).id] = \
-                world_from_optical[:, 2]
+            light = self.model.light(camera_light_name(name)).id
+            self.model.light_dir[light] = world_from_optical[:, 2]
+            self.model.light_pos[light] = world_from_camera[:3, 3]
         for camera, world_from_mjcam in turned.items():
-            self.model.cam_quat[self.model.camera(camera).id] = _mj_quat(world_from_mjcam)
+            index = self.model.camera(camera).id
+            self.model.cam_quat[index] = _mj_quat(world_from_mjcam)
+            self.model.cam_pos[index] = world_from_camera[:3, 3]
         self.mujoco.mj_camlight(self.model, self.data)
 
     def render(self, camera_index: int) -> np.ndarray:

@@ -19,6 +19,8 @@ from .builtin import DEFAULT_SCENARIO, MAX_FRAMES, builtin_dir, builtin_names
 from .cameras import CameraSpec, parse_camera
 from .drift import DriftSpec, parse_drift
 from .errors import ScenarioError
+from .latency import LatencySpec, parse_latency
+from .rig_motion import RigMotionSpec, parse_rig_motion
 from .spec_table import SpecTable
 from .target_spec import TargetSpec, parse_target
 from .targets import check_target
@@ -39,6 +41,8 @@ class ScenarioSpec:
     spec: dict[str, Any]  # the resolved raw data
     source: str
     drifts: tuple[DriftSpec, ...] = ()  # cameras turned away from their calibration
+    latencies: tuple[LatencySpec, ...] = ()  # cameras stamping late (or early)
+    rig_motion: RigMotionSpec | None = None  # the whole rig carried along a path
 
     @property
     def rate_hz(self) -> float:
@@ -115,8 +119,8 @@ def apply_overrides(raw: dict[str, Any], overrides: dict[str, Any]) -> dict[str,
         elif key == "duration_s":
             out["duration_s"] = value
             out.pop("frames", None)
-        elif key == "drifts":  # added to the spec's own
-            out["drifts"] = [*out.get("drifts", []), *value]
+        elif key in ("drifts", "latencies"):  # added to the spec's own
+            out[key] = [*out.get(key, []), *value]
         else:
             out[key] = value
     return out
@@ -160,9 +164,22 @@ def parse_scenario(raw: dict[str, Any], source: str) -> ScenarioSpec:
         raise ScenarioError(f"{source}: drifts: expected [[drifts]] tables")
     drifts = tuple(parse_drift(d, f"drifts[{i}].", source, cameras)
                    for i, d in enumerate(drifts_raw))
+    latencies_raw = top.get("latencies", [])
+    if not isinstance(latencies_raw, list):
+        raise ScenarioError(f"{source}: latencies: expected [[latencies]] tables")
+    latencies = tuple(parse_latency(t, f"latencies[{i}].", source, cameras)
+                      for i, t in enumerate(latencies_raw))
+    late = [(latency.camera, latency.start_s) for latency in latencies]
+    twice = sorted({key for key in late if late.count(key) > 1})
+    if twice:
+        raise ScenarioError(f"{source}: latencies: camera {twice[0][0]!r} is given two "
+                            f"latencies from {twice[0][1]:g} s")
+    rig_motion = parse_rig_motion(raw["rig_motion"], "rig_motion.", source) \
+        if top.get("rig_motion", None) is not None else None
     top.check_unknown()
     scenario = ScenarioSpec(name, description, seed, duration_s, frames, start_stamp_ns,
-                        tuple(cameras), targets, raw, source, drifts)
+                            tuple(cameras), targets, raw, source, drifts, latencies,
+                            rig_motion)
     if max(scenario.frame_counts) > MAX_FRAMES:
         raise ScenarioError(f"{source}: {max(scenario.frame_counts)} frames per camera is more "
                             f"than camlog records at once ({MAX_FRAMES}); shorten it")

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from xml.sax.saxutils import quoteattr
 
+import cv2
 import numpy as np
 
 from replay.geometry import OPTICAL_FROM_MJCAMERA, quat_xyzw_from_rotation
@@ -15,7 +16,7 @@ from replay.messages import F64
 
 from .optics import View
 from .scenario import ScenarioSpec
-from .targets import CIRCLE_SLICES, PLANAR_KINDS, target_geoms
+from .targets import CIRCLE_SLICES, PLANAR_KINDS, target_geoms, texture_image
 
 #: MuJoCo's headlight shines along the rendering camera's view; a camera rendered as several
 #: views gets the same light as a fixed directional light along its optical axis instead
@@ -53,6 +54,23 @@ def _view_camera(name: str, world_from_camera: F64, view: View) -> str:
     )
 
 
+def texture_file(target_name: str) -> str:
+    """The asset name of a textured target's texture (:func:`scene_assets`)."""
+    return f"{target_name}_texture.png"
+
+
+def scene_assets(scenario: ScenarioSpec) -> dict[str, bytes]:
+    """The files the scene's MJCF refers to, by name: every textured target's texture
+    (PNG)."""
+    assets = {}
+    for target in scenario.targets:
+        if target.kind == "textured":
+            ok, png = cv2.imencode(".png", texture_image(target))
+            assert ok, "a grey image always encodes as PNG"
+            assets[texture_file(target.name)] = png.tobytes()
+    return assets
+
+
 def build_mjcf(
     scenario: ScenarioSpec, *, offscreen_size: tuple[int, int],
     views: dict[str, tuple[View, ...]] | None = None,
@@ -85,6 +103,13 @@ def build_mjcf(
                 f'  <material name="{target.name}_mat" rgba="{_vec(target.rgba)}" '
                 'specular="0" shininess="0"/>'
             )
+        elif target.kind == "textured":
+            parts += [
+                f'  <texture name="{target.name}_tex" type="cube" '
+                f'file={quoteattr(texture_file(target.name))}/>',
+                f'  <material name="{target.name}_mat" texture="{target.name}_tex" '
+                'specular="0" shininess="0"/>',
+            ]
     parts += [
         "</asset>",
         "<worldbody>",

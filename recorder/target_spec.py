@@ -46,7 +46,9 @@ class TargetSpec:
     - ``checkerboard``: ``inner_corners`` (cols, rows), ``square_m``;
     - ``charuco``: ``squares`` (cols, rows), ``square_m``, ``marker_m``, ``dictionary``;
     - ``circles`` / ``acircles``: ``circles`` (cols, rows), ``spacing_m``, ``diameter_m``;
-    - ``box``: ``size_m`` (3,) full extents, ``rgba``.
+    - ``box``: ``size_m`` (3,) full extents, ``rgba``;
+    - ``textured``: a box of ``size_m`` whose faces carry a random texture of blobs about
+      ``grain_m`` across (natural features for a moving rig to see).
 
     A planar target's white plate reaches ``border_m`` beyond its features.
     """
@@ -65,9 +67,13 @@ class TargetSpec:
     diameter_m: float = 0.005
     size_m: F64 = field(default_factory=lambda: np.array([0.02, 0.02, 0.01]))
     rgba: tuple[float, float, float, float] = (1.0, 0.0, 0.0, 1.0)
+    grain_m: float = 0.01
 
 
-TARGET_KINDS = ("checkerboard", "charuco", "circles", "acircles", "box")
+#: a textured box's largest extent holds at most this many grains (its texture's size)
+MAX_GRAINS = 400
+
+TARGET_KINDS = ("checkerboard", "charuco", "circles", "acircles", "box", "textured")
 
 
 def _grid(f: SpecTable, key: str, default: list[int], low: int) -> tuple[int, int]:
@@ -98,6 +104,12 @@ def _geometry(f: SpecTable, kind: str) -> dict[str, Any]:
     size_m = f.vector("size_m", 3, [0.02, 0.02, 0.01])
     if np.any(size_m <= 0):
         raise f.fail("size_m", "extents must be > 0")
+    if kind == "textured":
+        grain_m = f.number("grain_m", 0.01, positive=True)
+        if float(size_m.max()) / grain_m > MAX_GRAINS:
+            raise f.fail("grain_m", f"more than {MAX_GRAINS} grains across the box; make "
+                                    "them larger")
+        return {"size_m": size_m, "grain_m": grain_m}
     color = f.vector("rgba", 4, [1.0, 0.0, 0.0, 1.0])
     return {"size_m": size_m,
             "rgba": (float(color[0]), float(color[1]), float(color[2]), float(color[3]))}

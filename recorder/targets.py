@@ -16,6 +16,9 @@ at any distance behind.
   an OpenCV predefined ArUco dictionary), in OpenCV's board frame: origin at the outer
   corner of the first square, x along the columns, y along the rows. The first square is
   black; each white square holds a marker whose bits are black boxes (runs of cells merged).
+- ``textured``: a box whose faces carry a random grey texture (:func:`texture_image`), for
+  natural features; the texture is drawn from the target's name, the same in every
+  recording.
 - ``circles`` / ``acircles``: black disks (``diameter_m``) in OpenCV's symmetric or
   asymmetric grid of ``circles`` cols x rows (``findCirclesGrid``'s pattern size) with
   ``spacing_m``: circle (row i, col j) at ``(j s, i s)``, or ``((2 j + i % 2) s, i s)`` when
@@ -26,6 +29,7 @@ at any distance behind.
 from __future__ import annotations
 
 import math
+import zlib
 
 import cv2
 import numpy as np
@@ -46,6 +50,8 @@ PLATE_THICKNESS_M = 3e-3
 #: sides of the polygon MuJoCo draws a disk with (quality numslices)
 CIRCLE_SLICES = 120
 PLANAR_KINDS = ("checkerboard", "charuco", "circles", "acircles")
+#: texels per grain of a textured target's texture
+TEXELS_PER_GRAIN = 8
 
 
 def _vec(values: F64 | list[float] | tuple[float, ...]) -> str:
@@ -211,6 +217,22 @@ def target_geoms(target: TargetSpec) -> list[str]:
     return [_plate(target), *(_black_box(*r) for r in black_rectangles(target))]
 
 
+def texture_image(target: TargetSpec) -> np.ndarray:
+    """A ``textured`` target's texture ``(N, N)`` uint8, drawn on each face of its box: grey
+    blobs about ``grain_m`` across its largest face with sharp edges (smoothed noise pushed
+    towards black and white), and half as large ones within them, so that corners stand
+    out at two scales."""
+    grains = max(4, math.ceil(float(np.max(target.size_m)) / target.grain_m))
+    side = grains * TEXELS_PER_GRAIN
+    rng = np.random.default_rng(zlib.crc32(target.name.encode()))
+    texture = np.zeros((side, side))
+    for scale, weight in ((grains, 1.0), (2 * grains, 0.5)):
+        noise = rng.standard_normal((scale, scale))
+        texture += weight * cv2.resize(noise, (side, side), interpolation=cv2.INTER_CUBIC)
+    texture /= float(np.std(texture))
+    return np.asarray(np.clip(127.5 + 120.0 * np.tanh(1.5 * texture), 0, 255), dtype=np.uint8)
+
+
 def check_target(target: TargetSpec) -> None:
     """Raise ScenarioError for a target that cannot be built as specified."""
     if target.kind == "charuco":
@@ -256,5 +278,8 @@ def target_record(target: TargetSpec) -> ScenarioTarget:
             centres_in_target=feature_points_in_target(target),
             frame="origin at the first circle's centre, x along cols, y along rows, "
                   "z into the board")
+    if target.kind == "textured":
+        return ScenarioTarget(name=target.name, kind=target.kind, size_m=target.size_m,
+                              grain_m=target.grain_m, frame="origin at the box centre")
     return ScenarioTarget(name=target.name, kind=target.kind, size_m=target.size_m,
                           rgba=tuple(target.rgba), frame="origin at the box centre")

@@ -31,11 +31,12 @@ generated from :mod:`processors.registry`: a processor with a flag is ``NAME = t
 table of its options, or its primary option's value (``rectify = "ost.yaml"``); a flagless
 one (throttle) gives its options as keys (``every = 3``). The keys of each step:
 
-- resync: left, out_prefix, recover, right, slop
+- resync: calibration, left, max_offset, offset, out_prefix, pattern, recover, right, size,
+  slop, square
 - calibrate: approximate, board_warp, calibration, camera, camera_name, check, diameter,
   dictionary, fix_aspect_ratio, fix_principal_point, k_coefficients, left, legacy_pattern,
   marker, max_chessboard_speed, model, pattern, recover, report, rig, right, size, square,
-  tangent_dist, zero_tangent_dist
+  tangent_dist, time_offset, zero_tangent_dist
 - process: compress, drop_input, max_frames, output_ns, recover, topic; processor keys:
   edges, every, rate, rectify, red_pixels, resize, undistort
 - throttle: recover, topic; processor keys: every, rate

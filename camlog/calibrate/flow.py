@@ -12,6 +12,7 @@ temporary folder and moved into place only when all of it succeeded.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import time
 from collections.abc import Callable, Iterator
@@ -39,6 +40,7 @@ from ..requests.calibrate import CalibrateRequest
 from ..requests.fields import RequestError
 from .evidence import EVIDENCE_ZSTD_LEVEL, write_evidence, write_summary
 from .instants import ViewsOfRig
+from .offsets import measure_offsets
 from .remeasure import remeasured_rig
 from .report import output_names, write_files
 from .solving import CalibratedCamera, RigSolution, guiding_models, solve_rig
@@ -215,10 +217,14 @@ def calibrate_log(request: CalibrateRequest, *, workers: int | None = None,
             remeasure = partial(remeasured_rig, reader, cameras_views, board=board,
                                 workers=workers, progress=progress)
         scenario = found.scenario
+        solve = partial(solve_rig, cameras_views, board, options, approximate_s=approximate_s,
+                        diameter_m=diameter_m, remeasure=remeasure, as_rig=as_rig,
+                        truth=_truth(scenario, cameras_views))
         with _singular_is_one_line():
-            solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s,
-                               diameter_m=diameter_m, remeasure=remeasure, as_rig=as_rig,
-                               truth=_truth(scenario, cameras_views))
+            if request.time_offset == "auto" and len(cameras_views) > 1:
+                solved = _solved_with_offsets(solve, cameras_views, board, options)
+            else:
+                solved = solve()
         if report:
             summary, statistics = _write_report(
                 reader, staged.path, solved, board=board, options=options, scenario=scenario,
@@ -229,11 +235,43 @@ def calibrate_log(request: CalibrateRequest, *, workers: int | None = None,
                                     scenario=scenario)
             write_files(staged.path, solved, statistics, summary=summary, evidence=None,
                         camera_name=camera_name)
-    diameter_warning = solved.circles.warning() if solved.circles is not None else None
+    solve_warnings = [solved.circles.warning() if solved.circles is not None else None,
+                      _asynchronous_warning(solved)]
     return CalibrationRun(solved, statistics, output_dir, staged.files,
                           time.perf_counter() - started, summary,
                           [*reader.warnings, *found.warnings,
-                           *([diameter_warning] if diameter_warning else [])])
+                           *(w for w in solve_warnings if w)])
+
+
+def _solved_with_offsets(solve: Callable[..., RigSolution], cameras: list[CameraViews],
+                         board: Board, options: CalibrationOptions) -> RigSolution:
+    """The rig solved with each camera's time offset against camera 0: measured first
+    through a calibration of each camera's own views, then again through the solved cameras
+    and rig, and solved again when that pairs the views otherwise (:mod:`.offsets`)."""
+    first = measure_offsets(cameras, board, options)
+    solved = solve(offsets=first)
+    if all(o.measured is None for o in first):
+        return solved
+    again = measure_offsets(cameras, board, options, models=solved.joint.models,
+                            rig=solved.joint.camera_from_reference)
+    if any(a.moved_from(b) for a, b in zip(again, first, strict=True)):
+        return solve(offsets=again)
+    return dataclasses.replace(solved, offsets=again)
+
+
+def _asynchronous_warning(solved: RigSolution) -> str | None:
+    """A warning when most of a pair's joint views left the rig as not simultaneous: the rig
+    then rests on the few left."""
+    results = [solved.stereo] if solved.stereo is not None else [p.result for p in solved.pairs]
+    for result in results:
+        apart = sum(why.startswith("not simultaneous") for why in result.rejected.values())
+        if apart and apart >= len(result.pairs):
+            return (f"{apart} joint views were not simultaneous (the board moved between the "
+                    f"cameras' images) and left the rig, which rests on {len(result.pairs)}: "
+                    "synchronise the cameras, hold the board still for each view, or record "
+                    "video of a moving board so that the offset between their stamps is "
+                    "measured")
+    return None
 
 
 def _truth(scenario: Scenario | None, cameras: list[CameraViews]

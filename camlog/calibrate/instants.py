@@ -7,6 +7,13 @@ held still become one view per camera, their corners averaged (:mod:`processors.
 holds`: the frames of a hold share the detector's error, so they are one observation, made
 more precise). Every view of every camera then goes into one least-squares problem
 (:func:`processors.calibration.joint.calibrate_cameras`); nothing is selected away.
+
+A camera whose stamps are ``offset`` late relative to the first camera's (measured from the
+board's motion, :mod:`.offsets`) joins the first camera's frames by time instead: each frame
+of the first camera is paired with the frame of the other camera exposed nearest to it, and
+when the board moves in between, that camera's corners are interpolated to the first
+camera's exposure (a cubic through 4 of its consecutive frames that show the same corners,
+:mod:`processors.time_offset.interpolation`), so that the pair shows the board at one pose.
 """
 
 from __future__ import annotations
@@ -20,6 +27,7 @@ from processors.calibration.board import Board
 from processors.calibration.holds import Seen, frame_scatter_px, holds
 from processors.calibration.joint import BoardView
 from processors.resync import pair_stamps
+from processors.time_offset.interpolation import Stencils
 
 from ..errors import CalibrationError
 from .views import SNAPSHOT_GAP_S, CameraViews, DetectedFrame, size_hint
@@ -27,6 +35,11 @@ from .views import SNAPSHOT_GAP_S, CameraViews, DetectedFrame, size_hint
 #: an approximately paired stereo frame joins its partner while the board moves less than
 #: this (px per frame) in both
 STILL_PX = 0.25
+#: a frame of a camera with an offset joins a first camera's frame as it is when the board
+#: moves less than this (px) between their exposures; else its corners are interpolated
+SAME_INSTANT_PX = 0.01
+#: frames of the cubic that interpolates a camera's corners to another camera's exposure
+STENCIL = 4
 
 __all__ = ["STILL_PX", "Instant", "ViewsOfRig", "rig_views", "stereo_pairs"]
 
@@ -130,22 +143,99 @@ def _sources(views: CameraViews) -> list[int]:
     return out
 
 
+def _timed_pairs(first: CameraViews, other: CameraViews, offset_ns: int,
+                 usable: tuple[set[int], set[int]]) -> list[tuple[int, int, Seen | None]]:
+    """(frame of ``first``, frame of ``other`` exposed nearest to it, the other camera's
+    corners at the first frame's exposure or None: the other frame's own), for ``other``
+    stamping ``offset_ns`` later than ``first``; each frame in one pair at most. A frame is
+    paired as it is when the board moves less than :data:`SAME_INSTANT_PX` between the two
+    exposures, with its corners interpolated when :data:`STENCIL` consecutive frames around
+    the exposure show the same corners, and not at all otherwise."""
+    mine = sorted(usable[1], key=lambda i: other.frames[i].stamp_ns)
+    if len(mine) < 2:
+        return []
+    stamps = np.array([other.frames[i].stamp_ns for i in mine], dtype=np.int64)
+    period_ns = float(np.median(np.diff(stamps)))
+    origin = int(stamps[0])
+    times_s = np.asarray((stamps - origin) * 1e-9, dtype=np.float64)
+    if np.any(np.diff(times_s) <= 0):
+        return []
+    stencils = Stencils(times_s, STENCIL)
+    best: dict[int, tuple[int, int, Seen | None]] = {}  # other frame -> its pair
+    for frame in sorted(usable[0]):
+        target_ns = first.frames[frame].stamp_ns + offset_ns
+        nearest = int(np.argmin(np.abs(stamps - target_ns)))
+        gap_ns = abs(int(stamps[nearest]) - target_ns)
+        if gap_ns > period_ns / 2:
+            continue
+        if nearest in best and abs(other.frames[mine[nearest]].stamp_ns
+                                   - (first.frames[best[nearest][0]].stamp_ns + offset_ns)) \
+                <= gap_ns:
+            continue
+        speed = other.frames[mine[nearest]].speed_px
+        if speed is not None and speed * gap_ns / period_ns <= SAME_INSTANT_PX:
+            best[nearest] = (frame, mine[nearest], None)
+            continue
+        seen = _interpolated(other, mine, stencils, (target_ns - origin) * 1e-9)
+        if seen is not None:
+            best[nearest] = (frame, mine[nearest], seen)
+    return sorted(best.values())
+
+
+def _interpolated(other: CameraViews, frames: list[int], stencils: Stencils, t_s: float
+                  ) -> Seen | None:
+    """A camera's corners at ``t_s`` (s after its first usable frame) from the cubic through
+    the :data:`STENCIL` usable ``frames`` around it; None when they are not consecutive or
+    do not show the same corners."""
+    start, found = stencils.locate(np.array([t_s]))
+    if not found[0]:
+        return None
+    chosen = [other.frames[frames[int(start[0]) + k]] for k in range(STENCIL)]
+    detections = [f.detection for f in chosen]
+    if any(d is None for d in detections):
+        return None
+    ids = [d.ids for d in detections if d is not None]
+    if not all(np.array_equal(ids[0], i) for i in ids[1:]):
+        return None
+    weights, _ = stencils.weights(np.array([t_s]), start)
+    corners = np.einsum("k,kmd->md", weights[0],
+                        np.stack([d.corners_px for d in detections if d is not None]))
+    return Seen(ids[0], corners)
+
+
 def _instants(cameras: list[CameraViews], candidates: list[list[int]],
-              approximate_s: float | None) -> list[Instant]:
+              approximate_s: float | None, offsets_ns: list[int | None] | None = None
+              ) -> tuple[list[Instant], dict[tuple[int, int], Seen]]:
     """Every candidate frame in one instant, frames of cameras shot at the same time sharing
-    one, in time order. Cameras pair two by two (0 with 1, 0 with 2, ..., 1 with 2, ...); a
-    pair joins its frames' instants unless that would put two frames of one camera in one."""
+    one, in time order, and the corners of the frames interpolated to their instant
+    ((camera, frame) -> what it saw then). Cameras pair two by two (0 with 1, 0 with 2, ...,
+    1 with 2, ...); a pair joins its frames' instants unless that would put two frames of
+    one camera in one. A camera with an offset (``offsets_ns[c]``, late relative to camera
+    0) pairs with camera 0 by time (:func:`_timed_pairs`), with no other camera by stamp."""
     usable = [set(c) for c in candidates]
     source = [_sources(c) for c in cameras]
     snapshots = [_snapshots(c) for c in cameras] if approximate_s is not None else []
+    timed = offsets_ns or [None] * len(cameras)
+    interpolated: dict[tuple[int, int], Seen] = {}
 
     def still(camera: int, frame: int) -> bool:
         return _still(cameras[camera].frames[frame]) or frame in snapshots[camera]
 
     joined: dict[tuple[int, int], dict[int, int]] = {}  # (camera, frame) -> its instant
     for a, b in combinations(range(len(cameras)), 2):
-        pairs = stereo_pairs(cameras[a], cameras[b], approximate_s) if len(cameras) == 2 \
-            else _stamp_pairs(cameras[a], cameras[b], approximate_s)
+        offset_ns = timed[b]
+        if offset_ns is not None or timed[a] is not None:
+            if a or offset_ns is None:
+                continue  # a camera with an offset pairs with camera 0 alone
+            pairs = []
+            for a_frame, b_frame, seen in _timed_pairs(cameras[a], cameras[b], offset_ns,
+                                                       (usable[a], usable[b])):
+                pairs.append((a_frame, b_frame))
+                if seen is not None:
+                    interpolated[(b, b_frame)] = seen
+        else:
+            pairs = stereo_pairs(cameras[a], cameras[b], approximate_s) \
+                if len(cameras) == 2 else _stamp_pairs(cameras[a], cameras[b], approximate_s)
         for a_frame, b_frame in pairs:
             # a repeated frame stands for the frame it repeats
             ai, bi = source[a][a_frame], source[b][b_frame]
@@ -154,7 +244,8 @@ def _instants(cameras: list[CameraViews], candidates: list[list[int]],
             mine, theirs = joined.get((a, ai), {a: ai}), joined.get((b, bi), {b: bi})
             if mine.keys() & theirs.keys():
                 continue
-            if approximate_s is not None and not (still(a, ai) and still(b, bi)):
+            if approximate_s is not None and offset_ns is None \
+                    and not (still(a, ai) and still(b, bi)):
                 continue
             merged = dict(sorted({**mine, **theirs}.items()))
             for key in merged.items():
@@ -165,7 +256,8 @@ def _instants(cameras: list[CameraViews], candidates: list[list[int]],
     for camera, views in enumerate(cameras):
         out += [Instant({camera: i}, views.frames[i].stamp_ns)
                 for i in candidates[camera] if (camera, i) not in joined]
-    return sorted(out, key=lambda instant: (instant.stamp_ns, sorted(instant.frames.items())))
+    return (sorted(out, key=lambda instant: (instant.stamp_ns, sorted(instant.frames.items()))),
+            {key: seen for key, seen in interpolated.items() if key in joined})
 
 
 def _unlinked(cameras: int, instants: list[Instant]) -> list[int]:
@@ -203,13 +295,16 @@ def _check_linked(cameras: list[CameraViews], instants: list[Instant],
 
 
 def rig_views(cameras: list[CameraViews], board: Board, *, approximate_s: float | None,
-              stereo_note: bool) -> ViewsOfRig:
-    """The solver's views of every camera: instants, held poses averaged."""
+              stereo_note: bool, offsets_ns: list[int | None] | None = None) -> ViewsOfRig:
+    """The solver's views of every camera: instants, held poses averaged; a camera with an
+    offset (``offsets_ns[c]``: how much later it stamps an instant than camera 0) joins
+    camera 0's frames by time (see the module's text)."""
     candidates = [_candidates(v, board, f" (camera {v.source.namespace})" if stereo_note
                               else "") for v in cameras]
-    instants = _instants(cameras, candidates, approximate_s)
+    instants, interpolated = _instants(cameras, candidates, approximate_s, offsets_ns)
     _check_linked(cameras, instants, approximate_s)
-    seen = [{c: Seen(cameras[c].detection(i).ids, cameras[c].corners(i))
+    seen = [{c: interpolated.get((c, i)) or Seen(cameras[c].detection(i).ids,
+                                                  cameras[c].corners(i))
              for c, i in instant.frames.items()} for instant in instants]
     groups = holds(seen)
     views: list[BoardView] = []

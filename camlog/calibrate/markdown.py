@@ -4,7 +4,13 @@ from __future__ import annotations
 
 import math
 
-from replay.records import CalibrationSummary, CameraSummary, RigSummary, StereoSummary
+from replay.records import (
+    CalibrationSummary,
+    CameraSummary,
+    RigSummary,
+    StereoSummary,
+    TimeOffsetSummary,
+)
 
 __all__ = ["markdown_report"]
 
@@ -34,6 +40,14 @@ def _parameter_lines(camera: CameraSummary) -> list[str]:
     return lines
 
 
+def time_offset_line(offset: TimeOffsetSummary) -> str:
+    """A camera's time offset in words, with the simulator's truth when known."""
+    truth = "" if offset.truth_ms is None else (
+        f" (truth {offset.truth_ms:+.3f} ms" + ("" if offset.error_ms is None else
+                                               f", error {offset.error_ms:+.3f} ms") + ")")
+    return f"Time offset against {offset.reference}: {offset.summary}{truth}"
+
+
 def _camera_lines(camera: CameraSummary) -> list[str]:
     lines = [
         f"## {camera.namespace}", "",
@@ -47,6 +61,8 @@ def _camera_lines(camera: CameraSummary) -> list[str]:
                  camera.tangential.summary):
         if text is not None:
             lines.append(text[0].upper() + text[1:] + ".")
+    if camera.time_offset is not None:
+        lines.append(time_offset_line(camera.time_offset) + ".")
     if camera.evidence is not None:
         e = camera.evidence
         held = f" ({e.held_views} of them held poses, their frames averaged)" \

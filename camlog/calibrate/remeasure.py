@@ -33,10 +33,13 @@ from .views import CameraViews
 __all__ = ["remeasured_rig"]
 
 
-def _remeasured(view: BoardView, image: np.ndarray, joint: JointResult, board: Board) -> F64:
+def _remeasured(view: BoardView, image: np.ndarray, joint: JointResult, board: Board, *,
+                instant: int) -> F64:
+    """The view's corners measured again through its camera and the board pose the solve
+    gave it (``instant``: its own, when it was not simultaneous with its instant's views)."""
     model = joint.models[view.camera]
     camera_from_board = joint.camera_from_reference[view.camera] \
-        @ joint.reference_from_board[view.instant]
+        @ joint.reference_from_board[instant]
     refined, ok = refine_on_board(image, model, camera_from_board,
                                   board.points_in_board()[view.point_ids], board.square_m,
                                   band_m=edge_band_m(board))
@@ -53,7 +56,8 @@ def remeasured_rig(reader: LogReader, cameras: list[CameraViews], rig: ViewsOfRi
     # camera -> frame index -> the view it belongs to
     view_of: list[dict[int, int]] = [{} for _ in cameras]
     for index, (board_view, frames) in enumerate(zip(rig.views, rig.frames_of, strict=True)):
-        if index not in joint.rejected and board_view.instant in joint.reference_from_board:
+        if index not in joint.rejected \
+                and joint.views[index].instant in joint.reference_from_board:
             for frame in frames:
                 view_of[board_view.camera][frame] = index
     counters = [0] * len(cameras)
@@ -66,7 +70,8 @@ def remeasured_rig(reader: LogReader, cameras: list[CameraViews], rig: ViewsOfRi
     with ThreadPoolExecutor(max_workers=workers) as pool, bar:
 
         def submit(view: int, gray: np.ndarray) -> None:
-            pending[view] = future = pool.submit(_remeasured, rig.views[view], gray, joint, board)
+            pending[view] = future = pool.submit(_remeasured, rig.views[view], gray, joint,
+                                                 board, instant=joint.views[view].instant)
             in_flight.append(future)
             while len(in_flight) > 2 * workers:
                 wait([in_flight.popleft()])

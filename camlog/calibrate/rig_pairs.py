@@ -49,7 +49,7 @@ def rig_pairs(joint: JointResult, rig: ViewsOfRig, *, points_in_board: F64,
     out = []
     for first, second in combinations(range(len(joint.models)), 2):
         views = _joint_views(rig, first, second)
-        usable = [p for p in views if p[0] not in joint.rejected and p[1] not in joint.rejected]
+        usable = [p for p in views if not {*p} & (joint.rejected.keys() | joint.split.keys())]
         if not usable:
             continue
         if covariance is None and first:

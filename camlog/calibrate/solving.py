@@ -43,6 +43,7 @@ from replay.records import ScenarioCamera
 from ..errors import CalibrationError
 from .circles import CircleSize, circle_size
 from .instants import ViewsOfRig, rig_views
+from .offsets import CameraOffset
 from .rig_pairs import PairSolution, rig_pairs
 from .views import CameraViews, DetectedFrame
 
@@ -80,6 +81,7 @@ class RigSolution:
     pairs: list[PairSolution] = field(default_factory=list)  # a rig's pairs (not stereo)
     circles: CircleSize | None = None
     measured_again: list[str] | None = None  # per camera: what the second measurement did
+    offsets: list[CameraOffset] = field(default_factory=list)  # cameras 1..N-1 against 0
 
     def first_frame(self, view: int) -> int:
         """The frame a view is shown at: its first (a held pose spans several)."""
@@ -190,12 +192,15 @@ def _oriented(rig: ViewsOfRig, board: Board, seeds: list[CameraModel]) -> ViewsO
 
 
 def _prepared(cameras: list[CameraViews], board: Board, options: CalibrationOptions, *,
-              approximate_s: float | None, stereo_note: bool
+              approximate_s: float | None, stereo_note: bool,
+              offsets: list[CameraOffset] | None = None
               ) -> tuple[ViewsOfRig, list[CameraModel], list[tuple[int, int]]]:
-    """The rig's views (right views oriented as the left ones), the seed models and the
-    image sizes."""
+    """The rig's views (right views oriented as the left ones; cameras with an offset
+    paired by it), the seed models and the image sizes."""
     sizes = [c.size for c in cameras]
-    rig = rig_views(cameras, board, approximate_s=approximate_s, stereo_note=stereo_note)
+    offsets_ns = None if not offsets else [None, *(o.offset_ns for o in offsets)]
+    rig = rig_views(cameras, board, approximate_s=approximate_s, stereo_note=stereo_note,
+                    offsets_ns=offsets_ns)
     seeds = _seeds(rig, board, sizes, options)
     return _oriented(rig, board, seeds), seeds, sizes
 
@@ -229,7 +234,8 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
               approximate_s: float | None, diameter_m: float | None = None,
               remeasure: Callable[[ViewsOfRig, JointResult], ViewsOfRig] | None = None,
               as_rig: bool = False,
-              truth: list[ScenarioCamera | None] | None = None) -> RigSolution:
+              truth: list[ScenarioCamera | None] | None = None,
+              offsets: list[CameraOffset] | None = None) -> RigSolution:
     """Calibrate every camera, and for two the stereo rig (with ``as_rig``, or for three or
     more cameras: every pair of the rig), from every view; a circle grid's
     circles are ``diameter_m`` across, or as the views measure them; with ``choose_order``
@@ -238,11 +244,13 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
     warp after the flat solve (:mod:`processors.calibration.warp_choice`; the guiding
     models of a ChArUco detection are solved flat). ``remeasure`` gives the
     views measured again through a first solution (:mod:`.remeasure`), which are then solved
-    again from it. ``truth``: each camera's simulator record, when the log has one."""
+    again from it. ``truth``: each camera's simulator record, when the log has one.
+    ``offsets``: cameras 1..N-1's time offsets against camera 0 (:mod:`.offsets`), by which
+    the views of those applied are paired."""
     circles = circle_size(cameras, board, diameter_m)
     disc_diameter_m = circles.diameter_m if circles is not None else None
     rig, seeds, sizes = _prepared(cameras, board, options, approximate_s=approximate_s,
-                                  stereo_note=len(cameras) > 1)
+                                  stereo_note=len(cameras) > 1, offsets=offsets)
     points = board.points_in_board()
     orders = choose_orders(points, rig.views, sizes, options)
     chosen = [options if o is None else o.options for o in orders]
@@ -276,4 +284,4 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
             {f: i for i in mine for f in rig.frames_of[i]},
             coverage(params, [v.corners_px for v in used], views.size), orders[index],
             truth[index] if truth is not None else None))
-    return RigSolution(solved, joint, rig, stereo, pairs, circles, again)
+    return RigSolution(solved, joint, rig, stereo, pairs, circles, again, offsets or [])

@@ -63,10 +63,12 @@ def camera_statistics(solved: RigSolution, *, points_in_board: F64) -> list[Came
     joint = solved.joint
     sizes = [c.views.size for c in solved.cameras]
     # the halves' two solves on a thread of their own while the maps are computed here (both
-    # mostly in numpy and OpenCV, which release the GIL); joined, their error raised, below
+    # mostly in numpy and OpenCV, which release the GIL); joined, their error raised, below.
+    # The views at the instants they were solved with: one not simultaneous with its
+    # instant's other views has a board pose of its own in each half too
     with ThreadPoolExecutor(max_workers=1, thread_name_prefix="camlog-halves") as pool:
         halves = pool.submit(
-            cross_validate, points_in_board, solved.rig.views, sizes, joint.options,
+            cross_validate, points_in_board, joint.views, sizes, joint.options,
             range_m=FAR_M,
             disc_diameter_m=solved.circles.diameter_m if solved.circles is not None else None)
         maps = [(projection_uncertainty(joint.problem, index),

@@ -23,6 +23,7 @@ from replay.records import calibration as records
 from replay.records import rig as rig_records
 from replay.records.scenario import Scenario
 
+from .offsets import offset_record, true_offset_ms
 from .rig_pairs import PairSolution
 from .solving import CalibratedCamera, RigSolution
 from .statistics import CameraStatistics
@@ -145,7 +146,7 @@ def _uncertainty(camera: CalibratedCamera, statistics: CameraStatistics, solved:
 
 
 def _camera(camera: CalibratedCamera, statistics: CameraStatistics, solved: RigSolution,
-            truth: TrueRig | None) -> records.CameraSummary:
+            truth: TrueRig | None, scenario: Scenario | None) -> records.CameraSummary:
     views, joint = camera.views, solved.joint
     distinct = list(views.distinct())
     differences: dict[str, float] = {}
@@ -178,7 +179,25 @@ def _camera(camera: CalibratedCamera, statistics: CameraStatistics, solved: RigS
         evidence=_evidence(camera, solved),
         uncertainty=_uncertainty(camera, statistics, solved, truth),
         lens_order=_lens_order(camera.order),
+        time_offset=_time_offset(camera, solved, scenario),
     )
+
+
+def _time_offset(camera: CalibratedCamera, solved: RigSolution, scenario: Scenario | None
+                 ) -> records.TimeOffsetSummary | None:
+    """A camera's time offset against camera 0, when it was measured (cameras 1..N-1)."""
+    found = [o for o in solved.offsets if o.camera == camera.index]
+    if not found:
+        return None
+    offset = found[0]
+    reference = solved.cameras[0].views.source.namespace
+    truth = true_offset_ms(scenario, [c.views for c in solved.cameras], camera.index)
+    measured = offset.measured
+    return records.TimeOffsetSummary(
+        reference, offset.describe(), offset.applied,
+        None if measured is None else offset_record(
+            measured, reference, camera.views.source.namespace),
+        truth, None if truth is None or measured is None else measured.offset_ms - truth)
 
 
 def _stereo(solved: RigSolution) -> records.StereoSummary:
@@ -258,7 +277,7 @@ def build_summary(solved: RigSolution, statistics: list[CameraStatistics], *,
         options=records.OptionsSummary(options.fix_principal_point, options.fix_aspect_ratio,
                                options.tangential, options.radial_count,
                                options.distortion_model, options.choose_order or None),
-        cameras=[_camera(c, s, solved, truth)
+        cameras=[_camera(c, s, solved, truth, scenario)
                  for c, s in zip(cameras, statistics, strict=True)],
         ground_truth=scenario is not None,
         stereo=_stereo(solved) if stereo is not None else None,

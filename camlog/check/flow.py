@@ -25,6 +25,8 @@ from processors.calibration.board import Board
 from processors.calibration.targets import find_board
 from processors.calibration.view_fit import fit_view
 from processors.drift import PairMatches, StereoMatcher
+from processors.time_offset.features import track_rows
+from processors.time_offset.interpolation import lagrange_weights
 from replay.camera import CameraModel
 from replay.formats import open_reader
 from replay.progress import progress_bar
@@ -32,8 +34,15 @@ from replay.progress import progress_bar
 from ..errors import InputError
 from ..requests.check import CheckRequest
 from .cameras import Checkable, Unchecked, checkable
-from .samples import samples
-from .series import NOISE_SIGMAS, CheckOptions, Series, board_series, stereo_series
+from .samples import Sample, samples
+from .series import (
+    NOISE_SIGMAS,
+    CheckOptions,
+    Series,
+    board_series,
+    offset_series,
+    stereo_series,
+)
 
 __all__ = ["EXIT_DRIFTED", "EXIT_NOT_JUDGED", "NOISE_SIGMAS", "CheckOptions", "LogCheck",
            "Series", "check_drift", "exit_status", "options_of"]
@@ -113,6 +122,14 @@ def _drift(check: LogCheck, series: Series) -> str:
                 if series.metric == "vertical_error_px" else
                 f"{first:.3g} sigmas from the calibration {limit}, vertical error "
                 f"{_flagged_median(series, 'vertical_error_px'):.2f} px")
+    elif series.kind == "offset":
+        onset = series.flagged.index(True)
+        offsets = series.values["offset_ms"]
+        before = [v for v in offsets[:onset] if math.isfinite(v)]
+        how = (f"time offset between the cameras' stamps changed from "
+               f"{np.median(before):+.2f} to {_flagged_median(series, 'offset_ms'):+.2f} ms "
+               f"({series.values[series.metric][onset]:.1f} sigmas, limit {series.limit:g}; a "
+               "driver restarted?)")
     else:
         how = f"{series.metric} {_flagged_median(series, series.metric):.3g} {limit}"
     return f"{series.camera} from {start:g} s, {how}"
@@ -158,17 +175,52 @@ def check_drift(log: Path | str, options: CheckOptions, *,
                 window = seen[sample.check][index]
                 matcher = matchers[sample.check]
                 if matcher is not None:
-                    window.matches.append(matcher.match(*sample.grays))
+                    window.matches.append(_pair_matches(matcher, sample))
                 else:
                     _board_view(window, sample.grays[0], checks[sample.check], options.board)
                 if int(at_s) > shown_s:
                     bar.update(int(at_s) - shown_s)
                     shown_s = int(at_s)
-    series = [stereo_series(c, [w.matches for w in windows], options.threshold)
-              if c.kind == "stereo" else
-              board_series(c, [w.reprojection_px for w in windows], options.threshold)
-              for c, windows in zip(checks, seen, strict=True)]
+    series: list[Series] = []
+    for check, found in zip(checks, seen, strict=True):
+        if check.kind == "stereo":
+            pair = stereo_series(check, [w.matches for w in found], options.threshold)
+            series += [pair, *offset_series(pair)]
+        else:
+            series.append(board_series(check, [w.reprojection_px for w in found],
+                                       options.threshold))
     return LogCheck(str(log), options.window_s, windows, series, unchecked)
+
+
+def _pair_matches(matcher: StereoMatcher, sample: Sample) -> PairMatches:
+    """A pair's features matched across it, rectified; with the left frames around it, each
+    feature's row speed and acceleration across them and the pair's stamp gap (a moving
+    rig's offset)."""
+    if sample.around is None:
+        return matcher.match(*sample.grays)
+    raw_left, raw_right = matcher.match_raw(*sample.grays)
+    before, after = sample.around
+    tracked, kept = track_rows([before, sample.grays[0], after], 1, raw_left)
+    if not kept.any():
+        none = np.zeros(0)
+        return PairMatches(np.zeros((0, 2)), np.zeros((0, 2)), none, none, none)
+    left_px, right_px = matcher.rectify(raw_left[kept], raw_right[kept])
+    model, info = matcher.left_model, matcher.left
+    rows = np.stack([model.rectify_points(tracked[kept][:, k], info.r, info.p)[:, 1]
+                     for k in range(3)])  # (3, N)
+    centre_ns = sample.stamps_ns[0]
+    times_s = np.array([sample.around_stamps_ns[0] - centre_ns, 0,
+                        sample.around_stamps_ns[1] - centre_ns]) * 1e-9
+    if not (times_s[0] < 0 < times_s[2]):
+        return PairMatches(left_px, right_px)
+    # the quadratic through the three rows: its slope and curvature at the chosen frame
+    _, slope = lagrange_weights(times_s[None], np.zeros(1))
+    curvature = 2.0 / np.array([(times_s[0] - times_s[1]) * (times_s[0] - times_s[2]),
+                                (times_s[1] - times_s[0]) * (times_s[1] - times_s[2]),
+                                (times_s[2] - times_s[0]) * (times_s[2] - times_s[1])])
+    gap_s = (sample.stamps_ns[1] - centre_ns) * 1e-9
+    return PairMatches(left_px, right_px, slope[0] @ rows, np.full(len(left_px), gap_s),
+                       curvature @ rows)
 
 
 def _board_view(window: _Window, gray: np.ndarray, check: Checkable, board: Board | None

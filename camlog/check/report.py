@@ -54,6 +54,9 @@ def figure(check: LogCheck) -> np.ndarray:
 
 def _lines(series: Series) -> tuple[list[tuple[str, tuple[int, int, int]]], str]:
     """The metrics a panel draws (with their colours) and its title."""
+    if series.metric == "offset_change_sigmas":
+        return [("offset_ms", BLUE)], \
+            "time offset between the cameras' stamps (ms; right later than left)"
     if series.metric == "drift_sigmas":
         return [("pitch_deg", BLUE), ("roll_deg", GREEN)], \
             "rotation from the calibration (deg): pitch (blue), roll (green)"
@@ -76,7 +79,8 @@ def _range(values: list[float], limit: float) -> tuple[float, float]:
 def _panel(check: LogCheck, series: Series) -> np.ndarray:
     img = np.full((HEIGHT + 2 * MARGIN, WIDTH + 2 * MARGIN, 3), 255, np.uint8)
     lines, what = _lines(series)
-    limited = math.isfinite(series.limit) and series.metric != "drift_sigmas"
+    limited = math.isfinite(series.limit) \
+        and series.metric not in ("drift_sigmas", "offset_change_sigmas")
     low, high = _range([v for m, _ in lines for v in series.values[m]],
                        series.limit if limited else math.nan)
     span_s = check.windows * check.window_s

@@ -3,12 +3,15 @@ frames taken together), decoded only when chosen.
 
 A camera's frame is chosen once ``1 / rate_hz`` has passed since its last chosen one (by log
 time); a pair's right frame is the one nearest in log time to the chosen left frame, within
-half a frame period (20 ms at most). Still images are decoded only when chosen; a video
-stream is decoded throughout (a picture needs the ones before it).
+half a frame period (20 ms at most), and the left frames just before and after the chosen one
+come with it (a moving rig's features move across them: :mod:`processors.drift`). Still
+images are decoded only when chosen; a video stream is decoded throughout (a picture needs
+the ones before it).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
@@ -28,21 +31,31 @@ MAX_SLOP_S = 0.02
 
 @dataclass(frozen=True)
 class Sample:
-    """One instant of one check: its index in the checks, its log time (ns) and a grey
-    image ``(H, W)`` uint8 of each of its cameras."""
+    """One instant of one check: its index in the checks, its log time (ns), a grey image
+    ``(H, W)`` uint8 of each of its cameras and their header stamps (ns); for a pair, the
+    left camera's frames just before and after the chosen one (``around``, with their
+    stamps), when the log has them."""
 
     check: int
     log_time_ns: int
     grays: tuple[np.ndarray, ...]
+    stamps_ns: tuple[int, ...] = ()
+    around: tuple[np.ndarray, np.ndarray] | None = None
+    around_stamps_ns: tuple[int, int] = (0, 0)
 
 
 @dataclass
 class _LatestImage:
-    """The latest message of an image topic (decoded when it was chosen, or a video's)."""
+    """The latest message of an image topic (decoded when it was chosen, or a video's) and
+    the one before it."""
 
     video: bool
     raw: RawMessage | None = None
     gray: np.ndarray | None = None
+    stamp_ns: int = 0
+    previous: RawMessage | None = None
+    previous_gray: np.ndarray | None = None
+    previous_stamp_ns: int = 0
 
 
 @dataclass
@@ -54,6 +67,10 @@ class _Check:
     wanted: RawMessage | None = None  # a pair's chosen left frame, waiting for its right
     slop_ns: int = 0
     grays: dict[str, np.ndarray] = field(default_factory=dict)
+    stamps: dict[str, int] = field(default_factory=dict)
+    #: a pair complete but for the left frame after it, and the left frame before it
+    waiting: Sample | None = None
+    before: tuple[np.ndarray, int] | None = None
 
 
 def _period_ns(reader: LogReader, topic: str) -> float:
@@ -81,25 +98,48 @@ def samples(reader: LogReader, checks: list[Checkable], *, rate_hz: float) -> It
         if latest.gray is None and latest.raw is not None:
             frame = frames(reader, latest.raw)
             latest.gray = None if frame is None else frame.mono8()
+            latest.stamp_ns = 0 if frame is None else frame.stamp_ns
         return latest.gray
+
+    def previous(topic: str) -> tuple[np.ndarray, int] | None:
+        """The frame before a topic's latest one (a still image: decoded now)."""
+        latest = topics[topic]
+        if latest.previous_gray is None and latest.previous is not None and not latest.video:
+            frame = frames(reader, latest.previous)
+            if frame is not None:
+                latest.previous_gray, latest.previous_stamp_ns = frame.mono8(), frame.stamp_ns
+        return None if latest.previous_gray is None else \
+            (latest.previous_gray, latest.previous_stamp_ns)
 
     for raw in reader.raw_messages(list(topics)):
         latest = topics[raw.topic]
+        latest.previous, latest.previous_gray = latest.raw, latest.gray
+        latest.previous_stamp_ns = latest.stamp_ns
         latest.raw, latest.gray = raw, None
         if latest.video:
             gray(raw.topic)
         for index in by_topic[raw.topic]:
             state = states[index]
             first = state.topics[0]
+            if raw.topic == first and state.waiting is not None:
+                after = gray(first)
+                done, state.waiting = state.waiting, None
+                if after is not None and state.before is not None:
+                    done = dataclasses.replace(done, around=(state.before[0], after),
+                                               around_stamps_ns=(state.before[1],
+                                                                 topics[first].stamp_ns))
+                yield done
             if raw.topic == first and (state.next_ns is None or raw.log_time_ns >= state.next_ns):
                 state.next_ns = raw.log_time_ns + step_ns
                 state.wanted = raw
-                state.grays = {}
+                state.grays, state.stamps = {}, {}
                 picked = gray(first)
                 if picked is None:
                     state.wanted = None
                     continue
                 state.grays[first] = picked
+                state.stamps[first] = topics[first].stamp_ns
+                state.before = previous(first) if len(state.topics) > 1 else None
             if state.wanted is None:
                 continue
             for topic in state.topics[1:]:
@@ -109,9 +149,18 @@ def samples(reader: LogReader, checks: list[Checkable], *, rate_hz: float) -> It
                     picked = gray(topic)
                     if picked is not None:
                         state.grays[topic] = picked
+                        state.stamps[topic] = topics[topic].stamp_ns
             if len(state.grays) == len(state.topics):
-                yield Sample(index, state.wanted.log_time_ns,
-                             tuple(state.grays[t] for t in state.topics))
+                sample = Sample(index, state.wanted.log_time_ns,
+                                tuple(state.grays[t] for t in state.topics),
+                                tuple(state.stamps[t] for t in state.topics))
                 state.wanted = None
+                if len(state.topics) > 1:
+                    state.waiting = sample  # until the left frame after it comes
+                else:
+                    yield sample
             elif raw.log_time_ns - state.wanted.log_time_ns > state.slop_ns:
                 state.wanted = None  # the partner never came
+    for state in states:
+        if state.waiting is not None:
+            yield state.waiting

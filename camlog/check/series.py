@@ -9,6 +9,9 @@ the calibration's rotation uncertainty. A window is flagged beyond ``NOISE_SIGMA
 camera with a board in view is flagged by its reprojection error beyond its median over the
 windows plus ``NOISE_SIGMAS`` sigmas of the same noise. ``threshold`` replaces the limit
 with a fixed one: the vertical error (px) of a pair, the reprojection error (px) of a board.
+A moving rig also shows the offset between its cameras' stamps, fitted beside the rotation
+(:mod:`processors.drift`); when enough windows show it, a second series of the pair
+(``offset``) flags the windows from where it changed (:func:`offset_series`).
 """
 
 from __future__ import annotations
@@ -27,7 +30,7 @@ from replay.messages import F64
 from .cameras import Checkable
 
 __all__ = ["MIN_WINDOWS", "NOISE_SIGMAS", "CheckOptions", "Series", "board_series",
-           "drift_sigmas", "noise_scale", "stereo_series"]
+           "drift_sigmas", "noise_scale", "offset_series", "stereo_series"]
 
 #: a window is flagged this many noise sigmas beyond a calibrated window's value
 NOISE_SIGMAS = 5.0
@@ -106,12 +109,10 @@ def stereo_series(check: Checkable, matches: list[list[PairMatches]],
     """A stereo pair's series from each window's matches (one entry per pair of images)."""
     right = check.infos[1]
     names = ("vertical_error_px", "rotation_deg", "pitch_deg", "roll_deg", "pitch_std_deg",
-             "roll_std_deg", "matches")
+             "roll_std_deg", "matches", "offset_ms", "offset_std_ms")
     metrics: dict[str, list[float]] = {name: [] for name in names}
     for window in matches:
-        joined = PairMatches(
-            np.concatenate([m.left_px for m in window] or [np.zeros((0, 2))]),
-            np.concatenate([m.right_px for m in window] or [np.zeros((0, 2))]))
+        joined = _joined(window)
         views = np.repeat(np.arange(len(window)), [len(m.dy_px) for m in window])
         fit = fit_rotation(joined, p_rect=right.p, rect_from_right=right.r,
                            views=views.astype(np.int64))
@@ -120,7 +121,8 @@ def stereo_series(check: Checkable, matches: list[list[PairMatches]],
                 float(np.median(np.abs(dy))) if dy.size else math.nan, fit.angle_deg,
                 math.degrees(fit.pitch_rad), math.degrees(fit.roll_rad),
                 math.degrees(fit.pitch_std_rad), math.degrees(fit.roll_std_rad),
-                float(fit.matches)), strict=True):
+                float(fit.matches), 1000 * fit.offset_s, 1000 * fit.offset_std_s),
+                strict=True):
             metrics[name].append(value)
     unjudged = _unjudged(metrics["rotation_deg"], threshold,
                          "no window had enough features matched across the pair")
@@ -134,6 +136,53 @@ def stereo_series(check: Checkable, matches: list[list[PairMatches]],
                for index in range(len(matches))]
     return Series(check.name, "stereo", metrics, "drift_sigmas", NOISE_SIGMAS, flagged,
                   unjudged)
+
+
+def _joined(window: list[PairMatches]) -> PairMatches:
+    """A window's matches in one set (their speeds and stamp gaps only when every pair of
+    images of the window has them)."""
+    timed = bool(window) and all(m.row_speed_px_s is not None for m in window)
+    return PairMatches(
+        np.concatenate([m.left_px for m in window] or [np.zeros((0, 2))]),
+        np.concatenate([m.right_px for m in window] or [np.zeros((0, 2))]),
+        np.concatenate([m.row_speed_px_s for m in window
+                        if m.row_speed_px_s is not None]) if timed else None,
+        np.concatenate([m.stamp_gap_s for m in window
+                        if m.stamp_gap_s is not None]) if timed else None,
+        np.concatenate([m.row_acceleration_px_s2 for m in window
+                        if m.row_acceleration_px_s2 is not None]) if timed
+        and all(m.row_acceleration_px_s2 is not None for m in window) else None)
+
+
+def offset_series(pair: Series) -> list[Series]:
+    """The offset between a pair's stamps over its windows, flagged from the window where it
+    changed (a driver restarted): for each window ``k`` the step between the mean offset of
+    the windows before it and of those from it on, in sigmas (each window weighted by its
+    standard error times :func:`noise_scale`), flagged from the largest step beyond
+    ``NOISE_SIGMAS``. None when fewer than ``MIN_WINDOWS`` windows show the offset (the rig
+    stood still, or moved only along the rows)."""
+    offsets = np.array(pair.values["offset_ms"], dtype=np.float64)
+    std = np.array(pair.values["offset_std_ms"], dtype=np.float64)
+    usable = np.isfinite(offsets) & np.isfinite(std) & (std > 0)
+    if usable.sum() < MIN_WINDOWS:
+        return []
+    sigma = noise_scale(offsets, std) * std
+    weight = np.where(usable, 1.0 / np.where(usable, sigma, 1.0) ** 2, 0.0)
+    weighted = np.where(usable, offsets, 0.0) * weight
+    before_w, before_s = np.cumsum(weight) - weight, np.cumsum(weighted) - weighted
+    after_w = np.cumsum(weight[::-1])[::-1]
+    after_s = np.cumsum(weighted[::-1])[::-1]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        steps = np.abs(after_s / after_w - before_s / before_w) \
+            / np.sqrt(1.0 / after_w + 1.0 / before_w)
+    steps = np.where(usable & (before_w > 0) & (after_w > 0), steps, np.nan)
+    onset = int(np.nanargmax(steps)) if np.any(np.isfinite(steps)) \
+        and np.nanmax(steps) > NOISE_SIGMAS else None
+    values = {"offset_ms": pair.values["offset_ms"], "offset_std_ms": pair.values["offset_std_ms"],
+              "offset_change_sigmas": [float(v) for v in steps]}
+    flagged = [onset is not None and index >= onset for index in range(len(offsets))]
+    return [Series(pair.camera, "offset", values, "offset_change_sigmas", NOISE_SIGMAS,
+                   flagged)]
 
 
 def drift_sigmas(metrics: dict[str, list[float]], calibration_std_deg: float,

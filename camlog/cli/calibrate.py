@@ -55,6 +55,7 @@ def run(args: argparse.Namespace) -> int:
         print("\n".join(measure_calibration(request).lines()))
         return 0
     from ..calibrate.flow import calibrate_log
+    from ..calibrate.markdown import time_offset_line
 
     run_ = calibrate_log(request)
     print_warnings(run_.warnings)
@@ -72,6 +73,9 @@ def run(args: argparse.Namespace) -> int:
             print(f"  {camera.lens_order.summary}")
         if camera.tangential.summary is not None:
             print(f"  {camera.tangential.summary}")
+        if camera.time_offset is not None:
+            line = time_offset_line(camera.time_offset)
+            print(f"  {line[0].lower()}{line[1:]}")
         if camera.uncertainty is not None:
             u = camera.uncertainty
             print(f"  projection uncertainty at {u.range_m:.3f} m: median {u.median_px:.3f} px, "

@@ -27,5 +27,9 @@ def run(args: argparse.Namespace) -> int:
           f"in {result.wall_s:.1f} s ({result.fps:.0f} frames/s)")
     for drift in scenario.drifts:
         print(f"drift: {drift.camera} {drift.axis} {drift.degrees:+g}° from {drift.start_s:g} s")
+    for latency in scenario.latencies:
+        since = f" from {latency.start_s:g} s" if latency.start_s else ""
+        print(f"latency: {latency.camera} stamped {latency.latency_ms:+g} ms from its "
+              f"exposures{since}")
     print(f"wrote {result.path} ({result.storage})")
     return 0

@@ -23,6 +23,8 @@ __all__ = ["CalibrateRequest"]
 
 #: ``-k``'s word for a radial order chosen by cross-validation
 AUTO_ORDER = "auto"
+#: ``--time-offset``'s choices
+TIME_OFFSET_MODES = ("auto", "off")
 
 
 def radial_count(text: str) -> int | str:
@@ -80,6 +82,11 @@ class CalibrateRequest:
     approximate: float | None = option(
         None, "--approximate", type=non_negative, metavar="SEC",
         help="pair stereo frames whose stamps differ by at most SEC")
+    time_offset: str = option(
+        "auto", "--time-offset", choices=TIME_OFFSET_MODES,
+        help="cameras' stamps offset from each other: 'auto' (default) measures each "
+             "camera's offset against the first from a moving board and pairs the views by "
+             "it; 'off' pairs them by their stamps")
     output: Path | None = common.output(
         "output folder (default: LOG_calibration next to the log)", metavar="OUTDIR",
         default=None)

@@ -17,8 +17,9 @@ import inspect
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, ClassVar, TypeVar
+from typing import TYPE_CHECKING, Any, ClassVar, TypeVar
 
+from processors.calibration.patterns import PATTERNS
 from processors.errors import OptionValueError
 from processors.registry import SPECS, spec_of
 from processors.spec import Configured, Option, OptionKind, ProcessorSpec
@@ -28,7 +29,10 @@ from replay.topics import RESYNC_PREFIX
 
 from . import fields as common
 from .fields import RequestError, option, required
-from .values import bounded_int, name, number
+from .values import ESTIMATED, bounded_int, name, number, offset_value, output_path, positive
+
+if TYPE_CHECKING:
+    from processors.calibration.board import Board
 
 __all__ = ["CHAPTER_NS", "ProcessRequest", "ResyncRequest", "ThrottleRequest",
            "configure_values", "option_error", "processor_fields", "resolve_value"]
@@ -165,7 +169,8 @@ def _chosen(request: Any, specs: Sequence[ProcessorSpec]) -> tuple[Configured, .
 
 @dataclass(frozen=True, kw_only=True)
 class ResyncRequest:
-    """Pair and re-stamp the images of two unsynchronised cameras."""
+    """Pair and re-stamp the images of two unsynchronised cameras; measure the offset
+    between their stamps from what they saw."""
 
     epilog: ClassVar[str] = (
         "Pairs: |right - left| <= slop, each frame used once, as many pairs as possible, then "
@@ -173,11 +178,17 @@ class ResyncRequest:
         "re-stamped with the later of its two stamps and written to "
         "PREFIX/{left,right}/{image_raw,camera_info}; PREFIX/offset_s (PointStamped, x = "
         "right - left in s) per pair and PREFIX/stats (JSON) summarise the pairing. Every "
-        "input topic is kept."
+        "input topic is kept. "
+        "Offsets: --estimate-offset measures how much later the right camera stamps an "
+        "instant than the left from the images: from a moving board both see (--size, "
+        "--square), else from natural features of a moving rig (its calibration from the "
+        "log's camera_info or --calibration); it prints the offset ± sigma and the frames "
+        "that carried it, and writes it to --offset-file. --offset MS|estimated|FILE.json "
+        "moves the right camera's stamps back by the offset before pairing."
     )
 
     log: Location = common.input_log()
-    output: Path = common.output()
+    output: Path | None = common.output(default=None)
     left: str = option("/unsynced/left", "--left", type=name, metavar="NS",
                        help="left camera namespace with image_raw[/compressed] and camera_info, "
                             "or its image topic (default /unsynced/left)")
@@ -191,10 +202,58 @@ class ResyncRequest:
     out_prefix: str = option(RESYNC_PREFIX, "--out-prefix", type=name, metavar="NS",
                              help=f"namespace of the re-stamped topics (default "
                                   f"{RESYNC_PREFIX})")
+    estimate_offset: bool = option(
+        False, "--estimate-offset", action="store_true", batch=False,
+        help="measure the offset between the cameras' stamps from the images, print it and "
+             "write --offset-file; no log is written unless -o is given too")
+    offset: float | str | None = option(
+        None, "--offset", type=offset_value, metavar="MS|estimated|FILE",
+        help="move the right camera's stamps back by this offset before pairing: "
+             "milliseconds, 'estimated' (measured from the images, as --estimate-offset "
+             "does) or an offset file written before")
+    offset_file: Path | None = option(
+        None, "--offset-file", type=output_path, metavar="FILE", batch=False,
+        help="where the measured offset is written (JSON; default OUT_offset.json beside "
+             "the output, or LOG_offset.json in the working folder)")
+    size: str | None = option(None, "-s", "--size", metavar="COLSxROWS",
+                              help="a board in view for the offset: its size in inner "
+                                   "corners, e.g. 7x6 (without it: natural features)")
+    square: float | None = option(None, "-q", "--square", type=positive, metavar="M",
+                                  help="the board's square side in metres")
+    pattern: str = option("chessboard", "-p", "--pattern", choices=PATTERNS,
+                          help="the board's kind (default chessboard)")
+    calibration: Path | None = option(
+        None, "--calibration", type=Path, metavar="DIR",
+        help="natural features: the pair's calibration, a calibrate output folder (left.yaml "
+             "and right.yaml) instead of the log's camera_info")
+    max_offset: float = option(0.25, "--max-offset", type=number(above=0.0, high=5.0),
+                               metavar="SEC",
+                               help="board: search the offset within ±SEC (default 0.25)")
     format: str | None = common.log_format()
     overwrite: bool = common.overwrite()
     recover: bool = common.recover()
+    workers: int | None = common.workers()
     progress: bool | None = common.progress()
+
+    def __post_init__(self) -> None:
+        if (self.size is None) != (self.square is None):
+            raise RequestError(ResyncRequest, "a board needs both {size} and {square}")
+        if self.estimate_offset and self.offset is not None and self.offset != ESTIMATED:
+            raise RequestError(ResyncRequest, "{estimate_offset} measures the offset; with "
+                                              "{offset} given, leave it out")
+
+    @property
+    def measures(self) -> bool:
+        """Whether the offset is measured from the images."""
+        return self.estimate_offset or self.offset == ESTIMATED
+
+    def board(self) -> Board | None:
+        """The board in view (None: natural features)."""
+        from processors.calibration.board import make_board
+
+        if self.size is None or self.square is None:
+            return None
+        return make_board(self.size, self.square, self.pattern)
 
 
 @dataclass(frozen=True, kw_only=True)

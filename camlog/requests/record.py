@@ -89,6 +89,22 @@ def _drift(text: str) -> dict[str, Any]:
     return {"camera": camera, "axis": axis, "degrees": numbers[0], "start_s": numbers[1]}
 
 
+def _latency(text: str) -> dict[str, Any]:
+    """``CAMERA:MS[@SECONDS]`` as a scenario's ``[[latencies]]`` table."""
+    where, at, start = text.rpartition("@") if "@" in text else (text, "", "0")
+    camera, _, ms = where.rpartition(":")
+    try:
+        numbers = (float(ms), float(start))
+    except ValueError:
+        numbers = (math.nan, math.nan)
+    if not camera or not all(math.isfinite(v) for v in numbers):
+        raise argparse.ArgumentTypeError(
+            f"expected CAMERA:MS or CAMERA:MS@SECONDS, e.g. right:17, left:-5 or "
+            f"right:25@6, got {text!r}")
+    table = {"camera": camera, "latency_ms": numbers[0]}
+    return table | ({"start_s": numbers[1]} if at else {})
+
+
 @dataclass(frozen=True, kw_only=True)
 class RecordRequest:
     """Simulate a scenario in MuJoCo and write its camera log."""
@@ -143,6 +159,12 @@ class RecordRequest:
         help="turn a camera (its name, e.g. left or right, or namespace) by DEGREES about an "
              "axis of its optical frame (roll: z, pitch: x, yaw: y) from S seconds after the "
              "start on, its camera_info unchanged; repeatable")
+    latency: tuple[dict[str, Any], ...] = option(
+        (), "--latency", type=_latency, action="append", metavar="CAMERA:MS[@S]",
+        help="stamp a camera's messages MS milliseconds after the exposure they carry "
+             "(negative: before it), as a driver that stamps late does (from S seconds after "
+             "the start on: a driver restarted); exposure times, jitter and drops unchanged; "
+             "repeatable")
     progress: bool | None = common.progress()
 
     def overrides(self) -> dict[str, Any]:
@@ -156,6 +178,7 @@ class RecordRequest:
             "supersample": self.supersample,
             "encoding": self.encoding,
             "drifts": list(self.drift) or None,
+            "latencies": list(self.latency) or None,
         }
         if self.resolution:
             out["width"], out["height"] = self.resolution

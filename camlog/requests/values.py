@@ -10,8 +10,8 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
-__all__ = ["bounded_int", "name", "namespaces", "non_negative", "number", "output_path",
-           "positive"]
+__all__ = ["ESTIMATED", "bounded_int", "name", "namespaces", "non_negative", "number",
+           "offset_value", "output_path", "positive"]
 
 #: bytes a file name may have on common file systems (ext4, xfs, btrfs, tmpfs, APFS)
 NAME_MAX = 255
@@ -57,6 +57,32 @@ def number(low: float | None = None, high: float | None = None, *,
 positive = number(above=0.0)
 #: a finite number >= 0
 non_negative = number(low=0.0)
+
+
+#: ``--offset``'s word for an offset measured from the images
+ESTIMATED = "estimated"
+#: the largest time offset given by hand (ms)
+MAX_OFFSET_MS = 10_000.0
+
+
+def offset_value(text: str) -> float | str:
+    """A type: a time offset in milliseconds (a number), ``estimated``, or the path of an
+    offset result file (``.json``)."""
+    word = text.strip()
+    if word.lower() == ESTIMATED:
+        return ESTIMATED
+    if word.endswith(".json"):
+        return word
+    try:
+        value = float(word)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected milliseconds, '{ESTIMATED}' or an offset file (.json), got {text!r}"
+            ) from None
+    if not math.isfinite(value) or abs(value) > MAX_OFFSET_MS:
+        raise argparse.ArgumentTypeError(
+            f"expected milliseconds within ±{MAX_OFFSET_MS:g}, got {text!r}")
+    return value
 
 
 def name(text: str) -> str:

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import numpy.typing as npt
@@ -53,7 +53,10 @@ class JointResult:
     Cameras are numbered as the ``sizes`` given (every per-camera list follows it), views as
     the ``views`` given: ``residuals_px[i]`` ``(M, 2)`` (observed - projected) and
     ``inliers[i]`` ``(M,)`` follow the order of ``views[i]``'s corners; views in
-    ``rejected`` carry no weight.
+    ``rejected`` carry no weight. Each of ``views`` is at the instant whose board pose it
+    was solved with: a view in ``split`` left the instant it was given, whose other views
+    saw the board elsewhere (not simultaneous), for a board pose of its own (a new instant
+    number).
     """
 
     views: list[BoardView]
@@ -75,6 +78,7 @@ class JointResult:
     blurred_views: int = 0
     rounds: int = 0
     warp_choice: WarpChoice | None = None  # the warp's cross-validation (board_warp "auto")
+    split: dict[int, str] = field(default_factory=dict)  # view index -> why
 
     @property
     def board_warp_m(self) -> tuple[F64, F64] | None:
@@ -230,12 +234,17 @@ def _result(problem: Problem, views: list[BoardView], evidence: InlierSelection,
                             np.sqrt(np.maximum(np.diag(full), 0.0)).tolist(), strict=True)))
     rig_covariance = [covariance[np.ix_(layout.rig_columns[c], layout.rig_columns[c])]
                       if c else np.zeros((6, 6)) for c in range(len(models))]
+    solved = list(views)
+    for row, view in enumerate(problem.order):
+        instant = int(problem.instants[obs.instant[row]])
+        if instant != views[view].instant:
+            solved[view] = dataclasses.replace(views[view], instant=instant)
     return JointResult(
-        views=views, models=models, options=options, tangential_tests=tests,
+        views=solved, models=models, options=options, tangential_tests=tests,
         camera_from_reference=[state.camera_from_reference(c) for c in range(len(models))],
         reference_from_board={int(problem.instants[p]): state.reference_from_board(p)
                               for p in range(len(problem.instants))},
         sigma_px=problem.sigma_px, residuals_px=residuals, inliers=inliers,
         rejected=dict(evidence.rejected), std=std, rig_covariance=rig_covariance,
         problem=problem, blur=evidence.blur, blurred_views=evidence.blurred, rounds=rounds,
-        warp_choice=warp_choice)
+        warp_choice=warp_choice, split=dict(evidence.split))

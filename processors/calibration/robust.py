@@ -9,11 +9,18 @@ different poses) and is dropped whole. Once the solve has settled, such views ar
 more chance: posed afresh through the solution's lens and solved with the others, a view that
 only its seed pose could not explain (PnP through a seed lens can pick the wrong one of a
 planar board's two poses) fits and stays; one that is not the board is dropped again, and
-the solve before the trial stands. Views of a moving board carry their speed; after the
-first solve the blur law of :mod:`.motion` is fitted to their residuals, weights them and
-leaves out views too blurred to help. The centres of a circle grid's circles are measured as
-the centroids of their images; each round moves them by the shift :mod:`.discs` computes at
-the current solution, until the shift settles.
+the solve before the trial stands. Views of several cameras at one instant share a board
+pose only while they agree on it: frames stamped as one instant but exposed apart (cameras
+that are not synchronised) see a moving board at two poses. Such a view is given a board
+pose of its own, and so stays in its camera's intrinsics while the pair leaves the rig
+(``split``: "not simultaneous: the board moved N mm between the two images"): when it would
+lose most of its corners with the shared pose, and, once the solve has settled, when its
+own pose explains its corners better than noise would (a likelihood ratio, chi-square with
+6 degrees of freedom, at one false split in a hundred data sets). Views of a moving board carry
+their speed; after the first solve the blur law of :mod:`.motion` is fitted to their
+residuals, weights them and leaves out views too blurred to help. The centres of a circle
+grid's circles are measured as the centroids of their images; each round moves them by the
+shift :mod:`.discs` computes at the current solution, until the shift settles.
 """
 
 from __future__ import annotations
@@ -49,6 +56,13 @@ SEED_FLOOR_PX = 1.0
 SHIFT_TOLERANCE_PX = 1e-4
 #: views taken back in are kept only if the noise estimate grows by at most this factor
 RETRY_SIGMA_GROWTH = 1.25
+#: rounds of splitting views that disagree with their instant's pose, at most
+MAX_SPLIT_STAGES = 5
+#: views split from their instant by chance, in a data set whose views all agree: one in a
+#: hundred data sets (a split costs the rig a joint view; a pair left in costs it more)
+FALSE_SPLITS = 0.01
+#: Gauss-Newton steps of a view's own pose
+OWN_POSE_ITERATIONS = 6
 
 
 @dataclass(frozen=True)
@@ -80,6 +94,9 @@ class InlierSelection:
     blur: BlurModel | None = None
     blurred: int = 0  # views left out as too blurred
     outlying: set[int] = field(default_factory=set)  # views left out as not the board
+    #: views given a board pose of their own: view index -> the pose row they shared
+    split_from: dict[int, int] = field(default_factory=dict)
+    split: dict[int, str] = field(default_factory=dict)  # view index -> why
 
     @classmethod
     def of(cls, views: list[BoardView], points_in_board: F64) -> InlierSelection:
@@ -118,6 +135,28 @@ class InlierSelection:
     def dropped(self) -> B8:
         """``(V,)`` whether each row's view is left out."""
         return np.isin(self.order, list(self.rejected))
+
+    def partnered(self, row: int) -> bool:
+        """Whether another view in use shares the row's board pose."""
+        obs = self.observations
+        return bool(np.any((obs.instant == obs.instant[row]) & ~self.dropped
+                           & (np.arange(obs.view_count) != row)))
+
+    def split_off(self, row: int, state: bundle.RigState,
+                  reference_from_board: F64) -> bundle.RigState:
+        """Give the row's view a board pose of its own, ``reference_from_board`` (4, 4): a new
+        pose row (numbered after every instant); the state with it."""
+        obs = self.observations
+        view = int(self.order[row])
+        self.split_from.setdefault(view, int(obs.instant[row]))
+        obs.instant[row] = len(self.instants)
+        self.instants = np.append(self.instants, int(self.instants.max()) + 1)
+        out = state.copy()
+        out.board_rotation = np.concatenate([state.board_rotation,
+                                             reference_from_board[None, :3, :3]])
+        out.board_translation = np.concatenate([state.board_translation,
+                                                reference_from_board[None, :3, 3]])
+        return out
 
 
 @dataclass
@@ -223,7 +262,8 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
         # corner leaves it singular): it sits that solve out and is judged after it
         evidence.inliers[evidence.inliers.sum(axis=1) < MIN_VIEW_POINTS] = False
     speeds = np.array([views[i].speed_px for i in evidence.order])
-    rounds, trial = 0, None
+    lenses = [(o.distortion_model, s) for o, s in zip(options, sizes, strict=True)]
+    rounds, trial, splits, lost_stages = 0, None, 0, 0
     while True:
         rounds += 1
         refinement = normal.refine(state, layout,
@@ -234,7 +274,7 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
         settled = float(np.abs(shift - previous).max(initial=0.0)) <= SHIFT_TOLERANCE_PX
         norm = _residual_norms(state, layout, _moved(obs, shift), points_in_board)
         sigma = _sigma(norm * obs.weight[:, None], evidence.inliers, layout)
-        if rounds >= MAX_ROUNDS * (1 if trial is None else 2):
+        if rounds >= MAX_ROUNDS * ((1 if trial is None else 2) + splits + lost_stages):
             break
         if not (fresh and reject):
             if settled:
@@ -242,19 +282,31 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
             continue
         if rounds == 1 and np.any(speeds > 0) and _weigh_blur(evidence, norm, speeds):
             continue
-        if not _reject_outliers(evidence, norm, sigma) and settled:
+        changed, lost = _reject_outliers(evidence, norm, sigma)
+        if lost:  # views that lose most of their corners to a shared pose get their own
+            state = _split_lost(evidence, state, _moved(obs, shift), points_in_board,
+                                lenses=lenses, rows=lost)
+            lost_stages += 1
+            continue
+        if not changed and settled:
+            if trial is None and splits < MAX_SPLIT_STAGES:
+                state, split = _split_disagreeing(evidence, state, layout=layout,
+                                                  obs=_moved(obs, shift),
+                                                  points_in_board=points_in_board, sigma=sigma)
+                if split:
+                    splits += 1
+                    continue
             if trial is not None or not evidence.outlying:
                 break
             trial = _Trial.before(state, refinement, sigma, shift, evidence)
             state, restored = _retry_outlying(evidence, state, _moved(obs, shift),
-                                              points_in_board,
-                                              [(o.distortion_model, s) for o, s in
-                                               zip(options, sizes, strict=True)])
+                                              points_in_board, lenses)
             if not restored:
                 trial = None
                 break
     if trial is not None and not trial.holds(evidence, state, sigma):
         state, refinement, sigma, shift = trial.undo(evidence)
+    _word_splits(evidence, state, points_in_board)
     problem = Problem(state, layout, _moved(obs, shift).with_mask(evidence.inliers),
                       refinement.normal, points_in_board, sigma, evidence.instants,
                       evidence.order)
@@ -268,9 +320,12 @@ def _sigma(weighted_norm: F64, inliers: B8, layout: bundle.Layout) -> float:
     return math.sqrt(float(np.sum(weighted_norm[inliers] ** 2)) / dof)
 
 
-def _reject_outliers(evidence: InlierSelection, norm: F64, sigma: float) -> bool:
-    """Mark the corners beyond the threshold (and views that lose most of theirs); whether
-    anything changed."""
+def _reject_outliers(evidence: InlierSelection, norm: F64, sigma: float
+                     ) -> tuple[bool, list[int]]:
+    """Mark the corners beyond the threshold (and drop views that lose most of theirs);
+    whether anything changed, and the rows that lost most of their corners to a board pose
+    they share with another view in use (not dropped: they get a pose of their own, their
+    corners left as they were)."""
     obs, seen = evidence.observations, evidence.observations.mask
     dropped = evidence.dropped
     limit = threshold_sigma(int(evidence.inliers.sum())) * sigma / obs.weight[:, None]
@@ -278,6 +333,9 @@ def _reject_outliers(evidence: InlierSelection, norm: F64, sigma: float) -> bool
     lost = ((seen & ~new).sum(axis=1) > VIEW_OUTLIER_SHARE * seen.sum(axis=1)) \
         | (new.sum(axis=1) < MIN_VIEW_POINTS)
     lost &= ~dropped
+    shared = [int(row) for row in np.flatnonzero(lost) if evidence.partnered(int(row))]
+    if shared:
+        return True, shared
     changed = not np.array_equal(new, evidence.inliers) or bool(lost.any())
     evidence.inliers = new
     for row in np.flatnonzero(lost):
@@ -285,7 +343,145 @@ def _reject_outliers(evidence: InlierSelection, norm: F64, sigma: float) -> bool
                       f"{int(seen[row].sum())} corners beyond the outlier threshold: not the "
                       "board at one pose")
         evidence.outlying.add(int(evidence.order[row]))
-    return changed
+    return changed, []
+
+
+def _split_lost(evidence: InlierSelection, state: bundle.RigState, obs: bundle.Observations,
+                points_in_board: F64, *, lenses: list[tuple[str, tuple[int, int]]],
+                rows: list[int]) -> bundle.RigState:
+    """Give each of ``rows`` a board pose of its own, found by PnP through its camera's
+    current lens (a view PnP cannot pose is dropped as not the board)."""
+    for row in rows:
+        camera = int(obs.camera[row])
+        ids = np.flatnonzero(obs.mask[row])
+        distortion_model, size = lenses[camera]
+        camera_from_board = board_pose(points_in_board[ids], obs.observed[row, ids],
+                                       model_of(distortion_model, state.intrinsics[camera],
+                                                size))
+        if camera_from_board is None:
+            evidence.drop(row, "not the board at one pose: no pose fits its corners")
+            evidence.outlying.add(int(evidence.order[row]))
+            continue
+        state = evidence.split_off(row, state, np.linalg.inv(
+            state.camera_from_reference(camera)) @ camera_from_board)
+        evidence.inliers[row] = obs.mask[row]
+    return state
+
+
+def _own_poses(state: bundle.RigState, layout: bundle.Layout, obs: bundle.Observations,
+               points_in_board: F64, rows: I64) -> tuple[bundle.RigState, F64, F64]:
+    """Each of ``rows``' views with a board pose of its own (Gauss-Newton from the pose it
+    shares, its camera held): those poses (one per row, in a state of their own), and each
+    row's cost (sum of squared weighted residuals) with the shared pose and with its own."""
+    part = bundle.Observations(obs.camera[rows], np.arange(len(rows)), obs.observed[rows],
+                               obs.mask[rows], obs.weight[rows])
+    own = state.copy()
+    own.board_rotation = state.board_rotation[obs.instant[rows]].copy()
+    own.board_translation = state.board_translation[obs.instant[rows]].copy()
+    no_global = np.zeros(layout.global_count)
+
+    def costs(at: bundle.RigState) -> F64:
+        residuals = bundle.linearize(at, layout, part, points_in_board,
+                                     jacobian=False).residuals
+        return np.asarray(np.sum(residuals.reshape(len(rows), -1) ** 2, axis=1))
+
+    shared = costs(own)
+    best = shared.copy()
+    for _ in range(OWN_POSE_ITERATIONS):
+        lin = bundle.linearize(own, layout, part, points_in_board)
+        jacobian = lin.pose  # (R, 2N, 6)
+        hessian = np.swapaxes(jacobian, 1, 2) @ jacobian + 1e-9 * np.eye(6)
+        gradient = np.einsum("rki,rk->ri", jacobian, lin.residuals.reshape(len(rows), -1))
+        step = -np.linalg.solve(hessian, gradient[:, :, None])[:, :, 0]
+        trial = layout.step(own, no_global, step)
+        cost = costs(trial)
+        better = cost < best
+        own.board_rotation[better] = trial.board_rotation[better]
+        own.board_translation[better] = trial.board_translation[better]
+        best = np.where(better, cost, best)
+    return own, shared, best
+
+
+def _split_disagreeing(evidence: InlierSelection, state: bundle.RigState, *,
+                       layout: bundle.Layout, obs: bundle.Observations, points_in_board: F64,
+                       sigma: float) -> tuple[bundle.RigState, bool]:
+    """Views that disagree with their instant's board pose beyond noise given a pose of
+    their own: the likelihood ratio of a pose each against the one shared is chi-square
+    with 6 degrees of freedom per extra pose. An instant beyond :data:`FALSE_SPLITS` false
+    splits per data set is split; when none is, but the instants together are (many pairs a
+    little apart: the rig, fitted to them, hides each one's misfit), those that gain most
+    are split until the rest agree. The instant that agrees best is never split: the rig
+    rests on it (the flow warns when it rests on few). In an instant split, the view whose
+    own pose gains most is given it. The state, and whether any was."""
+    inliers = obs.with_mask(evidence.inliers)
+    in_use = ~evidence.dropped & (evidence.inliers.sum(axis=1) >= MIN_VIEW_POINTS)
+    counts = np.bincount(obs.instant[in_use], minlength=len(evidence.instants))
+    rows = np.flatnonzero(in_use & (counts[obs.instant] >= 2))
+    if not len(rows) or not sigma > 0:
+        return state, False
+    own, shared, alone = _own_poses(state, layout, inliers, points_in_board, rows)
+    gain = (shared - alone) / sigma ** 2
+    instants = obs.instant[rows]
+    tested = np.unique(instants)
+    members = [np.flatnonzero(instants == instant) for instant in tested]
+    gains = np.array([float(gain[m].sum()) for m in members])
+    dofs = np.array([6 * (len(m) - 1) for m in members])
+    chosen = [i for i in range(len(tested))
+              if chi2_survival(float(gains[i]), int(dofs[i])) < FALSE_SPLITS / len(tested)]
+    if not chosen:
+        total, dof = float(gains.sum()), int(dofs.sum())
+        for i in np.argsort(-gains).tolist():
+            if chi2_survival(total, dof) >= FALSE_SPLITS:
+                break
+            chosen.append(i)
+            total, dof = total - float(gains[i]), dof - int(dofs[i])
+    if len(chosen) == len(tested):  # the rig rests on the one that agrees best
+        chosen.remove(int(np.argmin(gains)))
+    for i in chosen:
+        pick = members[i][int(np.argmax(gain[members[i]]))]
+        state = evidence.split_off(int(rows[pick]), state, own.reference_from_board(int(pick)))
+    return state, bool(chosen)
+
+
+def chi2_survival(x: float, dof: int) -> float:
+    """``P(X > x)`` for ``X`` chi-square with an even number ``dof`` of degrees of freedom:
+    ``exp(-x/2) sum_{i < dof/2} (x/2)^i / i!`` (summed in logarithms: no underflow)."""
+    if dof <= 0 or dof % 2:
+        raise ValueError(f"dof must be even and positive, got {dof}")
+    half = max(x, 0.0) / 2.0
+    if half == 0.0:
+        return 1.0
+    logs = [-half + i * math.log(half) - math.lgamma(i + 1) for i in range(dof // 2)]
+    top = max(logs)
+    return min(1.0, math.exp(top) * math.fsum(math.exp(v - top) for v in logs))
+
+
+def _word_splits(evidence: InlierSelection, state: bundle.RigState,
+                 points_in_board: F64) -> None:
+    """Why each view given a pose of its own left its instant: how far the board moved
+    between its pose and that of the other views of its instant still in use (mm)."""
+    obs = evidence.observations
+    in_use = ~evidence.dropped
+    row_of = {int(view): row for row, view in enumerate(evidence.order)}
+    evidence.split = {}
+    for view, origin in evidence.split_from.items():
+        row = row_of[view]
+        if not in_use[row]:
+            continue
+        partners = [r for r in np.flatnonzero(in_use) if r != row and (
+            int(obs.instant[r]) == origin
+            or evidence.split_from.get(int(evidence.order[r])) == origin)]
+        own = state.reference_from_board(int(obs.instant[row]))
+        mine = points_in_board @ own[:3, :3].T + own[:3, 3]
+        moved = [float(np.linalg.norm(mine - (points_in_board @ other[:3, :3].T
+                                               + other[:3, 3]), axis=1).max())
+                 for r in partners
+                 for other in (state.reference_from_board(int(obs.instant[r])),)]
+        mm = 1000 * max(moved, default=0.0)
+        evidence.split[view] = (
+            f"not simultaneous: the board moved {mm:.{1 if mm >= 1 else 2}f} mm between the "
+            f"{'two images' if len(partners) == 1 else 'images'}" if moved else
+            "not simultaneous: no other view of its instant is used")
 
 
 @dataclass
@@ -327,27 +523,29 @@ class _Trial:
 def _retry_outlying(evidence: InlierSelection, state: bundle.RigState, obs: bundle.Observations,
                     points_in_board: F64, lenses: list[tuple[str, tuple[int, int]]]
                     ) -> tuple[bundle.RigState, int]:
-    """Take the views left out as not the board back in (see the module's text); a board
-    pose that no view in use holds is found afresh by PnP through the solution's lens
-    ``(distortion model, image size)`` of the view's camera, and a view whose corners that
-    pose does not put in front of the camera stays out. The state to solve from, and how
-    many views were taken back in."""
+    """Take the views left out as not the board back in (see the module's text), each posed
+    afresh by PnP through the solution's lens ``(distortion model, image size)`` of its
+    camera: the pose of its instant, or, when a view in use holds the instant, a pose of its
+    own; a view whose corners that pose does not put in front of the camera stays out. The
+    state to solve from, and how many views were taken back in."""
     state = state.copy()
     in_use = ~evidence.dropped
     restored = 0
     for row in np.flatnonzero(np.isin(evidence.order, list(evidence.outlying))):
         instant, camera = int(obs.instant[row]), int(obs.camera[row])
-        if not np.any(in_use & (obs.instant == instant)):
-            ids = np.flatnonzero(obs.mask[row])
-            distortion_model, size = lenses[camera]
-            camera_from_board = board_pose(
-                points_in_board[ids], obs.observed[row, ids],
-                model_of(distortion_model, state.intrinsics[camera], size))
-            if camera_from_board is None or np.any(
-                    points_in_board @ camera_from_board[2, :3] + camera_from_board[2, 3] <= 0):
-                continue
-            reference_from_board = np.linalg.inv(state.camera_from_reference(camera)) \
-                @ camera_from_board
+        ids = np.flatnonzero(obs.mask[row])
+        distortion_model, size = lenses[camera]
+        camera_from_board = board_pose(
+            points_in_board[ids], obs.observed[row, ids],
+            model_of(distortion_model, state.intrinsics[camera], size))
+        if camera_from_board is None or np.any(
+                points_in_board @ camera_from_board[2, :3] + camera_from_board[2, 3] <= 0):
+            continue
+        reference_from_board = np.linalg.inv(state.camera_from_reference(camera)) \
+            @ camera_from_board
+        if np.any(in_use & (obs.instant == instant)):
+            state = evidence.split_off(int(row), state, reference_from_board)
+        else:
             state.board_rotation[instant] = reference_from_board[:3, :3]
             state.board_translation[instant] = reference_from_board[:3, 3]
         evidence.restore(int(row))

@@ -174,6 +174,9 @@ def stereo_result(joint: JointResult, pairs: list[tuple[int, int]], *,
         if lv in joint.rejected or rv in joint.rejected:
             rejected[lv, rv] = joint.rejected.get(lv) or joint.rejected[rv]
             continue
+        if lv in joint.split or rv in joint.split:  # not one instant: no joint view
+            rejected[lv, rv] = joint.split.get(rv) or joint.split[lv]
+            continue
         ids, li, ri = np.intersect1d(lid, rid, return_indices=True)
         keep = joint.inliers[lv][li] & joint.inliers[rv][ri]
         if keep.sum() < 2:

@@ -17,13 +17,22 @@ from .calibration import (
     StereoSummary,
     StereoTruth,
     TangentialSummary,
+    TimeOffsetSummary,
     UncertaintySummary,
     ViewResiduals,
 )
 from .processed import ProcessedOutput, ProcessedOutputs, outputs_by_topic
 from .resync import OffsetStats, ResyncStats
 from .rig import RigCameraSummary, RigPairSummary, RigSummary
-from .scenario import RenderView, Scenario, ScenarioCamera, ScenarioDrift, ScenarioTarget
+from .scenario import (
+    RenderView,
+    Scenario,
+    ScenarioCamera,
+    ScenarioDrift,
+    ScenarioLatency,
+    ScenarioTarget,
+)
+from .time_offset import TimeOffset
 
 __all__ = [
     "BoardSummary",
@@ -50,10 +59,13 @@ __all__ = [
     "Scenario",
     "ScenarioCamera",
     "ScenarioDrift",
+    "ScenarioLatency",
     "ScenarioTarget",
     "StereoSummary",
     "StereoTruth",
     "TangentialSummary",
+    "TimeOffset",
+    "TimeOffsetSummary",
     "UncertaintySummary",
     "ViewResiduals",
     "from_json",

@@ -16,6 +16,7 @@ from ..errors import RecordError
 from ..messages import F64
 from .base import OMIT_NONE, JsonRecord, from_json, to_json
 from .rig import RigSummary
+from .time_offset import TimeOffset
 
 __all__ = [
     "BoardSummary",
@@ -33,6 +34,7 @@ __all__ = [
     "StereoSummary",
     "StereoTruth",
     "TangentialSummary",
+    "TimeOffsetSummary",
     "UncertaintySummary",
     "ViewResiduals",
 ]
@@ -239,6 +241,22 @@ class UncertaintySummary:
 
 
 @dataclass(frozen=True)
+class TimeOffsetSummary:
+    """How much later a camera stamps an instant than the rig's first camera
+    (``reference``), measured from the board's motion: in words (``summary``), the estimate
+    (``measured``; None when the log does not show it: a held board, snapshots), whether
+    the views were paired by it (``applied``) and, in a simulated log, the true offset (the
+    difference of the cameras' latencies) and the estimate's error (ms)."""
+
+    reference: str
+    summary: str
+    applied: bool
+    measured: TimeOffset | None = field(default=None, metadata=OMIT_NONE)
+    truth_ms: float | None = field(default=None, metadata=OMIT_NONE)
+    error_ms: float | None = field(default=None, metadata=OMIT_NONE)
+
+
+@dataclass(frozen=True)
 class CameraSummary:
     """One calibrated camera: what its frames gave, the model, its evidence and accuracy.
 
@@ -275,6 +293,7 @@ class CameraSummary:
     evidence: EvidenceSummary | None = field(default=None, metadata=OMIT_NONE)
     uncertainty: UncertaintySummary | None = field(default=None, metadata=OMIT_NONE)
     lens_order: LensOrderSummary | None = field(default=None, metadata=OMIT_NONE)
+    time_offset: TimeOffsetSummary | None = field(default=None, metadata=OMIT_NONE)
 
     @property
     def has_truth(self) -> bool:

@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from .base import OMIT_NONE, JsonRecord
+from .time_offset import TimeOffset
 
 __all__ = ["OffsetStats", "ResyncStats"]
 
@@ -22,7 +23,9 @@ class OffsetStats:
 class ResyncStats(JsonRecord):
     """Pair count, slop, the stamps left unpaired per side and the pairs' stamp offsets;
     ``slop_source`` says whether the slop was given or the default (half the median frame
-    period)."""
+    period). With an offset, the right camera's stamps were moved by
+    ``right_stamps_moved_ns`` before pairing (minus the offset), the offset given or
+    measured (``time_offset``)."""
 
     what = "resync stats record"
 
@@ -38,3 +41,5 @@ class ResyncStats(JsonRecord):
     right_topic: str = ""
     slop_source: str = ""
     peak_buffered_messages: int | None = field(default=None, metadata=OMIT_NONE)
+    right_stamps_moved_ns: int | None = field(default=None, metadata=OMIT_NONE)
+    time_offset: TimeOffset | None = field(default=None, metadata=OMIT_NONE)

@@ -18,7 +18,8 @@ from ..lens_models import lens_model
 from ..messages import F64
 from .base import OMIT_NONE, JsonRecord
 
-__all__ = ["RenderView", "Scenario", "ScenarioCamera", "ScenarioDrift", "ScenarioTarget"]
+__all__ = ["RenderView", "Scenario", "ScenarioCamera", "ScenarioDrift", "ScenarioLatency",
+           "ScenarioTarget"]
 
 
 @dataclass(frozen=True)
@@ -82,7 +83,8 @@ class ScenarioTarget:
     - ``circles`` / ``acircles``: ``circles`` (cols, rows), ``spacing_m``, ``diameter_m``,
       ``asymmetric``, the circle centres ``centres_in_target`` (N, 3) in findCirclesGrid's
       order;
-    - ``box``: ``size_m`` (3,), ``rgba``.
+    - ``box``: ``size_m`` (3,), ``rgba``;
+    - ``textured``: a box of ``size_m`` (3,) with a random texture of ``grain_m`` blobs.
     """
 
     name: str
@@ -104,6 +106,7 @@ class ScenarioTarget:
     diameter_m: float | None = field(default=None, metadata=OMIT_NONE)
     asymmetric: bool | None = field(default=None, metadata=OMIT_NONE)
     centres_in_target: F64 | None = field(default=None, metadata=OMIT_NONE)
+    grain_m: float | None = field(default=None, metadata=OMIT_NONE)
     frame: str = ""
 
     def points_in_target(self) -> F64 | None:
@@ -114,7 +117,8 @@ class ScenarioTarget:
                 continue
             points = np.asarray(given, dtype=np.float64)
             return points.reshape(-1, 3) if points.size and points.size % 3 == 0 else None
-        if self.kind == "box" and self.size_m is not None and np.size(self.size_m) == 3:
+        box = self.kind in ("box", "textured")
+        if box and self.size_m is not None and np.size(self.size_m) == 3:
             half = np.asarray(self.size_m, dtype=np.float64).reshape(3) / 2
             signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)])
             return np.asarray(signs * half, dtype=np.float64)
@@ -138,6 +142,19 @@ class ScenarioDrift:
 
 
 @dataclass(frozen=True)
+class ScenarioLatency:
+    """A camera whose messages are stamped ``latency_ms`` milliseconds after the exposure
+    they carry (negative: before it), for its frames exposed ``start_s`` or more after the
+    recording's start: such a frame exposed at ``t`` carries the stamp ``t + latency_ms``.
+    Exposure times, jitter and dropped frames are its clock's."""
+
+    camera: str
+    namespace: str
+    latency_ms: float
+    start_s: float = 0.0
+
+
+@dataclass(frozen=True)
 class Scenario(JsonRecord):
     """Everything that shaped a recording (``/camlog/scenario``, JSON)."""
 
@@ -153,6 +170,15 @@ class Scenario(JsonRecord):
     cameras: list[ScenarioCamera]
     targets: list[ScenarioTarget]
     drifts: list[ScenarioDrift] | None = field(default=None, metadata=OMIT_NONE)
+    latencies: list[ScenarioLatency] | None = field(default=None, metadata=OMIT_NONE)
+
+    def latency_ns(self, camera: ScenarioCamera, at_s: float = 0.0) -> int:
+        """How much later than its exposure a camera's frame exposed ``at_s`` after the
+        recording's start is stamped (ns; 0 for a camera without a latency)."""
+        started = [latency for latency in self.latencies or ()
+                   if latency.camera == camera.name and latency.start_s <= at_s]
+        return round(max(started, key=lambda latency: latency.start_s).latency_ms * 1e6) \
+            if started else 0
 
     def camera_for(self, namespace: str, frame_id: str | None = None) -> ScenarioCamera | None:
         """The camera of a namespace, or else the one camera with ``frame_id`` (topics

@@ -66,7 +66,8 @@ def test_views_are_measured_again_from_their_own_frames(tmp_path: Path) -> None:
                          tuple(DetectedFrame(i, T0 + i * 10**8, False) for i in range(4)),
                          (640, 480), None)
     joint = SimpleNamespace(models=[FISHEYE], camera_from_reference=[np.eye(4)],
-                            reference_from_board={0: poses[0], 1: poses[1]}, rejected={})
+                            reference_from_board={0: poses[0], 1: poses[1]}, rejected={},
+                            views=rig.views)
     with open_reader(log) as reader:
         again = remeasured_rig(reader, [camera], rig, joint, BOARD,  # type: ignore[arg-type]
                                workers=2)
@@ -120,7 +121,7 @@ def test_charuco_views_are_measured_on_the_edges_between_the_markers(tmp_path: P
     camera = CameraViews(CameraSource("/cam", TOPIC, None), (DetectedFrame(0, T0, False),),
                          (640, 480), None)
     joint = SimpleNamespace(models=[lens], camera_from_reference=[np.eye(4)],
-                            reference_from_board={0: pose}, rejected={})
+                            reference_from_board={0: pose}, rejected={}, views=rig.views)
     with open_reader(log) as reader:
         again = remeasured_rig(reader, [camera], rig, joint, board,  # type: ignore[arg-type]
                                workers=1)

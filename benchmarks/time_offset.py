@@ -1,0 +1,409 @@
+"""Time offsets between cameras measured from their images, against the simulator's truth.
+
+Three cases, each over many seeds:
+
+- **board**: ``stereo_moving_board`` (a waved board, both cameras exposing at the same
+  instants, no motion blur) with the right camera stamping 0, 3, 17, 33 or -10 ms late; the
+  offset measured by ``camlog resync --estimate-offset`` from the board
+  (:func:`processors.time_offset.estimate_board_offset`): the median and 95th percentile of
+  ``|error|`` per offset and the RMS of ``error / sigma`` (1 when the sigma is honest).
+- **natural**: ``stereo_moving_rig`` (a rig carried over a textured scene) with the same
+  latencies, the rig's motion scaled per seed (0.25, 0.5, 1 or 1.5 times the scenario's), the
+  offset measured from natural features (:func:`processors.time_offset.estimate_feature_
+  offset`): the same figures, and each log's error against how fast its features move across
+  the rows (the RMS of the rig's rows' speed, from its true path), drawn to
+  ``docs/time_offset_natural.png``.
+- **rig**: ``camlog calibrate`` of the board logs stamped 17 ms late (the offset measured and
+  the views paired by it), of the same logs with true stamps, and of the late logs paired by
+  their stamps (``resync``: every left frame with the right frame stamped nearest, then
+  calibrated as one instant each): the baseline's and the rotation's error against the
+  truth, medians over the seeds.
+
+A latency changes nothing but stamps (the recorder draws no random number for it: the same
+seed renders the same images), so each seed is rendered once with true stamps and each
+offset's log is that recording with the right camera's messages re-stamped as
+``camlog record --latency right:MS`` stamps them (:func:`restamped`; the scenario record
+lists the latency); ``tests/benchmarks/test_time_offset.py`` checks that the two agree
+message for message. The same seeds serve every offset. Recordings are cached in ``--cache``
+(outside the repository, named by their inputs), each log's result appended to ``--keep``
+(one JSON line, read back by a later run: a run can be resumed). Run with ``nice -n 10``::
+
+    python -m benchmarks.time_offset [--seeds 20] [--cases board,natural,rig] [--write-docs]
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import dataclasses
+import io
+import json
+import math
+import tempfile
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+
+from camlog.cli import main as camlog
+from recorder.record import RIG_STREAM, rng_for
+from recorder.rig_motion import plan_rig_path
+from recorder.scenario import load_scenario
+from replay.records import TimeOffset
+
+from .docs import PAGE, add_write_docs, markdown_table, write_table
+
+OFFSETS_MS = (0.0, 3.0, 17.0, 33.0, -10.0)
+RIG_OFFSET_MS = 17.0
+#: the natural case's rig motion, as multiples of the scenario's, cycled over the seeds
+MOTION_SCALES = (0.25, 0.5, 1.0, 1.5)
+DURATION_S = {"board": 8.0, "natural": 6.0}
+RESOLUTION = "320x240"
+FIRST_SEED = 1000
+LEFT, RIGHT = "/stereo_camera/left", "/stereo_camera/right"
+CAMERAS = ["--left", LEFT, "--right", RIGHT]
+BOARD = ["-s", "7x6", "-q", "0.01"]
+DEFAULT_CACHE = Path.home() / ".cache" / "camlog" / "time_offset"
+FIGURE = PAGE.parent / "time_offset_natural.png"
+
+
+@dataclass(frozen=True)
+class Case:
+    """One log of the sweep: its case, seed and the right camera's latency."""
+
+    kind: str  # board | natural
+    seed: int
+    offset_ms: float
+
+    @property
+    def scale(self) -> float:
+        """The natural case's rig motion, as a multiple of the scenario's."""
+        return MOTION_SCALES[self.seed % len(MOTION_SCALES)] if self.kind == "natural" else 1.0
+
+    @property
+    def key(self) -> str:
+        """The name of its recording and of its result line."""
+        return f"{self.kind}-s{self.seed}-o{self.offset_ms:+g}-x{self.scale:g}"
+
+
+def _spec(case: Case, folder: Path) -> Path:
+    """The scenario spec of a case: the natural one with its rig motion scaled, the board
+    without motion blur (sub-frame renders would multiply the rendering time)."""
+    name = _spec_name(case)
+    text = (PAGE.parents[1] / "datasets" / "scenarios" / f"{name}.toml").read_text()
+    if case.kind == "board":
+        assert text.count("exposure_s = 0.004\n") == 2, f"{name}.toml: expected two exposures"
+        text = text.replace("exposure_s = 0.004\n", "")
+    if case.kind == "natural":
+        scenario = load_scenario(name)
+        assert scenario.rig_motion is not None
+        for key, values in (("translation_m", scenario.rig_motion.translation_m),
+                            ("rotation_rad", scenario.rig_motion.rotation_rad)):
+            old = f"{key} = [{', '.join(f'{v:g}' for v in values)}]"
+            assert old in text, f"{name}.toml: expected {old!r}"
+            scaled = ", ".join(f"{v * case.scale:g}" for v in values)
+            text = text.replace(old, f"{key} = [{scaled}]")
+    path = folder / f"{case.key}.toml"
+    path.write_text(text)
+    return path
+
+
+def recording(case: Case, cache: Path) -> Path:
+    """The case's log in ``cache``: its seed rendered once with true stamps, re-stamped with
+    the case's latency (both made unless already there)."""
+    true = Case(case.kind, case.seed, 0.0)
+    rendered = cache / f"{true.key}-{RESOLUTION}.mcap"
+    if not rendered.exists():
+        cache.mkdir(parents=True, exist_ok=True)
+        with tempfile.TemporaryDirectory() as tmp, contextlib.redirect_stdout(io.StringIO()):
+            code = camlog(["record", str(_spec(true, Path(tmp))), "-o", str(rendered),
+                           "--seed", str(case.seed), "--duration",
+                           f"{DURATION_S[case.kind]:g}", "--resolution", RESOLUTION,
+                           "--no-progress"])
+        if code:
+            raise SystemExit(f"error: recording {true.key} failed")
+    if case.offset_ms == 0.0:
+        return rendered
+    path = cache / f"{case.key}-{RESOLUTION}.mcap"
+    if not path.exists():
+        restamped(rendered, path, camera="right", latency_ms=case.offset_ms)
+    return path
+
+
+def restamped(log: Path, out: Path, *, camera: str, latency_ms: float) -> None:
+    """A copy of a recording with true stamps whose ``camera`` stamps its messages (image,
+    camera_info, ground truth) ``latency_ms`` after their exposure, as ``camlog record
+    --latency CAMERA:MS`` makes it: messages in stamp order (log time = stamp), the latency
+    in the scenario record."""
+    from replay import open_reader, open_writer
+    from replay.records import Scenario, ScenarioLatency
+    from replay.topics import SCENARIO
+
+    shift_ns = round(latency_ms * 1e6)
+    with open_reader(log) as reader:
+        messages = [(raw.topic, raw.log_time_ns, reader.decode(raw))
+                    for raw in reader.raw_messages()]
+    (record,) = [Scenario.from_message(m) for t, _, m in messages if t == SCENARIO]
+    (moved,) = [c for c in record.cameras if c.name == camera]
+    record = dataclasses.replace(record, latencies=[
+        ScenarioLatency(camera=camera, namespace=moved.namespace, latency_ms=latency_ms)])
+    out_messages: list[tuple[str, int, Any]] = []
+    for topic, log_time_ns, message in messages:
+        if topic == SCENARIO:
+            out_messages.append((topic, log_time_ns + min(shift_ns, 0), record.to_message()))
+        elif topic.startswith(moved.namespace + "/"):
+            stamped: Any = message
+            stamp = int(stamped.stamp_ns) + shift_ns
+            out_messages.append((topic, stamp, dataclasses.replace(stamped, stamp_ns=stamp)))
+        else:
+            out_messages.append((topic, log_time_ns, message))
+    out_messages.sort(key=lambda item: item[1])
+    with open_writer(out) as writer:
+        for topic, log_time_ns, message in out_messages:
+            writer.write(topic, message, log_time_ns=log_time_ns)
+
+
+def row_speed_px_s(case: Case) -> float:
+    """How fast the natural case's features move across the rows (RMS over its duration,
+    px/s): the rig's pitch rate times the focal length (the turn about its x axis moves
+    every point of a far scene down the image at ``f w_x``), from its true path."""
+    scenario = load_scenario(_spec_name(case), {"seed": case.seed})
+    assert scenario.rig_motion is not None
+    motion = scenario.rig_motion
+    scaled = type(motion)(motion.segment_s, motion.translation_m * case.scale,
+                          motion.rotation_rad * case.scale)
+    path = plan_rig_path(scaled, DURATION_S["natural"], rng_for(scenario, RIG_STREAM, 0))
+    model = scenario.cameras[0].model
+    focal = model.fx * int(RESOLUTION.split("x", maxsplit=1)[0]) / model.width
+    times = np.arange(0.0, DURATION_S["natural"], 1 / 30)
+    rates = []
+    for t in times:
+        a, b = path.rest_from_moved(float(t)), path.rest_from_moved(float(t) + 1e-3)
+        turn = a[:3, :3].T @ b[:3, :3]
+        rates.append((turn[2, 1] - turn[1, 2]) / 2 / 1e-3)  # rad/s about x
+    return float(focal * math.sqrt(np.mean(np.square(rates))))
+
+
+def _spec_name(case: Case) -> str:
+    return "stereo_moving_rig" if case.kind == "natural" else "stereo_moving_board"
+
+
+def measure(case: Case, cache: Path) -> dict[str, Any]:
+    """The offset ``resync --estimate-offset`` measures in the case's log (or why not)."""
+    log = recording(case, cache)
+    with tempfile.TemporaryDirectory() as tmp:
+        result = Path(tmp) / "offset.json"
+        board = BOARD if case.kind == "board" else []
+        errors = io.StringIO()
+        with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(errors):
+            code = camlog(["resync", str(log), *CAMERAS, *board, "--estimate-offset",
+                           "--offset-file", str(result), "--no-progress"])
+        if code:
+            return {"key": case.key, "why_not": errors.getvalue().strip()}
+        offset = TimeOffset.from_json_text(result.read_text())
+    out = {"key": case.key, "offset_ms": offset.offset_ms, "std_ms": offset.std_ms,
+           "error_ms": offset.offset_ms - case.offset_ms, "frames": offset.frames}
+    if case.kind == "natural":
+        out["row_speed_px_s"] = row_speed_px_s(case)
+    return out
+
+
+def _calibrated(log: Path, folder: Path, *options: str) -> dict[str, Any]:
+    with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()):
+        code = camlog(["calibrate", str(log), *BOARD, "-o", str(folder), "--no-report",
+                       "--no-progress", "--overwrite", *options])
+    if code:
+        return {}
+    summary: dict[str, Any] = json.loads((folder / "calibration.json").read_text())
+    return summary
+
+
+def _rig_errors(summary: dict[str, Any]) -> dict[str, float]:
+    """The baseline's error (%) and the rotation's (degrees; the true rig turns by none)."""
+    if "stereo" not in summary:
+        return {}
+    stereo = summary["stereo"]
+    return {"baseline_error_percent": abs(stereo["truth"]["baseline_error_percent"]),
+            "rotation_error_deg": stereo["rotation_deg"], "joint_views": stereo["joint_views"]}
+
+
+def calibrate_rig(seed: int, cache: Path) -> dict[str, Any]:
+    """The rig of one seed calibrated three ways (see the module's text)."""
+    late = recording(Case("board", seed, RIG_OFFSET_MS), cache)
+    true = recording(Case("board", seed, 0.0), cache)
+    out: dict[str, Any] = {"key": f"rig-s{seed}"}
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp)
+        estimated = _calibrated(late, folder / "estimated", *CAMERAS)
+        out["estimated"] = _rig_errors(estimated)
+        if "stereo" in estimated:
+            right = next(c for c in estimated["cameras"] if c["namespace"] == RIGHT)
+            out["estimated"]["offset_error_ms"] = right["time_offset"].get("error_ms")
+        out["true"] = _rig_errors(_calibrated(true, folder / "true", *CAMERAS))
+        synced = folder / "synced.mcap"
+        with contextlib.redirect_stdout(io.StringIO()):
+            camlog(["resync", str(late), "-o", str(synced), *CAMERAS])
+        out["stamps"] = _rig_errors(_calibrated(
+            synced, folder / "stamps", "--left", "/stereo_sync/left", "--right",
+            "/stereo_sync/right", "--time-offset", "off"))
+    return out
+
+
+def _kept(path: Path) -> dict[str, dict[str, Any]]:
+    """Results of an earlier run, by key (a line cut short is run again)."""
+    out = {}
+    if path.exists():
+        for line in path.read_text().splitlines():
+            with contextlib.suppress(ValueError):
+                entry = json.loads(line)
+                out[entry["key"]] = entry
+    return out
+
+
+def _results(keys: list[str], run: Any, keep: Path) -> Iterator[dict[str, Any]]:
+    """Each key's result: kept from an earlier run, or run now and appended to ``keep``."""
+    kept = _kept(keep)
+    for key in keys:
+        if key not in kept:
+            kept[key] = run(key)
+            keep.parent.mkdir(parents=True, exist_ok=True)
+            cut = keep.exists() and not keep.read_bytes().endswith(b"\n") \
+                and keep.stat().st_size > 0
+            with keep.open("a") as f:  # a line cut short stays apart from the next one
+                f.write(("\n" if cut else "") + json.dumps(kept[key]) + "\n")
+            print(json.dumps(kept[key]), flush=True)
+        yield kept[key]
+
+
+def offset_table(kind: str, results: list[dict[str, Any]]) -> list[str]:
+    """Per offset: logs measured (of logs), median and 95th percentile of |error|, the RMS
+    of error / sigma and the median frames that carried it."""
+    rows = []
+    for offset in OFFSETS_MS:
+        mine = [r for r in results if f"-o{offset:+g}-" in r["key"]]
+        measured = [r for r in mine if "error_ms" in r]
+        if not measured:
+            rows.append([f"{offset:+g}", f"0 of {len(mine)}", "", "", "", ""])
+            continue
+        errors = np.abs([r["error_ms"] for r in measured])
+        z = np.array([r["error_ms"] / r["std_ms"] for r in measured])
+        rows.append([f"{offset:+g}", f"{len(measured)} of {len(mine)}",
+                     f"{np.median(errors):.3f}", f"{np.percentile(errors, 95):.3f}",
+                     f"{math.sqrt(float(np.mean(z ** 2))):.2f}",
+                     f"{np.median([r['frames'] for r in measured]):.0f}"])
+    header = ["offset (ms)", "logs measured", "median abs error (ms)", "p95 abs error (ms)",
+              "RMS error/sigma", "moving frames (median)"]
+    print(f"\n{kind}:")
+    return markdown_table(header, rows)
+
+
+def rig_table(results: list[dict[str, Any]]) -> list[str]:
+    """Medians over the seeds of the rig's errors, calibrated three ways."""
+    rows = []
+    for name, what in (("true", "true stamps"),
+                       ("estimated", f"right camera {RIG_OFFSET_MS:g} ms late, offset "
+                                     "measured and views paired by it"),
+                       ("stamps", f"right camera {RIG_OFFSET_MS:g} ms late, paired by "
+                                  "stamps (resync)")):
+        got = [r[name] for r in results if r.get(name)]
+        if not got:
+            rows.append([what, f"0 of {len(results)}", "", "", ""])
+            continue
+        rows.append([what, f"{len(got)} of {len(results)}",
+                     f"{np.median([g['baseline_error_percent'] for g in got]):.3f}",
+                     f"{np.median([g['rotation_error_deg'] for g in got]):.4f}",
+                     f"{np.median([g['joint_views'] for g in got]):.0f}"])
+    header = ["stamps", "calibrated", "baseline error (%, median)",
+              "rotation error (deg, median)", "joint views (median)"]
+    return markdown_table(header, rows)
+
+
+def natural_figure(results: list[dict[str, Any]], path: Path) -> None:
+    """|error| of each natural-scene log against its features' speed across the rows
+    (log-log), one colour per offset."""
+    width, height, margin = 720, 420, 70
+    img = np.full((height, width, 3), 255, np.uint8)
+    measured = [r for r in results if "error_ms" in r and r.get("row_speed_px_s")]
+    colours = [(200, 90, 40), (40, 160, 40), (40, 40, 220), (160, 40, 160), (20, 140, 200)]
+    xs = (1.0, 1000.0)  # px/s
+    ys = (1e-4, 10.0)  # ms
+
+    def to_px(speed: float, error: float) -> tuple[int, int]:
+        u = (math.log10(speed) - math.log10(xs[0])) / (math.log10(xs[1]) - math.log10(xs[0]))
+        v = (math.log10(max(error, ys[0])) - math.log10(ys[0])) \
+            / (math.log10(ys[1]) - math.log10(ys[0]))
+        return (int(margin + u * (width - 2 * margin)),
+                int(height - margin - v * (height - 2 * margin)))
+
+    cv2.rectangle(img, (margin, margin), (width - margin, height - margin), (0, 0, 0), 1)
+    for decade in range(4):
+        x, _ = to_px(10.0 ** decade, 1.0)
+        cv2.putText(img, f"{10 ** decade:g}", (x - 10, height - margin + 18),
+                    cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 1, cv2.LINE_AA)
+    for power in range(-4, 2):
+        _, y = to_px(1.0, 10.0 ** power)
+        cv2.putText(img, f"{10.0 ** power:g}", (8, y + 4), cv2.FONT_HERSHEY_SIMPLEX, 0.4,
+                    (0, 0, 0), 1, cv2.LINE_AA)
+    for r in measured:
+        offset = float(r["key"].split("-o")[1].split("-")[0])
+        colour = colours[OFFSETS_MS.index(offset)]
+        cv2.circle(img, to_px(r["row_speed_px_s"], abs(r["error_ms"])), 4, colour, -1,
+                   cv2.LINE_AA)
+    cv2.putText(img, "natural features: |offset error| (ms) vs the rig's row speed (px/s)",
+                (margin, 40), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 1, cv2.LINE_AA)
+    for i, offset in enumerate(OFFSETS_MS):
+        cv2.circle(img, (width - margin + 10, margin + 14 + 18 * i), 4, colours[i], -1)
+        cv2.putText(img, f"{offset:+g} ms", (width - margin + 18, margin + 18 + 18 * i),
+                    cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 1, cv2.LINE_AA)
+    ok, png = cv2.imencode(".png", img)
+    assert ok
+    path.write_bytes(png.tobytes())
+    print(f"wrote {path}", flush=True)
+
+
+def run(*, seeds: int, cases: list[str], cache: Path, keep: Path, write_docs: bool) -> None:
+    """The sweep: every case's logs, their tables (and figure), written into the docs."""
+    tables: dict[str, list[str]] = {}
+    for kind in ("board", "natural"):
+        if kind not in cases:
+            continue
+        plan = {Case(kind, seed, offset).key: Case(kind, seed, offset)
+                for seed in range(FIRST_SEED, FIRST_SEED + seeds) for offset in OFFSETS_MS}
+        results = list(_results(list(plan), lambda key, p=plan: measure(p[key], cache), keep))
+        tables[f"time_offset_{kind}"] = offset_table(kind, results)
+        print("\n".join(tables[f"time_offset_{kind}"]))
+        if kind == "natural" and write_docs:
+            natural_figure(results, FIGURE)
+    if "rig" in cases:
+        rig_seeds = range(FIRST_SEED, FIRST_SEED + seeds)
+        results = list(_results([f"rig-s{s}" for s in rig_seeds],
+                                lambda key: calibrate_rig(int(key.split("-s")[1]), cache),
+                                keep))
+        tables["time_offset_rig"] = rig_table(results)
+        print("\n".join(tables["time_offset_rig"]))
+    if write_docs:
+        for name, lines in tables.items():
+            write_table(name, lines)
+
+
+def main() -> None:
+    """Parse the command line and run the sweep."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=20, help="seeds per offset (default 20)")
+    parser.add_argument("--cases", default="board,natural,rig",
+                        help="comma-separated: board, natural, rig (default all)")
+    parser.add_argument("--cache", type=Path, default=DEFAULT_CACHE,
+                        help=f"recordings (default {DEFAULT_CACHE})")
+    parser.add_argument("--keep", type=Path, default=DEFAULT_CACHE / "results.jsonl",
+                        help="each log's result, one JSON line, read back by a later run")
+    add_write_docs(parser)
+    args = parser.parse_args()
+    run(seeds=args.seeds, cases=args.cases.split(","), cache=args.cache, keep=args.keep,
+        write_docs=args.write_docs)
+
+
+if __name__ == "__main__":
+    main()
