@@ -10,9 +10,12 @@ __all__ = ["LoggerOptions"]
 @dataclass(frozen=True)
 class LoggerOptions:
     """What to draw and how: ``every`` keeps every N-th image of a camera; ``jpeg_quality``
-    stores raw 8-bit images as JPEG; residual arrows are drawn ``residual_scale`` times long."""
+    stores raw 8-bit images as JPEG; residual arrows are drawn ``residual_scale`` times long;
+    a camera whose lens is not a pinhole gets pinhole views ``undistorted_scale`` times its
+    raw images' width and height (None: none, its raw images under a pinhole of its K)."""
 
     every: int = 1
     jpeg_quality: int | None = None
     residual_scale: float = 50.0
     ground_truth: bool = True
+    undistorted_scale: float | None = 1.0

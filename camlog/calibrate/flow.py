@@ -33,7 +33,7 @@ from ..errors import CalibrationError, InputError, UsageError
 from ..processing.cameras import cameras_in, find_camera
 from ..requests.calibrate import CalibrateRequest
 from ..requests.fields import RequestError
-from .evidence import EVIDENCE_ZSTD_LEVEL, write_evidence, write_summary
+from .evidence import EVIDENCE_ZSTD_LEVEL, write_evidence, write_summary, write_uncertainty
 from .instants import ViewsOfRig
 from .remeasure import remeasured_rig
 from .report import output_names, write_files
@@ -114,6 +114,8 @@ def _write_report(reader: LogReader, folder: Path, calibrated: list[CalibratedCa
                                   progress=progress)
         summary = build_summary(calibrated, solved, board=board, options=options,
                                 scenario=scenario)
+        write_uncertainty(log, calibrated, stamp_ns=reader.end_ns or 0,
+                          log_time_ns=reader.end_ns or 0)
         write_summary(log, summary, log_time_ns=reader.end_ns or 0)
         write_files(folder, calibrated, stereo=solved.stereo, summary=summary,
                     evidence=evidence, camera_name=camera_name)

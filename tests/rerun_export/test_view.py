@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from replay import CameraInfo, Image, PointStamped, Text, open_reader, open_writer
+from replay.camera import CameraModel
 from rerun_export import LoggerOptions, Reading, view_logs
 from rerun_export.overlays import CENTROID_MARKER, MASK_PIXEL
 from tests.rrd import load_rrd, rerun_cli
@@ -103,25 +104,49 @@ def test_calibration_corners_residuals_and_errors(mono_calibration_log: Path,
     view_logs([mono_calibration_log], output=out, progress=False,
               options=LoggerOptions(residual_scale=10.0))
     rec = load_rrd(out)
-    cam = "/world/simple_camera"
+    # the calibrated model (k1, k2) draws the camera: its raw image and overlays in a 2D
+    # space of their own, an undistorted view under the camera
+    cam, raw = "/world/simple_camera", "/raw/simple_camera"
     views = [json.loads(m.data) for m in messages(mono_calibration_log,
                                                   "/simple_camera/calibration/residuals")
              if isinstance(m, Text)]
     assert len(views) > 20
-    corners = rec.column(f"{cam}/calibration/corners", "Points2D:positions")
+    corners = rec.column(f"{raw}/calibration/corners", "Points2D:positions")
     assert [len(row) for row in corners] == [42] * len(views)
     np.testing.assert_allclose(corners[0], views[0]["corners_px"], atol=1e-3)
-    arrows = rec.column(f"{cam}/calibration/residuals", "Arrows2D:vectors")
+    arrows = rec.column(f"{raw}/calibration/residuals", "Arrows2D:vectors")
     np.testing.assert_allclose(arrows[0], np.multiply(views[0]["residuals_px"], 10.0), atol=1e-4)
     errors = rec.column("/metrics/calibration_view_rms_px/simple_camera", "Scalars:scalars")
     np.testing.assert_allclose([e[0] for e in errors], [v["rms_px"] for v in views])
-    labels = rec.column(f"{cam}/calibration/status", "Boxes2D:labels")
+    labels = rec.column(f"{raw}/calibration/status", "Boxes2D:labels")
     assert labels[0][0].startswith(f"used: view RMS {views[0]['rms_px']:.3f} px")
     detections = len(messages(mono_calibration_log, "/simple_camera/calibration/detections"))
-    assert rec.count(f"{cam}/calibration/detections", "Image:buffer") == detections
+    assert rec.count(f"{raw}/calibration/detections", "Image:buffer") == detections
     # corners of a used view are cleared when the board moves: they never linger
-    assert rec.count(f"{cam}/calibration/corners", "Clear:is_recursive") >= len(views) - 1
-    assert rec.entities_with(PINHOLE) == [cam]
+    assert rec.count(f"{raw}/calibration/corners", "Clear:is_recursive") >= len(views) - 1
+    assert rec.entities_with(PINHOLE) == [f"{cam}/undistorted"]
+    images = rec.count(f"{raw}/image", "Image:buffer")
+    assert images == 120 and rec.count(f"{cam}/undistorted/image", "Image:buffer") == images
+    # the board at its solved poses, in 3D: the calibrated model images its corners where
+    # the residuals say (corners minus residuals)
+    board = rec.column(f"{cam}/calibration/board", "Points3D:positions")
+    assert [len(row) for row in board] == [42] * len(views)
+    (info,) = [m for m in messages(mono_calibration_log, "/simple_camera/calibrated/camera_info")
+               if isinstance(m, CameraInfo)][:1]
+    model = CameraModel.from_camera_info(info)
+    np.testing.assert_allclose(
+        model.project(np.asarray(views[0]["corners_in_camera_m"])),
+        np.subtract(views[0]["corners_px"], views[0]["residuals_px"]), atol=2e-4)
+    np.testing.assert_allclose(board[0], views[0]["corners_in_camera_m"], atol=1e-6)
+    # the uncertainty map over the undistorted view, for the whole recording
+    uncertainty = f"{cam}/undistorted/uncertainty"
+    assert rec.count(uncertainty, "Image:buffer") == 1 and uncertainty in rec.static
+    (label,) = rec.column(f"{uncertainty}/scale", "Boxes2D:labels")
+    assert label[0].startswith("projection uncertainty, 1 sigma: dark 0, yellow ")
+    assert len(rec.column(f"{uncertainty}/contours", "LineStrips2D:strips")[0]) > 0
+    # the camera model beside the view: the calibrated one, as ost.yaml holds it
+    assert rec.column(cam, "CameraInfo:k")[-1] == info.k.reshape(-1).tolist()
+    assert rec.column(cam, "CameraInfo:d")[-1] == info.d.tolist()
     verify = rerun_cli("rrd", "verify", str(out), cwd=tmp_path)
     assert verify.returncode == 0, verify.stderr
 
