@@ -5,10 +5,12 @@ camera's images with every overlay that belongs to them; cameras that share a fr
 camera's raw and re-stamped streams) are tabs of one cell, so a stereo rig reads as a left
 and a right image. A camera shown through pinhole views (:mod:`rerun_export.lens`) has its
 raw image and each view side by side; a view also shows the 3D entities of its camera
-(calibrated board poses, ground truth) as rerun projects them. Middle row (when present):
+(calibrated board poses, ground truth) as rerun projects them (the calibration's uncertainty
+map shows over the view in 3D only). Middle row (when present):
 the rectified images side by side, with horizontal guide rows, and other processed images.
 Bottom row: one time-series view per kind of metric, then tabs with the 3D rig (when the log
-knows it, or a camera has pinhole views) and the text records. The side panels and the time
+knows it, or a camera has pinhole views; a lone camera's seen from just behind it) and the
+text records. The side panels and the time
 panel start collapsed (the time bar stays), leaving the window to the views; the time panel
 starts on the ``log_time`` timeline.
 """
@@ -19,6 +21,7 @@ import math
 from collections.abc import Sequence
 from typing import Any
 
+import numpy as np
 import rerun.blueprint as rrb
 
 from .scene import CameraPlan, ScenePlan
@@ -55,6 +58,23 @@ def make_blueprint(plan: ScenePlan, *, timeline: str = LOG_TIME, follow: bool = 
     return rrb.Blueprint(root, *panels)
 
 
+def _behind_the_camera(plan: ScenePlan) -> Any:
+    """The 3D view's eye of a one-camera scene shown through views: a little behind and
+    above the camera, looking along its axis, so that the 3D entities in front of it sit
+    near their place on its view's image (None otherwise: rerun frames the scene)."""
+    if len(plan.cameras) != 1:
+        return None
+    (cam,) = plan.cameras.values()
+    if not cam.views:
+        return None
+    pose = cam.world_from_camera if cam.world_from_camera is not None else np.eye(4)
+    centre, rotation = pose[:3, 3], pose[:3, :3]
+    depth = plan.image_plane_distance_m
+    forward, up = rotation[:, 2], -rotation[:, 1]  # optical z, image up (-y)
+    return rrb.EyeControls3D(position=centre - 1.2 * depth * forward + 0.5 * depth * up,
+                             look_target=centre + 2.0 * depth * forward, eye_up=up)
+
+
 def _camera_views(cam: CameraPlan) -> Any:
     """A camera's 2D view; its raw image and each pinhole view side by side when it has
     them."""
@@ -66,7 +86,7 @@ def _camera_views(cam: CameraPlan) -> Any:
         views.append(rrb.Spatial2DView(
             origin=f"{cam.entity}/{view.name}", name=f"{cam.namespace} ({view.name})",
             contents=["$origin/**", f"{cam.entity}/calibration/board/**",
-                      f"{cam.entity}/ground_truth/**"]))
+                      f"{cam.entity}/ground_truth/**", "- $origin/uncertainty/**"]))
     return rrb.Horizontal(*views)
 
 
@@ -85,7 +105,8 @@ def _layout(plan: ScenePlan, name: str | None = None) -> Any:
     bottom: list[Any] = [rrb.TimeSeriesView(origin=s.origin, name=s.title) for s in plan.series]
     tabs: list[Any] = []
     if plan.rig.world_from_camera or any(cam.views for cam in plan.cameras.values()):
-        tabs.append(rrb.Spatial3DView(origin="world", name="rig (3D)"))
+        tabs.append(rrb.Spatial3DView(origin="world", name="rig (3D)",
+                                      eye_controls=_behind_the_camera(plan)))
     tabs += [rrb.TextDocumentView(origin=entity, name=entity.removeprefix("text"))
              for entity in plan.texts]
     if tabs:

@@ -65,6 +65,7 @@ class CameraState:
     size: tuple[int, int] | None = None  # (width, height) from camera_info or raw images
     frames: CameraFrames = field(default_factory=CameraFrames)
     lens: Lens | None = None  # the pinhole views of a camera shown through them
+    remapped: Lens | None = None  # the lens the last view images were made with
 
     @property
     def shown_through_views(self) -> bool:
@@ -171,15 +172,20 @@ class CameraDrawing:
         if not cam.frames.take(stamp):
             return
         self._times(raw, stamp)
-        for entity in cam.frames.stale(stamp, stamp_free_view(raw.data)):
+        content = stamp_free_view(raw.data)
+        if cam.lens is None and cam.plan.info is not None:  # before its first camera_info
+            cam.lens = Lens.of(cam.plan.info, cam.plan.views)
+        # a view image stays until the next one: a raw image that repeats the last (a held
+        # pose without sensor noise) needs none of its own
+        remap = cam.lens is not None and not (cam.remapped is cam.lens
+                                              and cam.frames.repeats(content))
+        for entity in cam.frames.stale(stamp, content):
             self._emit(entity, ClearRow(), count=False)
         if isinstance(message, Image):
             cam.size = (message.width, message.height)
         self._emit(f"{cam.plan.raw_entity}/image", self._archetype(message))
         self.images += 1
-        if cam.lens is None and cam.plan.info is not None:  # before its first camera_info
-            cam.lens = Lens.of(cam.plan.info, cam.plan.views)
-        if cam.lens is not None:
+        if remap and cam.lens is not None:
             self._remap(cam, cam.lens, message)
 
     def _remap(self, cam: CameraState, lens: Lens, message: Image | CompressedImage) -> None:
@@ -190,6 +196,7 @@ class CameraDrawing:
             self._emit(f"{cam.plan.entity}/{view.name}/image", self._out.encode(
                 lens.remap, source, index, jpeg_quality=self.options.jpeg_quality))
             self.remapped += 1
+        cam.remapped = lens
 
     def _archetype(self, message: Image | CompressedImage, draw_order: float | None = None) -> Any:
         return image_archetype(message, self.options.jpeg_quality, self._out.encode,
