@@ -18,7 +18,7 @@ import numpy as np
 
 from camlog.calibrate.flow import CalibrationRun
 from camlog.calibrate.solving import CalibratedCamera
-from camlog.calibrate.views import Frame
+from camlog.calibrate.views import DetectedFrame
 from processors.calibration.board import Board
 from processors.calibration.validation import projection_difference
 from replay.camera import CameraModel
@@ -116,7 +116,7 @@ def camlog_accuracy(run: CalibrationRun) -> Accuracy:
                     true_right_from_left(run))
 
 
-def detected(camera: CalibratedCamera) -> list[Frame]:
+def detected(camera: CalibratedCamera) -> list[DetectedFrame]:
     """The frames a plain script calibrates from: every distinct frame whose board passed
     detection."""
     return [f for f in camera.views.frames if f.candidate and f.detection is not None]

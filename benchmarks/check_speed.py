@@ -1,7 +1,7 @@
 """Drift-check throughput: seconds of a 30 Hz stereo log checked per second of wall time.
 
 On one recorded ``stereo_checkerboard`` log (640x480 by default, the right camera pitched
-0.1° half-way) the benchmark times ``check_log`` with its defaults (2 s windows, 5 pairs
+0.1° half-way) the benchmark times ``check_drift`` with its defaults (2 s windows, 5 pairs
 looked at per second) and reports the log's duration over the wall time: a multiple of real
 time. As a reference it also times reading and decoding every frame of both cameras.
 
@@ -17,11 +17,12 @@ import tempfile
 import time
 from pathlib import Path
 
-from camlog.check.flow import CheckOptions, check_log
+from camlog.check.flow import CheckOptions, check_drift
 from replay import open_reader
 from replay.frames import FrameStream
 
-from .report import emit
+from .docs import add_write_docs
+from .report import emit, write_summary_rows
 
 
 def record_log(path: Path, duration_s: float, resolution: tuple[int, int]) -> None:
@@ -51,12 +52,13 @@ def decode_s(log: Path) -> float:
 def check_s(log: Path) -> tuple[float, str]:
     """Wall time of the check and its verdict."""
     started = time.perf_counter()
-    checked = check_log(log, CheckOptions())
+    checked = check_drift(log, CheckOptions())
     return time.perf_counter() - started, checked.summary()
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_write_docs(parser)
     parser.add_argument("--duration", type=float, default=20.0, help="log length in s (20)")
     parser.add_argument("--resolution", default="640x480", help="WxH (640x480)")
     parser.add_argument("--repeats", type=int, default=3)
@@ -83,6 +85,7 @@ def main() -> None:
     emit("check: read + decode (reference)", baseline="read + decode",
          baseline_value=decode_x, measured="check", measured_value=check_x,
          unit="x real time", ratio=check_x / decode_x, target="(reference)")
+    write_summary_rows("check_speed", args)
 
 
 if __name__ == "__main__":

@@ -25,12 +25,13 @@ from recorder.motion import plan_trajectory
 from recorder.multiview import plan_camera_optics
 from recorder.record import CLOCK_STREAM, MOTION_STREAM, record, rng_for
 from recorder.render import SceneRenderer
-from recorder.scenario import Scenario, load_scenario
+from recorder.scenario import ScenarioSpec, load_scenario
 
-from .report import emit
+from .docs import add_write_docs
+from .report import emit, write_summary_rows
 
 
-def bare_render_fps(scenario: Scenario) -> float:
+def bare_render_fps(scenario: ScenarioSpec) -> float:
     """Frames per second of rendering alone, over the recording's own shots."""
     optics = [plan_camera_optics(c.model, c.supersample) for c in scenario.cameras]
     duration_s = max(n / c.rate_hz + c.phase_s
@@ -52,7 +53,7 @@ def bare_render_fps(scenario: Scenario) -> float:
         renderer.close()
 
 
-def record_fps(scenario: Scenario, out_dir: Path) -> tuple[float, float, int]:
+def record_fps(scenario: ScenarioSpec, out_dir: Path) -> tuple[float, float, int]:
     """Loop and end-to-end frames per second of a recording to MCAP, and its size in bytes."""
     path = out_dir / f"{scenario.name}.mcap"
     result = record(scenario, path, overwrite=True, progress=False)
@@ -77,6 +78,7 @@ def run(
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_write_docs(parser)
     parser.add_argument("scenario", nargs="?", default="mono_checkerboard")
     parser.add_argument("--frames", type=int, default=600)
     parser.add_argument("--repeats", type=int, default=2)
@@ -97,6 +99,7 @@ def main() -> None:
         emit(f"record {label}", baseline="bare render", baseline_value=r["bare_fps"],
              measured="record", measured_value=r["record_fps"], unit="fps", ratio=r["ratio"],
              target=">= 0.9")
+    write_summary_rows("record_fps", args)
 
 
 if __name__ == "__main__":

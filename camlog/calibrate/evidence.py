@@ -31,7 +31,7 @@ from replay.topics import CALIBRATION_SUMMARY, CameraTopics
 
 from .pixels import TopicFrames
 from .solving import CalibratedCamera, StereoSolution
-from .views import Frame
+from .views import DetectedFrame
 
 __all__ = ["EVIDENCE_ZSTD_LEVEL", "Evidence", "write_evidence", "write_summary",
            "write_uncertainty"]
@@ -54,7 +54,7 @@ def _rectify_maps(info: CameraInfo) -> tuple[np.ndarray, np.ndarray]:
     return rectify_maps(info, cv2.CV_16SC2)
 
 
-def hold_ends(frames: Sequence[Frame], view_of: Mapping[int, int]) -> dict[int, int]:
+def hold_ends(frames: Sequence[DetectedFrame], view_of: Mapping[int, int]) -> dict[int, int]:
     """Per view (named by its first frame's index), the stamp of the last frame it covers:
     the frames of its held pose and their byte-for-byte repeats."""
     ends: dict[int, int] = {}

@@ -22,7 +22,7 @@ from processors.calibration.joint import BoardView
 from processors.resync import pair_stamps
 
 from ..errors import CalibrationError
-from .views import SNAPSHOT_GAP_S, CameraViews, Frame, size_hint
+from .views import SNAPSHOT_GAP_S, CameraViews, DetectedFrame, size_hint
 
 #: an approximately paired stereo frame joins its partner while the board moves less than
 #: this (px per frame) in both
@@ -104,7 +104,7 @@ def _candidates(views: CameraViews, board: Board, note: str) -> list[int]:
     return candidates
 
 
-def _still(frame: Frame) -> bool:
+def _still(frame: DetectedFrame) -> bool:
     return frame.speed_px is not None and frame.speed_px <= STILL_PX
 
 

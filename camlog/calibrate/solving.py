@@ -46,7 +46,7 @@ from .circles import CircleSize, circle_size
 from .instants import ViewsOfRig, rig_views
 from .rig_pairs import PairSolution, rig_pairs
 from .statistics import CameraStatistics, camera_statistics
-from .views import CameraViews, Frame
+from .views import CameraViews, DetectedFrame
 
 __all__ = ["CalibratedCamera", "CameraSolution", "RigSolution", "StereoSolution",
            "calibrated_cameras", "solve_rig"]
@@ -96,7 +96,7 @@ class CameraSolution:
         return [f.detection.corners_px for f in self.views.distinct()
                 if f.detection is not None and self.rejection(f) is not None]
 
-    def rejection(self, frame: Frame) -> str | None:
+    def rejection(self, frame: DetectedFrame) -> str | None:
         """Why a frame's board is not (in) a view (None: it is)."""
         if frame.detection is not None and not frame.detection.accepted:
             return frame.detection.reason
@@ -108,7 +108,7 @@ class CameraSolution:
         """Views are not judged by their RMS: outliers are single corners."""
         return None
 
-    def status(self, frame: Frame) -> tuple[str, bool]:
+    def status(self, frame: DetectedFrame) -> tuple[str, bool]:
         """Text drawn on an annotated frame, and whether the view was used."""
         if frame.detection is None:
             return "no board found", False

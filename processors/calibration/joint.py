@@ -31,7 +31,7 @@ from .options import TANGENTIAL_P_VALUE, CalibrationOptions, TangentialTest
 from .robust import (
     BoardView,
     BoardViews,
-    Evidence,
+    InlierSelection,
     Problem,
     camera_views,
     robust_solve,
@@ -181,7 +181,7 @@ def _without_tangential(state: bundle.RigState, camera: int) -> bundle.RigState:
     return out
 
 
-def _result(problem: Problem, views: list[BoardView], evidence: Evidence, *,
+def _result(problem: Problem, views: list[BoardView], evidence: InlierSelection, *,
             options: list[CalibrationOptions], tests: list[TangentialTest | None],
             rounds: int, warp_choice: WarpChoice | None) -> JointResult:
     state, layout, obs = problem.state, problem.layout, problem.observations

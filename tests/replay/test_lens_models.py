@@ -12,7 +12,6 @@ from processors.calibration.opencv_lens import OPENCV_LENSES
 from processors.calibration.options import CalibrationOptions
 from replay.calibration_yaml import calibration_from_yaml, calibration_to_yaml
 from replay.camera import CameraModel
-from replay.format_names import CAMERA_MODELS
 from replay.lens_models import LENS_MODELS, MODEL_ALIASES, lens_model
 from replay.projections import PROJECTIONS
 from tests.processors.calibration.synthetic import BOARD, K_TRUE, H, W, random_poses, views
@@ -28,13 +27,11 @@ def _model(name: str) -> CameraModel:
 
 def test_every_table_holds_every_model() -> None:
     assert list(PROJECTIONS) == list(DISTORTIONS) == list(OPENCV_LENSES) == list(LENS_MODELS)
-    assert list(CAMERA_MODELS) == list(LENS_MODELS)
 
 
 @pytest.mark.parametrize("name", list(LENS_MODELS))
 def test_every_model_is_one_consistent_entry(name: str) -> None:
     lens = LENS_MODELS[name]
-    assert CAMERA_MODELS[name] == len(lens.coefficients)
     assert INTRINSIC_NAMES[name] == ("fx", "fy", "cx", "cy", *lens.coefficients)
     assert 0 < lens.default_radial <= lens.max_radial == len(lens.radial_names)
     assert ({"p1", "p2"} <= set(lens.coefficients)) == lens.tangential
