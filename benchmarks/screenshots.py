@@ -214,6 +214,8 @@ def side_by_side(viewer: Viewer, rrd: Path, png: Path, origins: tuple[str, ...],
                                  view_origin=origin)
         pixels = cv2.imread(str(shot), cv2.IMREAD_COLOR)
         shot.unlink()
+        if pixels is None:
+            raise RuntimeError(f"the viewer saved no readable screenshot of {origin}")
         height, width = pixels.shape[:2]
         parts.append(cv2.resize(pixels, (round(width * SIDE_HEIGHT / height), SIDE_HEIGHT),
                                 interpolation=cv2.INTER_AREA))

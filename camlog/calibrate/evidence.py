@@ -146,7 +146,7 @@ def write_evidence(reader: LogReader, writer: LogWriter | BackgroundWriter,
     return Evidence(pair)
 
 
-def _board_in_camera(board: Board, frame: Frame, camera_from_board: F64 | None
+def _board_in_camera(board: Board, frame: DetectedFrame, camera_from_board: F64 | None
                      ) -> F64 | None:
     """The board points of a view's corners ``(N, 3)`` where the solution puts them, in the
     camera's optical frame (m, rounded to 0.1 um); None without a solved pose."""

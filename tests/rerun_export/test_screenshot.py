@@ -89,7 +89,7 @@ def test_the_board_lands_on_the_undistorted_image_in_the_viewer(tmp_path: Path) 
     view = cv2.imread(str(shot), cv2.IMREAD_COLOR).astype(int)
     blue, green, red = view[..., 0], view[..., 1], view[..., 2]
     marks = ((green > 150) & (red < 130) & (blue < 130)).astype(np.uint8)
-    count, labels, stats, centres = cv2.connectedComponentsWithStats(marks)
+    count, _, stats, centres = cv2.connectedComponentsWithStats(marks)
     white = (view.min(axis=2) > 200).astype(np.uint8)
     landed = 0
     for index in range(1, count):
