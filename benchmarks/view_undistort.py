@@ -7,11 +7,14 @@ its frames byte for byte: they need no view image of their own), the same with s
 (sigma 2 levels: no two frames alike, as a real camera's), and ``stereo_checkerboard``
 (ideal cameras: no views). Each is viewed into an .rrd, in interleaved repeats:
 
-* ``views``: ``camlog view`` as it is (views the raw images' size, --scale);
+* ``views``: ``camlog view`` as it is (its views --scale times the raw images' width and
+  height, by default view's own);
 * ``no views``: ``camlog view --no-undistort``, the raw images under a Pinhole of their K
   (what view drew before the views; the baseline).
 
-Wall time and the process's CPU time (every thread's) are medians of the repeats; on a
+Each log's two runs take turns at going first (the first read of a log after another's may
+find less of it in the page cache). Wall time and the process's CPU time (every thread's)
+are medians of the repeats; on a
 machine whose other jobs leave no core idle, the CPU ratio is what the wall ratio comes to.
 Targets: a distorted log's view at most 1.3 x its baseline's wall time; the ideal log's
 within noise of its baseline (no view is made for an ideal camera: both runs do the same
@@ -31,6 +34,7 @@ import time
 from pathlib import Path
 
 from rerun_export import LoggerOptions, view_logs
+from rerun_export.options import UNDISTORTED_SCALE
 
 from .docs import add_write_docs
 from .report import emit, write_summary_rows
@@ -70,8 +74,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--duration", type=float, default=30.0, help="log length in s (30)")
     parser.add_argument("--repeats", type=int, default=3, help="median of R interleaved runs")
-    parser.add_argument("--scale", type=float, default=1.0,
-                        help="the views' size relative to the raw images (1, view's default)")
+    parser.add_argument("--scale", type=float, default=UNDISTORTED_SCALE,
+                        help=f"the views' size relative to the raw images ({UNDISTORTED_SCALE:g}, "
+                             "view's default)")
     for kind, (scenario, _, what) in LOGS.items():
         parser.add_argument(f"--{kind}", type=Path, metavar="LOG",
                             help=f"a {scenario} log to use ({what})")
@@ -89,9 +94,11 @@ def main() -> None:
                 print(f"recorded {kind} ({scenario}) in {time.perf_counter() - started:.0f} s")
         runs: dict[tuple[str, str], list[tuple[float, float]]] = {}
         counts: dict[str, tuple[int, int]] = {}
-        for _ in range(args.repeats):  # interleaved, so that drifting load hits every run
+        modes: tuple[tuple[str, float | None], ...] = (("views", args.scale),
+                                                       ("no views", None))
+        for repeat in range(args.repeats):  # interleaved, so that drifting load hits all
             for kind, log in logs.items():
-                for mode, scale in (("views", args.scale), ("no views", None)):
+                for mode, scale in modes if repeat % 2 == 0 else modes[::-1]:
                     wall, cpu, images, remapped = view_s(log, tmp / "out.rrd", scale)
                     runs.setdefault((kind, mode), []).append((wall, cpu))
                     if mode == "views":

@@ -102,7 +102,6 @@ class CameraDrawing:
         self._truth: dict[str, tuple[bytes, CameraModel, Any, Any]] = {}
         self._replay_ns: int | None = None
 
-
     def _warn(self, key: str, text: str) -> None:
         if key not in self._warned:
             self._warned.add(key)

@@ -4,7 +4,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["LoggerOptions"]
+__all__ = ["UNDISTORTED_SCALE", "LoggerOptions"]
+
+#: the pinhole views' width and height, relative to the raw images': a quarter of their
+#: pixels, which costs view about a quarter of what a second image as large would (each
+#: image, remapped or not, costs rerun as much as its pixels; see the benchmarks page)
+UNDISTORTED_SCALE = 0.5
 
 
 @dataclass(frozen=True)
@@ -18,4 +23,4 @@ class LoggerOptions:
     jpeg_quality: int | None = None
     residual_scale: float = 50.0
     ground_truth: bool = True
-    undistorted_scale: float | None = 1.0
+    undistorted_scale: float | None = UNDISTORTED_SCALE

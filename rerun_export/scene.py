@@ -54,6 +54,7 @@ from replay.pinhole_views import PinholeView, pinhole_views
 from replay.records import Scenario
 from replay.wire import record_msgtype
 
+from .options import UNDISTORTED_SCALE
 from .rig import Rig, rig_poses
 from .survey import Survey
 from .topics import Kind, Route
@@ -137,7 +138,7 @@ class ScenePlan:
     rejected: dict[str, dict[int, str]] = field(default_factory=dict)  # ns -> stamp -> why
     skipped: dict[str, str] = field(default_factory=dict)  # topic -> why it is not shown
     counts: dict[str, int] = field(default_factory=dict)  # topic -> messages in the log
-    undistorted: float | None = 1.0  # the pinhole views' size (None: no views)
+    undistorted: float | None = UNDISTORTED_SCALE  # the views' size (None: no views)
 
 
 def image_entity(kind: Kind, topic: str) -> str:
@@ -194,7 +195,8 @@ def _views(info: CameraInfo, scale: float) -> list[PinholeView]:
         return []
 
 
-def plan_scene(found: Survey, *, undistorted_scale: float | None = 1.0) -> ScenePlan:
+def plan_scene(found: Survey, *,
+               undistorted_scale: float | None = UNDISTORTED_SCALE) -> ScenePlan:
     """Lay out cameras, overlays, series and documents for the surveyed topics; cameras
     whose lens is not a pinhole get pinhole views ``undistorted_scale`` times their raw
     images' size (None: none, their raw images go under a pinhole of their K)."""

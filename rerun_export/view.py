@@ -28,6 +28,7 @@ from replay.selection import merge_in_time, select_topics, window_ns
 from .blueprint import make_blueprint
 from .groups import related_groups
 from .logger import LoggerOptions, SceneLogger
+from .options import UNDISTORTED_SCALE
 from .paths import output_of
 from .scene import ScenePlan, plan_scene
 from .sink import Destination, RecordingSink
@@ -85,7 +86,8 @@ class ExportSession:
 
 def open_logs(stack: contextlib.ExitStack, paths: Sequence[Path], *,
               topics: Sequence[str] | None, start_s: float | None, end_s: float | None,
-              recover: bool, undistorted_scale: float | None = 1.0) -> ExportSession:
+              recover: bool,
+              undistorted_scale: float | None = UNDISTORTED_SCALE) -> ExportSession:
     """Open ``paths`` in ``stack``, choose topics and window, survey and plan the scene
     (pinhole views ``undistorted_scale`` times the raw images, see :func:`plan_scene`)."""
     readers = _open_readers(stack, paths, recover=recover)

@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import ClassVar
 
 from replay.format_names import LOG_TIMES
+from rerun_export.options import UNDISTORTED_SCALE
 
 from . import fields as common
 from .fields import option
@@ -105,9 +106,9 @@ class ViewRequest(ToViewer):
                              help="make no pinhole views of distorted cameras: their raw "
                                   "images go under a Pinhole of their K, as rerun alone "
                                   "shows them (wrong off the image centre)")
-    undistorted_scale: float = option(1.0, "--undistorted-scale", type=number(above=0.0,
-                                                                              high=2.0),
-                                      metavar="S", help="the pinhole views' width and height, "
-                                                        "S times the raw image's (default 1)")
+    undistorted_scale: float = option(
+        UNDISTORTED_SCALE, "--undistorted-scale", type=number(above=0.0, high=2.0), metavar="S",
+        help=f"the pinhole views' width and height, S times the raw image's (default "
+             f"{UNDISTORTED_SCALE:g}: a quarter of its pixels; 1 for full size)")
     recover: bool = common.recover()
     progress: bool | None = common.progress()

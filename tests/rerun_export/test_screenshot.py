@@ -15,7 +15,7 @@ from benchmarks.screenshots import Viewer, vulkan_driver
 from replay import Image, open_writer
 from replay.camera import CameraModel
 from replay.records import ViewResiduals
-from rerun_export import view_logs
+from rerun_export import LoggerOptions, view_logs
 
 T0 = 1_700_000_000_000_000_000
 
@@ -82,7 +82,7 @@ def test_the_board_lands_on_the_undistorted_image_in_the_viewer(tmp_path: Path) 
                 stamp, "cam", 0.0, raw_px, np.zeros_like(raw_px),
                 corners_in_camera_m=points).to_message(), log_time_ns=stamp)
     rrd = tmp_path / "lens.rrd"
-    view_logs([log], output=rrd, progress=False)
+    view_logs([log], output=rrd, progress=False, options=LoggerOptions(undistorted_scale=1.0))
     with Viewer(tmp_path / "viewer_home") as viewer:
         shot = viewer.screenshot(rrd, tmp_path / "undistorted.png", settle_s=2.0,
                                  view_origin="/world/cam/undistorted")
