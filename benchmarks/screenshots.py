@@ -33,6 +33,8 @@ import numpy as np
 WINDOW = "1280x720"
 #: tries at a screenshot before its timeout is an error
 SCREENSHOT_ATTEMPTS = 3
+#: the longest side of the warm-up screenshot taken before each picture (px)
+WARM_UP_PX = 64
 
 
 def vulkan_driver() -> str | None:
@@ -113,7 +115,10 @@ class Viewer:
                 raise RuntimeError(f"no view of {view_origin} in {[v.origin for v in views]}")
         raw = png.with_suffix(".raw.png")
         for attempt in range(SCREENSHOT_ATTEMPTS):
-            try:  # the software renderer's first frame of a new kind of view can time out
+            try:  # the software renderer's first frame of a new kind of view can time out,
+                # and paint before every image is uploaded: the first is a warm-up
+                client.take_screenshot(view_id, max_size=WARM_UP_PX)
+                time.sleep(settle_s / 2)
                 client.save_screenshot(str(raw), view_id)
                 break
             except TimeoutError:
@@ -155,8 +160,9 @@ SIDE_HEIGHT = 420
 
 
 def camlog(*argv: str) -> None:
-    """``camlog ARGV…`` in a fresh process, as a user types it."""
-    subprocess.run([sys.executable, "-m", "camlog", *argv], check=True,
+    """``camlog ARGV… --overwrite`` in a fresh process, as a user types it (a --keep folder
+    made before is made again)."""
+    subprocess.run([sys.executable, "-m", "camlog", *argv, "--overwrite"], check=True,
                    stdout=subprocess.DEVNULL)
 
 

@@ -59,9 +59,9 @@ def make_blueprint(plan: ScenePlan, *, timeline: str = LOG_TIME, follow: bool = 
 
 
 def _behind_the_camera(plan: ScenePlan) -> Any:
-    """The 3D view's eye of a one-camera scene shown through views: a little behind and
-    above the camera, looking along its axis, so that the 3D entities in front of it sit
-    near their place on its view's image (None otherwise: rerun frames the scene)."""
+    """The 3D view's eye of a one-camera scene shown through views: behind and above the
+    camera, looking along its axis at its view's image and the 3D entities in front of it
+    (None otherwise: rerun frames the scene)."""
     if len(plan.cameras) != 1:
         return None
     (cam,) = plan.cameras.values()
@@ -71,8 +71,8 @@ def _behind_the_camera(plan: ScenePlan) -> Any:
     centre, rotation = pose[:3, 3], pose[:3, :3]
     depth = plan.image_plane_distance_m
     forward, up = rotation[:, 2], -rotation[:, 1]  # optical z, image up (-y)
-    return rrb.EyeControls3D(position=centre - 1.2 * depth * forward + 0.5 * depth * up,
-                             look_target=centre + 2.0 * depth * forward, eye_up=up)
+    return rrb.EyeControls3D(position=centre - 0.6 * depth * forward + 0.3 * depth * up,
+                             look_target=centre + depth * forward, eye_up=up)
 
 
 def _camera_views(cam: CameraPlan) -> Any:
@@ -87,7 +87,7 @@ def _camera_views(cam: CameraPlan) -> Any:
             origin=f"{cam.entity}/{view.name}", name=f"{cam.namespace} ({view.name})",
             contents=["$origin/**", f"{cam.entity}/calibration/board/**",
                       f"{cam.entity}/ground_truth/**", "- $origin/uncertainty/**"]))
-    return rrb.Horizontal(*views)
+    return rrb.Horizontal(*views, name=cam.namespace)  # the name of its tab, if it is one
 
 
 def _layout(plan: ScenePlan, name: str | None = None) -> Any:

@@ -51,7 +51,7 @@ from dataclasses import dataclass, field
 from replay.messages import F64, CameraInfo
 from replay.msgtypes import FOXGLOVE_COMPRESSED_VIDEO as VIDEO
 from replay.pinhole_views import PinholeView, pinhole_views
-from replay.records import Scenario
+from replay.records import CalibrationSummary, Scenario
 from replay.wire import record_msgtype
 
 from .options import UNDISTORTED_SCALE
@@ -177,13 +177,18 @@ def _targets(scenario: Scenario | None) -> dict[str, F64]:
     return {t.name: points for t in targets if (points := t.points_in_target()) is not None}
 
 
-def _plane_distance_m(rig: Rig) -> float:
-    """Frustum depth: 2.5 baselines of the closest camera pair, else 0.1 m."""
+def _plane_distance_m(rig: Rig, summary: CalibrationSummary | None) -> float:
+    """Frustum depth: 2.5 baselines of the closest camera pair, else 0.1 m; in a
+    calibration's recording at least twice its working range, so that the boards it solved
+    show in 3D in front of each camera's image, over their place in it."""
     positions = [pose[:3, 3] for pose in rig.world_from_camera.values()]
     gaps = [float(((a - b) ** 2).sum() ** 0.5) for i, a in enumerate(positions)
             for b in positions[i + 1:]]
     gaps = [g for g in gaps if g > 1e-6]
-    return min(max(2.5 * min(gaps), 0.02), 1.0) if gaps else 0.1
+    depth = min(max(2.5 * min(gaps), 0.02), 1.0) if gaps else 0.1
+    ranges = [c.uncertainty.range_m for c in summary.cameras
+              if c.uncertainty is not None] if summary is not None else []
+    return max([depth, *(2.0 * r for r in ranges)])
 
 
 def _views(info: CameraInfo, scale: float) -> list[PinholeView]:
@@ -274,7 +279,7 @@ def plan_scene(found: Survey, *,
         cameras=ordered,
         frames=frames,
         rig=rig,
-        image_plane_distance_m=_plane_distance_m(rig),
+        image_plane_distance_m=_plane_distance_m(rig, found.calibration_summary),
         series=series,
         rectified=sorted({image_entity(r.kind, t) for t, r in routes.items()
                           if r.kind is Kind.RECTIFIED}),

@@ -231,3 +231,61 @@ def test_the_raw_image_under_a_pinhole_of_k_misses_by_pixels(recorded: Recorded)
     plain = landing(recorded, recorded.plain_rrd, "")
     assert plain.views >= 1
     assert float(plain.errors_px.max()) > 1.0, recorded.scenario
+
+
+@pytest.fixture(scope="module")
+def stereo_calibration_rrd(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """``stereo_checkerboard`` at 320x240, poses held 0.1 s, calibrated as a pair, and the
+    view of its calibration.mcap (the log, the .rrd)."""
+    tmp = tmp_path_factory.mktemp("stereo_lens")
+    spec = (SCENARIOS / "stereo_checkerboard.toml").read_text().replace("hold_s = 0.5",
+                                                                        "hold_s = 0.1")
+    (tmp / "spec.toml").write_text(spec)
+    log = tmp / "stereo.mcap"
+    cli("record", str(tmp / "spec.toml"), "--frames", "90", "--resolution", "320x240",
+        "-o", str(log), "--no-progress")
+    cli("calibrate", str(log), "--left", "/stereo_camera/left", "--right",
+        "/stereo_camera/right", "--size", "7x6", "--square", "0.01", "-o", str(tmp / "cal"),
+        "--no-progress")
+    rrd = tmp / "stereo.rrd"
+    cli("view", str(tmp / "cal" / "calibration.mcap"), "-o", str(rrd), "--no-progress",
+        "--undistorted-scale", "1")
+    return log, rrd
+
+
+@pytest.mark.slow
+def test_a_rectified_pair_s_views_share_their_rows(
+        stereo_calibration_rrd: tuple[Path, Path]) -> None:
+    """Each camera of a calibrated pair is shown through its rectified pinhole (P, turned
+    by R): a true board corner, carried into both views by the logged transforms, images
+    on the same row of both, and where the pair's baseline puts it along the row."""
+    log, rrd = stereo_calibration_rrd
+    store = _store(rrd)
+    with open_reader(log) as reader:
+        scenario = Scenario.from_message(
+            next(m.message for m in reader.messages(["/camlog/scenario"])))
+        poses = [m.message for m in reader.messages(
+            ["/stereo_camera/left/ground_truth/checkerboard"])]
+    (target,) = scenario.targets
+    (left,) = [c for c in scenario.cameras if c.namespace == "/stereo_camera/left"]
+    world_from_left = np.asarray(left.world_from_camera, dtype=np.float64)
+    pixels = {}
+    for side in ("left", "right"):
+        entity = f"/world/stereo_camera/{side}/rectified"
+        view_from_world = np.linalg.inv(_world_from(store, entity))
+        k = np.asarray(_last(store, entity, "Pinhole:image_from_camera"),
+                       dtype=np.float64).reshape(3, 3).T
+        found = []
+        for pose in poses[::5]:
+            in_left = target.points_in_target() @ rotation_from_quat_xyzw(
+                pose.orientation_xyzw).T + pose.position_m
+            in_world = in_left @ world_from_left[:3, :3].T + world_from_left[:3, 3]
+            in_view = in_world @ view_from_world[:3, :3].T + view_from_world[:3, 3]
+            uv = in_view @ k.T
+            found.append(uv[:, :2] / uv[:, 2:])
+        pixels[side] = np.concatenate(found)
+    rows_apart = np.abs(pixels["left"][:, 1] - pixels["right"][:, 1])
+    assert float(np.median(rows_apart)) < 0.1 and float(rows_apart.max()) < 0.3, \
+        (np.median(rows_apart), rows_apart.max())
+    # the disparity is the pair's: u_left - u_right = fx B / z, positive
+    assert float(np.min(pixels["left"][:, 0] - pixels["right"][:, 0])) > 0

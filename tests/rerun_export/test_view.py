@@ -10,6 +10,7 @@ import pytest
 
 from replay import CameraInfo, Image, PointStamped, Text, open_reader, open_writer
 from replay.camera import CameraModel
+from replay.frames import Color, Frame, encode_compressed
 from rerun_export import LoggerOptions, Reading, view_logs
 from rerun_export.overlays import CENTROID_MARKER, MASK_PIXEL
 from tests.rrd import load_rrd, rerun_cli
@@ -236,3 +237,41 @@ def test_compressed_inputs_are_stored_as_they_are(red_log: Path, tmp_path: Path)
     # PNG processor outputs are decoded to classes: the same overlays as from raw images
     assert rec.count(f"{LEFT}/red_pixels/mask", "SegmentationImage:buffer") == 20
     assert rec.count(f"{LEFT}/edges", "SegmentationImage:buffer") == 20
+
+
+def test_jpeg_images_of_a_distorted_camera_are_remapped_and_an_ideal_camera_is_as_before(
+        tmp_path: Path) -> None:
+    """A distorted camera's JPEG frames go into the recording as they are and are decoded
+    (on the worker threads) to make its view; an ideal camera gets no view and keeps its
+    entities, with its full model beside its Pinhole."""
+    ideal = CameraModel.ideal(64, 48, 1.0)
+    distorted = CameraModel(64, 48, ideal.k, "plumb_bob", np.array([-0.3, 0.1, 0, 0, 0]))
+    log = tmp_path / "two.mcap"
+    t0 = 1_700_000_000_000_000_000
+    with open_writer(log) as writer:
+        for i in range(4):
+            stamp = t0 + i * 100_000_000
+            pixels = np.full((48, 64, 3), 60 * i, np.uint8)
+            frame = Frame(stamp, "lens", pixels, Color.RGB)
+            writer.write("/lens/image_raw/compressed", encode_compressed(frame),
+                         log_time_ns=stamp)
+            writer.write("/lens/camera_info", distorted.camera_info(stamp_ns=stamp,
+                                                                    frame_id="lens"),
+                         log_time_ns=stamp)
+            writer.write("/pin/image_raw", Image(stamp, "pin", "rgb8", pixels),
+                         log_time_ns=stamp)
+            writer.write("/pin/camera_info", ideal.camera_info(stamp_ns=stamp, frame_id="pin"),
+                         log_time_ns=stamp)
+    out = tmp_path / "two.rrd"
+    result = view_logs([log], output=out, progress=False)
+    assert (result.images, result.remapped) == (8, 4) and result.warnings == []
+    rec = load_rrd(out)
+    assert rec.count("/raw/lens/image", "EncodedImage:blob") == 4
+    assert rec.count("/world/lens/undistorted/image", "Image:buffer") == 4
+    (image_format,) = rec.column("/world/lens/undistorted/image", "Image:format")[:1]
+    assert (image_format[0]["width"], image_format[0]["height"]) == (32, 24)  # half size
+    # the ideal camera: its image under its own Pinhole, as before, and its model beside it
+    assert rec.count("/world/pin/image", "Image:buffer") == 4
+    assert not [e for e in rec.rows if e.startswith(("/raw/pin", "/world/pin/undistorted"))]
+    assert rec.entities_with(PINHOLE) == ["/world/lens/undistorted", "/world/pin"]
+    assert rec.column("/world/pin", "CameraInfo:k") == [ideal.k.reshape(-1).tolist()]
