@@ -107,7 +107,7 @@ class ViewRequest(ToViewer):
                                   "images go under a Pinhole of their K, as rerun alone "
                                   "shows them (wrong off the image centre)")
     undistorted_scale: float = option(
-        UNDISTORTED_SCALE, "--undistorted-scale", type=number(above=0.0, high=2.0), metavar="S",
+        UNDISTORTED_SCALE, "--undistorted-scale", type=number(above=0.0, high=4.0), metavar="S",
         help=f"the pinhole views' width and height, S times the raw image's (default "
              f"{UNDISTORTED_SCALE:g}: a quarter of its pixels; 1 for full size)")
     recover: bool = common.recover()

@@ -50,6 +50,7 @@ SET_BY_THE_BATCH = {
     "progress": "a batch shows one bar of its own",
     "workers": "a batch gives each log its share of the cores",
     "format": "a step that writes a log writes MCAP (convert's format is a key)",
+    "calibration": "export's other input, a rerun recording: a batch's steps read logs",
 }
 
 #: commands without a batch step, and why
@@ -134,11 +135,16 @@ def _typed(arg: Arg) -> Any:
     return [value] if arg.action in ("append", "extend") or arg.nargs == "+" else value
 
 
+#: command -> what its request needs though declared with a default (export's topic: the
+#: images to write, unless --calibration, which only the command line takes)
+NEEDED: dict[str, dict[str, Any]] = {"export": {"topic": "/c/image_raw"}}
+
+
 def _with(command: str, field: Field[Any], value: Any) -> dict[str, Any]:
     """``field = value`` and the fields a request of ``command`` needs beside it."""
     required = {"size": "7x6", "square": 0.01, "topic": "/c/image_raw"}
     return {**{f.name: required[f.name] for f in request_fields(COMMANDS[command][0])
-               if f.default is dataclasses.MISSING},
+               if f.default is dataclasses.MISSING}, **NEEDED.get(command, {}),
             field.name: value, **COMPANIONS.get((command, field.name), {})}
 
 
