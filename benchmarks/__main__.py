@@ -24,6 +24,7 @@ BENCHMARKS: dict[str, tuple[list[str], list[str]]] = {
     "video_size": ([], ["--duration", "1"]),
     "calibrate_speed": ([], ["--quick"]),
     "view_fps": ([], ["--duration", "5"]),
+    "view_undistort": ([], ["--duration", "1", "--repeats", "1"]),
     "batch_speedup": ([], ["--frames", "90"]),
     "batch_ray": ([], ["--frames", "90"]),
     "demo_time": ([], ["--duration", "2"]),

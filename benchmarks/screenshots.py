@@ -1,12 +1,14 @@
 """The README's pictures: real rerun viewer screenshots of ``camlog view`` recordings.
 
-Records three tiny scenarios, runs camlog on them as a user would and photographs the
+Records four tiny scenarios, runs camlog on them as a user would and photographs the
 viewer: a mono calibration (``docs/calibration.png``), the stereo pair's calibration with
-its rectified images (``docs/rectified.png``) and the red-block processors
-(``docs/red_block.png``). The viewer runs headless on Mesa's software Vulkan
-(``WGPU_BACKEND=vulkan``; Debian's ``mesa-vulkan-drivers``), bound to 127.0.0.1.
+its rectified images (``docs/rectified.png``), the red-block processors
+(``docs/red_block.png``) and a ChArUco calibration through a strongly distorted rational
+lens, its raw view, undistorted view and 3D view side by side (``docs/undistorted.png``).
+The viewer runs headless on Mesa's software Vulkan (``WGPU_BACKEND=vulkan``; Debian's
+``mesa-vulkan-drivers``), bound to 127.0.0.1.
 
-    python -m benchmarks.screenshots [-o docs] [--keep DIR]
+    python -m benchmarks.screenshots [-o docs] [--keep DIR [--reuse]] [--only PNG...]
 """
 
 from __future__ import annotations
@@ -29,6 +31,10 @@ import numpy as np
 
 #: the viewer's window in logical points (one pixel each in the headless viewer)
 WINDOW = "1280x720"
+#: tries at a screenshot before its timeout is an error
+SCREENSHOT_ATTEMPTS = 3
+#: the longest side of the warm-up screenshot taken before each picture (px)
+WARM_UP_PX = 64
 
 
 def vulkan_driver() -> str | None:
@@ -108,7 +114,16 @@ class Viewer:
             if view_id is None:
                 raise RuntimeError(f"no view of {view_origin} in {[v.origin for v in views]}")
         raw = png.with_suffix(".raw.png")
-        client.save_screenshot(str(raw), view_id)
+        for attempt in range(SCREENSHOT_ATTEMPTS):
+            try:  # the software renderer's first frame of a new kind of view can time out,
+                # and paint before every image is uploaded: the first is a warm-up
+                client.take_screenshot(view_id, max_size=WARM_UP_PX)
+                time.sleep(settle_s / 2)
+                client.save_screenshot(str(raw), view_id)
+                break
+            except TimeoutError:
+                if attempt == SCREENSHOT_ATTEMPTS - 1:
+                    raise
         pixels = cv2.imread(str(raw), cv2.IMREAD_COLOR)
         raw.unlink()
         if pixels is None:
@@ -136,38 +151,83 @@ class Viewer:
 
 #: README picture -> the recording it shows
 RECORDINGS = {"calibration.png": "mono.rrd", "rectified.png": "stereo.rrd",
-              "red_block.png": "red.rrd"}
+              "red_block.png": "red.rrd", "undistorted.png": "lens.rrd"}
+#: pictures made of views side by side: picture -> the views' origins
+SIDE_BY_SIDE = {"undistorted.png": ("/raw/charuco_camera", "/world/charuco_camera/undistorted",
+                                    "/world")}
+#: the height every view of a side-by-side picture is scaled to (px)
+SIDE_HEIGHT = 420
 
 
 def camlog(*argv: str) -> None:
-    """``camlog ARGV…`` in a fresh process, as a user types it."""
-    subprocess.run([sys.executable, "-m", "camlog", *argv], check=True,
+    """``camlog ARGV… --overwrite`` in a fresh process, as a user types it (a --keep folder
+    made before is made again)."""
+    subprocess.run([sys.executable, "-m", "camlog", *argv, "--overwrite"], check=True,
                    stdout=subprocess.DEVNULL)
 
 
-def make_recordings(work: Path) -> dict[str, Path]:
-    """The three .rrd files the README shows, made in ``work``."""
-    quiet = "--no-progress"
-    camlog("record", "mono_checkerboard", "--frames", "90", "-o", str(work / "mono.mcap"), quiet)
+def _mono(work: Path) -> None:
+    camlog("record", "mono_checkerboard", "--frames", "90", "-o", str(work / "mono.mcap"), QUIET)
     camlog("calibrate", str(work / "mono.mcap"), "--size", "7x6", "--square", "0.01",
-           "-o", str(work / "mono_cal"), quiet)
+           "-o", str(work / "mono_cal"), QUIET)
     camlog("view", str(work / "mono_cal" / "calibration.mcap"), "-o", str(work / "mono.rrd"),
-           quiet)
+           QUIET)
 
+
+def _stereo(work: Path) -> None:
     camlog("record", "stereo_unsynced", "--duration", "4", "-o", str(work / "stereo.mcap"),
-           quiet)
+           QUIET)
     camlog("resync", str(work / "stereo.mcap"), "-o", str(work / "synced.mcap"))
     camlog("calibrate", str(work / "synced.mcap"), "--size", "7x6", "--square", "0.01",
            "--left", "/stereo_sync/left", "--right", "/stereo_sync/right",
-           "-o", str(work / "stereo_cal"), quiet)
+           "-o", str(work / "stereo_cal"), QUIET)
     camlog("view", str(work / "stereo_cal" / "calibration.mcap"), "-o",
-           str(work / "stereo.rrd"), quiet)
+           str(work / "stereo.rrd"), QUIET)
 
-    camlog("record", "red_block", "--frames", "30", "-o", str(work / "red.mcap"), quiet)
+
+def _red(work: Path) -> None:
+    camlog("record", "red_block", "--frames", "30", "-o", str(work / "red.mcap"), QUIET)
     camlog("process", str(work / "red.mcap"), "--topic", "/stereo_camera/left/image_raw",
            "--red-pixels", "--edges", "-o", str(work / "red_out.mcap"))
-    camlog("view", str(work / "red_out.mcap"), "-o", str(work / "red.rrd"), quiet)
-    return {name: work / rrd for name, rrd in RECORDINGS.items()}
+    camlog("view", str(work / "red_out.mcap"), "-o", str(work / "red.rrd"), QUIET)
+
+
+def _lens(work: Path) -> None:
+    """A strongly distorted rational lens calibrated on a ChArUco board: the raw image with
+    its overlays, the undistorted view with the board where the calibration solved it, and
+    the camera in 3D."""
+    camlog("record", "mono_charuco", "--frames", "120", "-o", str(work / "lens.mcap"), QUIET)
+    camlog("calibrate", str(work / "lens.mcap"), "--pattern", "charuco", "--size", "8x6",
+           "--square", "0.011", "--marker", "0.008", "--model", "rational_polynomial",
+           "-o", str(work / "lens_cal"), QUIET)
+    camlog("view", str(work / "lens_cal" / "calibration.mcap"), "-o", str(work / "lens.rrd"),
+           QUIET)
+
+
+QUIET = "--no-progress"
+#: picture -> how its recording is made in a work folder
+RECIPES = {"calibration.png": _mono, "rectified.png": _stereo, "red_block.png": _red,
+           "undistorted.png": _lens}
+
+
+def side_by_side(viewer: Viewer, rrd: Path, png: Path, origins: tuple[str, ...], *,
+                 at: float = 0.5) -> Path:
+    """One picture of the views of ``rrd`` whose origins are ``origins``, each scaled to
+    :data:`SIDE_HEIGHT`, left to right, with a thin gap."""
+    parts = []
+    for index, origin in enumerate(origins):
+        shot = viewer.screenshot(rrd, png.with_name(f"{png.stem}.{index}.png"), at=at,
+                                 view_origin=origin)
+        pixels = cv2.imread(str(shot), cv2.IMREAD_COLOR)
+        shot.unlink()
+        if pixels is None:
+            raise RuntimeError(f"the viewer saved no readable screenshot of {origin}")
+        height, width = pixels.shape[:2]
+        parts.append(cv2.resize(pixels, (round(width * SIDE_HEIGHT / height), SIDE_HEIGHT),
+                                interpolation=cv2.INTER_AREA))
+        parts.append(np.full((SIDE_HEIGHT, 6, 3), 255, np.uint8))
+    cv2.imwrite(str(png), np.hstack(parts[:-1]), [cv2.IMWRITE_PNG_COMPRESSION, 9])
+    return png
 
 
 def main() -> None:
@@ -177,6 +237,8 @@ def main() -> None:
     parser.add_argument("--keep", type=Path, help="keep the logs and .rrd files here")
     parser.add_argument("--reuse", action="store_true",
                         help="with --keep: photograph the .rrd files already there")
+    parser.add_argument("--only", nargs="+", choices=sorted(RECORDINGS), metavar="PNG",
+                        help="make only these pictures")
     args = parser.parse_args()
     missing = vulkan_driver()
     if missing:
@@ -184,13 +246,19 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp_name:
         work = args.keep or Path(tmp_name)
         work.mkdir(parents=True, exist_ok=True)
-        recordings = {name: work / rrd for name, rrd in RECORDINGS.items()} if args.reuse \
-            else make_recordings(work)
+        recordings = {name: work / rrd for name, rrd in RECORDINGS.items()
+                      if not args.only or name in args.only}
+        if not args.reuse:
+            for name in recordings:
+                RECIPES[name](work)
         args.output.mkdir(parents=True, exist_ok=True)
         for name, rrd in recordings.items():
             # a fresh viewer each: one keeps the first layout it saw per application id
             with Viewer(work / "viewer_home") as viewer:
-                png = viewer.screenshot(rrd, args.output / name)
+                if name in SIDE_BY_SIDE:
+                    png = side_by_side(viewer, rrd, args.output / name, SIDE_BY_SIDE[name])
+                else:
+                    png = viewer.screenshot(rrd, args.output / name)
             print(f"{png}  {png.stat().st_size / 1e3:.0f} kB  (from {rrd.name})")
         if args.keep is None:
             shutil.rmtree(work / "viewer_home", ignore_errors=True)

@@ -156,12 +156,13 @@ class CameraModel:
         projected = rays @ np.asarray(p, dtype=np.float64)[:, :3].T
         return np.asarray(projected[:, :2] / projected[:, 2:], dtype=np.float64)
 
-    def rectify_maps(self, r: F64, new_k: F64, map_type: int = cv2.CV_16SC2
-                     ) -> tuple[np.ndarray, np.ndarray]:
+    def rectify_maps(self, r: F64, new_k: F64, map_type: int = cv2.CV_16SC2, *,
+                     size: tuple[int, int] | None = None) -> tuple[np.ndarray, np.ndarray]:
         """``cv2.remap`` maps (image_proc's rectification): output pixel ``(u, v)`` of the
         pinhole camera ``new_k`` (3, 3) turned by ``r`` samples the raw image where this
-        model images that ray (OpenCV's fisheye maps for an equidistant lens)."""
-        size = (self.width, self.height)
+        model images that ray (OpenCV's fisheye maps for an equidistant lens). The output
+        is ``size`` (width, height), by default the raw image's."""
+        size = size or (self.width, self.height)
         r = np.asarray(r, dtype=np.float64)
         new_k = np.asarray(new_k, dtype=np.float64)[:, :3]
         map1, map2 = self.projection.rectify_map(self.k, self.d, r, new_k, size, map_type)

@@ -57,8 +57,9 @@ LENS_MODELS: dict[str, LensModel] = {m.name: m for m in (
     LensModel("equidistant", ("k1", "k2", "k3", "k4"), fisheye=True, default_radial=4,
               max_radial=4, tangential=False),
 )}
-#: other names of the models (OpenCV and Kalibr call the equidistant model "fisheye")
-MODEL_ALIASES = {"fisheye": "equidistant"}
+#: other names of the models (OpenCV and Kalibr call the equidistant model "fisheye",
+#: Foxglove's CameraCalibration "kannala_brandt": the same four coefficients k1..k4)
+MODEL_ALIASES = {"fisheye": "equidistant", "kannala_brandt": "equidistant"}
 #: every name a lens model may be given by: the ROS names, then the aliases (``--model``'s
 #: choices)
 LENS_MODEL_NAMES = (*LENS_MODELS, *MODEL_ALIASES)

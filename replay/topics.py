@@ -3,7 +3,7 @@
 A camera namespace ``ns`` owns ``{ns}/image_raw[/compressed]`` and ``{ns}/camera_info``; the
 simulator adds ``{ns}/ground_truth/{target}`` (``PoseStamped``: the target in the camera's
 optical frame) and the log-wide ``/camlog/scenario`` (:class:`~replay.records.Scenario`);
-``camlog calibrate`` adds ``{ns}/calibration/{detections,residuals,view_error}``,
+``camlog calibrate`` adds ``{ns}/calibration/{detections,residuals,view_error,uncertainty}``,
 ``{ns}/calibrated/camera_info``, ``{ns}/image_rect`` (stereo) and ``/calibration/summary``
 (:class:`~replay.records.CalibrationSummary`); ``camlog resync`` writes the pairs under a
 prefix (default ``/stereo_sync``) with ``{prefix}/offset_s`` and ``{prefix}/stats``
@@ -34,6 +34,7 @@ __all__ = [
     "RESIDUALS",
     "RESYNC_PREFIX",
     "SCENARIO",
+    "UNCERTAINTY",
     "VIEW_ERROR",
     "CameraTopics",
     "ResyncTopics",
@@ -58,6 +59,7 @@ GROUND_TRUTH = "ground_truth"
 DETECTIONS = "calibration/detections"
 RESIDUALS = "calibration/residuals"
 VIEW_ERROR = "calibration/view_error"
+UNCERTAINTY = "calibration/uncertainty"
 CALIBRATED_INFO = "calibrated/camera_info"
 IMAGE_RECT = "image_rect"
 
@@ -118,6 +120,13 @@ class CameraTopics:
     def view_error(self) -> str:
         """Per-view calibration RMS (``PointStamped`` x, px)."""
         return self._under(VIEW_ERROR)
+
+    @property
+    def uncertainty(self) -> str:
+        """The calibration's projection uncertainty (1 sigma, px) over the image: one
+        ``32FC1`` ``Image`` whose pixel ``(i, j)`` of ``rows x cols`` holds the value at the
+        camera's pixel ``(j (W - 1) / (cols - 1), i (H - 1) / (rows - 1))``."""
+        return self._under(UNCERTAINTY)
 
     @property
     def calibrated_info(self) -> str:

@@ -87,13 +87,19 @@ def _buffers(rows: Sequence[ImageRow]) -> pa.Array:
 
 @dataclass(frozen=True, slots=True)
 class PointsRow:
-    """The positions ``(N, 2)`` of a frame's 2D points (their style is logged statically)."""
+    """The positions ``(N, 2)`` of a frame's 2D points, or ``(N, 3)`` of its 3D points
+    (their style is logged statically)."""
 
     positions: np.ndarray
 
     def key(self) -> tuple[Any, ...]:
-        """Every points row goes with the others."""
-        return (PointsRow,)
+        """Points rows of one dimension go together."""
+        return (PointsRow, self.dimension)
+
+    @property
+    def dimension(self) -> int:
+        """2 or 3."""
+        return 3 if self.positions.ndim == 2 and self.positions.shape[1] == 3 else 2
 
     @property
     def nbytes(self) -> int:
@@ -102,13 +108,16 @@ class PointsRow:
 
     def archetype(self) -> Any:
         """The row as one ``log`` call's archetype."""
-        return rr.Points2D(self.positions)
+        return (rr.Points3D if self.dimension == 3 else rr.Points2D)(self.positions)
 
     @staticmethod
     def columns(rows: Sequence[PointsRow]) -> Any:
-        """The positions of ``rows``, one list per row."""
-        positions = [np.asarray(row.positions, dtype=np.float32).reshape(-1, 2) for row in rows]
-        return rr.Points2D.columns(positions=np.concatenate(positions)).partition(
+        """The positions of ``rows`` (one dimension), one list per row."""
+        dimension = rows[0].dimension
+        positions = [np.asarray(row.positions, dtype=np.float32).reshape(-1, dimension)
+                     for row in rows]
+        archetype = rr.Points3D if dimension == 3 else rr.Points2D
+        return archetype.columns(positions=np.concatenate(positions)).partition(
             [len(p) for p in positions])
 
 

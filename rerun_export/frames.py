@@ -65,6 +65,16 @@ class CameraFrames:
             if shown == stamp_ns:
                 self.live[entity] = max(shown, until_ns)
 
+    def repeats(self, image_key: Buffer) -> bool:
+        """Whether an image's content repeats the last image's byte for byte (a held pose in
+        a log without sensor noise).
+
+        >>> frames = CameraFrames()
+        >>> frames.stale(10, b"board"), frames.repeats(b"board"), frames.repeats(b"moved")
+        ([], True, False)
+        """
+        return _same(self.image_key, image_key)
+
     def stale(self, stamp_ns: int, image_key: Buffer | None = None) -> list[str]:
         """Overlays of frames older than ``stamp_ns``; forgotten once returned. An image
         whose ``image_key`` (content) repeats the last one's is the same view (a held pose):

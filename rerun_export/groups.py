@@ -24,7 +24,8 @@ _CAMERA_KINDS = frozenset({Kind.IMAGE, Kind.CAMERA_INFO, Kind.CALIBRATED_INFO})
 #: kinds whose namespace is a camera's (text, skipped and other series name none)
 _OF_A_CAMERA = _CAMERA_KINDS | {Kind.RECTIFIED, Kind.DETECTIONS, Kind.RESIDUALS,
                                 Kind.VIEW_ERROR, Kind.PROCESSED_IMAGE, Kind.MASK,
-                                Kind.POINT_2D, Kind.SCALAR, Kind.EDGES, Kind.GROUND_TRUTH}
+                                Kind.POINT_2D, Kind.SCALAR, Kind.EDGES, Kind.GROUND_TRUTH,
+                                Kind.UNCERTAINTY}
 
 
 def related_groups(readers: Sequence[LogReader], chosen: Sequence[Sequence[str]],

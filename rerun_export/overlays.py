@@ -25,6 +25,7 @@ __all__ = [
     "project_target",
     "stamp_free_key",
     "stamp_free_view",
+    "target_in_camera",
 ]
 
 U8 = npt.NDArray[np.uint8]
@@ -61,16 +62,23 @@ def edge_classes(edges_mono: U8) -> U8:
     return np.where(edges_mono > 127, EDGE, BACKGROUND).astype(np.uint8)
 
 
+def target_in_camera(points_in_target: F64, *, position_m: F64, orientation_xyzw: F64) -> F64:
+    """The target points ``(M, 3)`` in the camera optical frame, given the target's pose in
+    it: ``p_camera = R(q) p_target + t`` (none for a quaternion that is not one)."""
+    norm = float(np.linalg.norm(orientation_xyzw))
+    if not math.isfinite(norm) or norm == 0:
+        return np.zeros((0, 3))
+    camera_from_target = rotation_from_quat_xyzw(np.asarray(orientation_xyzw) / norm)
+    return np.asarray(points_in_target @ camera_from_target.T + np.asarray(position_m))
+
+
 def project_target(
     points_in_target: F64, *, position_m: F64, orientation_xyzw: F64, model: CameraModel
 ) -> F64:
     """Pixels ``(M, 2)`` of the target points in front of the camera, given the target's
     pose in the camera optical frame: ``p_camera = R(q) p_target + t``."""
-    norm = float(np.linalg.norm(orientation_xyzw))
-    if not math.isfinite(norm) or norm == 0:
-        return np.zeros((0, 2))
-    camera_from_target = rotation_from_quat_xyzw(np.asarray(orientation_xyzw) / norm)
-    points_in_camera = points_in_target @ camera_from_target.T + np.asarray(position_m)
+    points_in_camera = target_in_camera(points_in_target, position_m=position_m,
+                                        orientation_xyzw=orientation_xyzw)
     in_front = points_in_camera[:, 2] > 1e-6
     if not np.any(in_front):
         return np.zeros((0, 2))

@@ -4,10 +4,12 @@ Two sources, in order of preference:
 
 1. the simulator's scenario record (``/camlog/scenario``): every camera's ``world_from_camera``
    (4, 4), matched by namespace or else by ``frame_id`` (a resynced copy keeps the frame);
-2. a stereo right camera's projection ``P[0, 3] = -fx' * B``: the right camera sits ``B``
-   metres along the left camera's x axis (rectified frames; P carries no rotation). The left
-   camera is the sibling namespace whose last part says ``left`` where this one says
-   ``right``. Without a scenario the world is the left camera's optical frame.
+2. a stereo right camera's projection ``P[0, 3] = -fx' * B``: the right camera's rectified
+   frame sits ``B`` metres along the left one's x axis, and each camera's rectified frame is
+   its optical frame turned by its ``R`` (``x_rect = R x``), so that
+   ``left_from_right = [R_l^T R_r | R_l^T (B, 0, 0)]``. The left camera is the sibling
+   namespace whose last part says ``left`` where this one says ``right``. Without a
+   scenario the world is the left camera's optical frame.
 """
 
 from __future__ import annotations
@@ -58,6 +60,16 @@ def stereo_partner(namespace: str, namespaces: Sequence[str]) -> str | None:
         return None
     partner = f"{parent}/{last.replace('right', 'left')}"
     return partner if partner in namespaces else None
+
+
+def _rectification(info: CameraInfo | None) -> F64:
+    """A camera's rectifying rotation ``R`` (3, 3); the identity when it has none."""
+    if info is None:
+        return np.eye(3)
+    r = np.asarray(info.r, dtype=np.float64)
+    rotation = r.shape == (3, 3) and np.all(np.isfinite(r)) and \
+        np.allclose(r @ r.T, np.eye(3), atol=1e-6) and np.linalg.det(r) > 0
+    return r if rotation else np.eye(3)
 
 
 def _matrix(value: Any) -> F64 | None:
@@ -112,7 +124,9 @@ def rig_poses(
             if world_is_scenario:
                 continue  # the left camera is not in a scenario world: nothing to anchor to
             poses[partner], source[partner] = np.eye(4), "baseline"
+        rect_left, rect_right = _rectification(infos.get(partner)), _rectification(info)
         left_from_right = np.eye(4)
-        left_from_right[0, 3] = b
+        left_from_right[:3, :3] = rect_left.T @ rect_right
+        left_from_right[:3, 3] = rect_left.T @ np.array([b, 0.0, 0.0])
         poses[ns], source[ns] = poses[partner] @ left_from_right, "baseline"
     return Rig(poses, source, world_is_scenario)

@@ -3,7 +3,9 @@
 Entity paths (``{ns}`` is a camera namespace such as ``stereo_camera/left``)::
 
     world                                  ViewCoordinates (Z up with a scenario, else RDF)
-    world/{ns}                             Transform3D (rig pose, when known) + Pinhole
+    world/{ns}                             Transform3D (rig pose, when known), Pinhole (a
+                                           pinhole camera's) and CameraInfo (the camera model
+                                           in full: rerun_export.camera_records)
     world/{ns}/image                       Image, or EncodedImage (JPEG/PNG)
     world/{ns}/calibration/detections      the calibration's annotated image
     world/{ns}/calibration/corners         Points2D, corners of a used view
@@ -18,6 +20,24 @@ Entity paths (``{ns}`` is a camera namespace such as ``stereo_camera/left``)::
     metrics/{series}/{ns}                  Scalars (view RMS px, red count, offset ms, ...)
     text/{topic}                           TextDocument (scenario, summaries, stats)
 
+A camera whose lens is not a pinhole (distortion, a fisheye, a rectified stereo camera)
+cannot be shown by rerun's Pinhole as it is. Its raw image and every overlay drawn through
+its real lens move to a 2D space of their own, and the camera gets pinhole views
+(:mod:`rerun_export.lens`) made from its raw images::
+
+    raw/{ns}/image, raw/{ns}/...           the raw image and the overlays listed above
+    world/{ns}                             Transform3D (rig pose) and CameraInfo
+    world/{ns}/{view}                      Pinhole of the view (undistorted, wide or
+                                           rectified), Transform3D (R for rectified) and
+                                           PinholeView (its K in float64, field, coverage)
+    world/{ns}/{view}/image                the raw image remapped to the view
+    world/{ns}/{view}/uncertainty          the calibration's projection uncertainty map
+    world/{ns}/calibration/board           Points3D, a used view's corners where the
+                                           calibration solved them (camera frame)
+    world/{ns}/ground_truth/{target}       Points3D, the target's points (camera frame)
+
+rerun projects the 3D entities onto every view (in the 3D view and in a view's 2D view).
+
 Processor outputs recorded in the log go under the camera of their source image, at the
 entity their processor declared. Outputs known only by name (the chapter's
 ``/image_converter/...``) go under the camera whose images carry their ``frame_id``; a frame
@@ -29,17 +49,22 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from replay.messages import F64, CameraInfo
-from replay.records import Scenario
+from replay.msgtypes import FOXGLOVE_COMPRESSED_VIDEO as VIDEO
+from replay.pinhole_views import PinholeView, pinhole_views
+from replay.records import CalibrationSummary, Scenario
+from replay.wire import record_msgtype
 
+from .options import UNDISTORTED_SCALE
 from .rig import Rig, rig_poses
 from .survey import Survey
 from .topics import Kind, Route
 
-__all__ = ["CameraPlan", "ScenePlan", "SeriesPlan", "camera_entity", "plan_scene"]
+__all__ = ["CameraPlan", "ScenePlan", "SeriesPlan", "camera_entity", "plan_scene",
+           "raw_entity"]
 
 #: kinds whose messages are drawn inside a camera's 2D view
 _VIEWABLE = frozenset({Kind.IMAGE, Kind.DETECTIONS, Kind.RESIDUALS, Kind.MASK,
-                       Kind.POINT_2D, Kind.EDGES, Kind.GROUND_TRUTH})
+                       Kind.POINT_2D, Kind.EDGES, Kind.GROUND_TRUTH, Kind.UNCERTAINTY})
 #: kind -> (metrics group, view title); a processor's scalar names its own
 SERIES: dict[Kind, tuple[str, str]] = {
     Kind.VIEW_ERROR: ("calibration_view_rms_px", "calibration view RMS (px)"),
@@ -54,9 +79,15 @@ def camera_entity(namespace: str) -> str:
     return "world/" + namespace.strip("/")
 
 
+def raw_entity(namespace: str) -> str:
+    """``/stereo_camera/left`` -> ``raw/stereo_camera/left``."""
+    return "raw/" + namespace.strip("/")
+
+
 @dataclass
 class CameraPlan:
-    """One camera: its namespace, entity, frame and the topics that feed it."""
+    """One camera: its namespace, entity, frame and the topics that feed it; the pinhole
+    views of its lens (none for a pinhole camera) as its first camera_info describes it."""
 
     namespace: str
     entity: str
@@ -66,6 +97,20 @@ class CameraPlan:
     calibrated_info_topic: str | None = None
     viewable: bool = False
     world_from_camera: F64 | None = None
+    info: CameraInfo | None = None
+    views: list[PinholeView] = field(default_factory=list)
+
+    @property
+    def raw_entity(self) -> str:
+        """Where the raw image and its overlays go: the camera entity of a pinhole camera,
+        ``raw/{ns}`` (a 2D space of its own) for one shown through views."""
+        return raw_entity(self.namespace) if self.views else self.entity
+
+    @property
+    def info_topics(self) -> list[str]:
+        """The camera_info topics that describe the camera, the one it is drawn from first
+        (the calibration's, when the log has one)."""
+        return [t for t in (self.calibrated_info_topic, self.info_topic) if t is not None]
 
 
 @dataclass(frozen=True)
@@ -93,6 +138,7 @@ class ScenePlan:
     rejected: dict[str, dict[int, str]] = field(default_factory=dict)  # ns -> stamp -> why
     skipped: dict[str, str] = field(default_factory=dict)  # topic -> why it is not shown
     counts: dict[str, int] = field(default_factory=dict)  # topic -> messages in the log
+    undistorted: float | None = UNDISTORTED_SCALE  # the views' size (None: no views)
 
 
 def image_entity(kind: Kind, topic: str) -> str:
@@ -131,17 +177,34 @@ def _targets(scenario: Scenario | None) -> dict[str, F64]:
     return {t.name: points for t in targets if (points := t.points_in_target()) is not None}
 
 
-def _plane_distance_m(rig: Rig) -> float:
-    """Frustum depth: 2.5 baselines of the closest camera pair, else 0.1 m."""
+def _plane_distance_m(rig: Rig, summary: CalibrationSummary | None) -> float:
+    """Frustum depth: 2.5 baselines of the closest camera pair, else 0.1 m; in a
+    calibration's recording at least twice its working range, so that the boards it solved
+    show in 3D in front of each camera's image, over their place in it."""
     positions = [pose[:3, 3] for pose in rig.world_from_camera.values()]
     gaps = [float(((a - b) ** 2).sum() ** 0.5) for i, a in enumerate(positions)
             for b in positions[i + 1:]]
     gaps = [g for g in gaps if g > 1e-6]
-    return min(max(2.5 * min(gaps), 0.02), 1.0) if gaps else 0.1
+    depth = min(max(2.5 * min(gaps), 0.02), 1.0) if gaps else 0.1
+    ranges = [c.uncertainty.range_m for c in summary.cameras
+              if c.uncertainty is not None] if summary is not None else []
+    return max([depth, *(2.0 * r for r in ranges)])
 
 
-def plan_scene(found: Survey) -> ScenePlan:
-    """Lay out cameras, overlays, series and documents for the surveyed topics."""
+def _views(info: CameraInfo, scale: float) -> list[PinholeView]:
+    """The pinhole views of a camera (none for a lens camlog does not know: it is drawn
+    as rerun can, its raw image under a pinhole of its K)."""
+    try:
+        return pinhole_views(info, scale=scale)
+    except (KeyError, ValueError):
+        return []
+
+
+def plan_scene(found: Survey, *,
+               undistorted_scale: float | None = UNDISTORTED_SCALE) -> ScenePlan:
+    """Lay out cameras, overlays, series and documents for the surveyed topics; cameras
+    whose lens is not a pinhole get pinhole views ``undistorted_scale`` times their raw
+    images' size (None: none, their raw images go under a pinhole of their K)."""
     routes = dict(found.routes)
     cameras: dict[str, CameraPlan] = {}
     skipped: dict[str, str] = {}
@@ -193,9 +256,13 @@ def plan_scene(found: Survey) -> ScenePlan:
             cameras[route.namespace].viewable = True
     infos: dict[str, CameraInfo] = {}
     for ns, cam in cameras.items():
-        for info_topic in (cam.calibrated_info_topic, cam.info_topic):  # calibrated first
-            if info_topic is not None and info_topic in found.camera_infos and ns not in infos:
+        for info_topic in cam.info_topics:  # calibrated first
+            if info_topic in found.camera_infos and ns not in infos:
                 infos[ns] = found.camera_infos[info_topic]
+        if undistorted_scale is not None and ns in infos and cam.image_topic is not None \
+                and record_msgtype(found.topics[cam.image_topic].msgtype) != VIDEO:
+            cam.info = infos[ns]
+            cam.views = _views(infos[ns], undistorted_scale)
     ordered = dict(sorted(cameras.items()))
     rig = rig_poses(list(ordered), frame_ids={ns: c.frame_id for ns, c in ordered.items()},
                     infos=infos, scenario=found.scenario)
@@ -212,7 +279,7 @@ def plan_scene(found: Survey) -> ScenePlan:
         cameras=ordered,
         frames=frames,
         rig=rig,
-        image_plane_distance_m=_plane_distance_m(rig),
+        image_plane_distance_m=_plane_distance_m(rig, found.calibration_summary),
         series=series,
         rectified=sorted({image_entity(r.kind, t) for t, r in routes.items()
                           if r.kind is Kind.RECTIFIED}),
@@ -224,4 +291,5 @@ def plan_scene(found: Survey) -> ScenePlan:
         if found.calibration_summary is not None else {},
         skipped=skipped,
         counts={name: info.count for name, info in found.topics.items()},
+        undistorted=undistorted_scale,
     )

@@ -48,6 +48,7 @@ class Kind(Enum):
     RECTIFIED = "rectified"  # a rectified image, shown in its own view
     DETECTIONS = "detections"  # calibration image with the drawn corners
     RESIDUALS = "residuals"  # calibration corners and residual arrows (JSON)
+    UNCERTAINTY = "uncertainty"  # the calibration's projection uncertainty map (32FC1)
     VIEW_ERROR = "view_error"  # per-view calibration RMS (PointStamped x, px)
     PROCESSED_IMAGE = "processed_image"  # a processor's image, shown in its own view
     MASK = "mask"  # a processor's mask (mono8, or rgb8 with a blue marker) over the camera
@@ -98,7 +99,9 @@ BY_FRAME: dict[str, Route] = {
 }
 #: type -> (suffix, kind) tried in order; the camera namespace is what precedes the suffix
 SUFFIXES: dict[str, tuple[tuple[str, Kind], ...]] = {
-    IMAGE: ((f"/{names.DETECTIONS}", Kind.DETECTIONS), (f"/{names.IMAGE_RECT}", Kind.RECTIFIED),
+    IMAGE: ((f"/{names.DETECTIONS}", Kind.DETECTIONS),
+            (f"/{names.UNCERTAINTY}", Kind.UNCERTAINTY),
+            (f"/{names.IMAGE_RECT}", Kind.RECTIFIED),
             (f"/{names.IMAGE_RAW}", Kind.IMAGE), ("/image", Kind.IMAGE)),
     CAMERA_INFO: ((f"/{names.CALIBRATED_INFO}", Kind.CALIBRATED_INFO),
                   (f"/{names.CAMERA_INFO}", Kind.CAMERA_INFO), ("/calibration", Kind.CAMERA_INFO)),

@@ -28,6 +28,7 @@ from replay.selection import merge_in_time, select_topics, window_ns
 from .blueprint import make_blueprint
 from .groups import related_groups
 from .logger import LoggerOptions, SceneLogger
+from .options import UNDISTORTED_SCALE
 from .paths import output_of
 from .scene import ScenePlan, plan_scene
 from .sink import Destination, RecordingSink
@@ -40,7 +41,8 @@ __all__ = ["ExportSession", "ViewResult", "image_bytes", "open_logs", "size_note
 @dataclass(frozen=True)
 class ViewResult:
     """What :func:`view_logs` logged: rows per entity, the cameras, what it left out
-    (``skipped``: topic -> why; ``duplicates``: topics a later log repeats, not read)."""
+    (``skipped``: topic -> why; ``duplicates``: topics a later log repeats, not read), how
+    many raw images and how many images of pinhole views (``remapped``)."""
 
     output: Path | None
     messages: int
@@ -51,6 +53,8 @@ class ViewResult:
     duplicates: list[str] = field(default_factory=list)
     wall_s: float = 0.0
     recordings: int = 1  # unrelated logs get a recording each (see rerun_export.groups)
+    images: int = 0
+    remapped: int = 0
 
 
 @dataclass
@@ -81,11 +85,14 @@ class ExportSession:
 
 def open_logs(stack: contextlib.ExitStack, paths: Sequence[Path], *,
               topics: Sequence[str] | None, start_s: float | None, end_s: float | None,
-              recover: bool) -> ExportSession:
-    """Open ``paths`` in ``stack``, choose topics and window, survey and plan the scene."""
+              recover: bool,
+              undistorted_scale: float | None = UNDISTORTED_SCALE) -> ExportSession:
+    """Open ``paths`` in ``stack``, choose topics and window, survey and plan the scene
+    (pinhole views ``undistorted_scale`` times the raw images, see :func:`plan_scene`)."""
     readers = _open_readers(stack, paths, recover=recover)
     where = str(paths[0]) if len(paths) == 1 else f"{len(paths)} logs"
-    return _session(readers, _chosen(readers, topics, where), start_s, end_s)
+    return _session(readers, _chosen(readers, topics, where), start_s, end_s,
+                    undistorted_scale)
 
 
 def _open_readers(stack: contextlib.ExitStack, paths: Sequence[Path], *,
@@ -112,12 +119,12 @@ def _chosen(readers: Sequence[LogReader], topics: Sequence[str] | None,
 
 
 def _session(readers: list[LogReader], chosen: list[list[str]], start_s: float | None,
-             end_s: float | None) -> ExportSession:
+             end_s: float | None, undistorted_scale: float | None) -> ExportSession:
     """Survey and plan ``readers``; the time window counts from the earliest of them."""
     origin = min(r.start_ns for r in readers if r.start_ns is not None)
     start_ns, end_ns = window_ns(origin, start_s, end_s)
     found = survey(readers, chosen, start_ns, end_ns)
-    plan = plan_scene(found)
+    plan = plan_scene(found, undistorted_scale=undistorted_scale)
     owned = [[t for t in found.topics if found.owner[t] == i] for i in range(len(readers))]
     total = sum(info.count for info in found.topics.values())
     return ExportSession(readers, owned, dict(found.owner), start_ns, end_ns, plan, total,
@@ -155,11 +162,13 @@ def view_logs(
         readers = _open_readers(stack, paths, recover=recover)
         where = str(paths[0]) if len(paths) == 1 else f"{len(paths)} logs"
         chosen = _chosen(readers, topics, where)
-        whole = _session(readers, chosen, start_s, end_s)
+        scale = options.undistorted_scale
+        whole = _session(readers, chosen, start_s, end_s, scale)
         assert whole.found is not None
         groups = related_groups(readers, chosen, whole.found) if len(readers) > 1 else [[0]]
         sessions = [whole] if len(groups) == 1 else [
-            _session([readers[i] for i in group], [chosen[i] for i in group], start_s, end_s)
+            _session([readers[i] for i in group], [chosen[i] for i in group], start_s, end_s,
+                     scale)
             for group in groups if any(chosen[i] for i in group)]
         if say is not None:
             say(size_note(sessions, options))
@@ -188,7 +197,8 @@ def view_logs(
     duplicates = [d for session in sessions for d in session.duplicates]
     return ViewResult(output, sum(n for _, n in loggers), dict(counts),
                       cameras, skipped, warnings, duplicates, time.perf_counter() - started,
-                      recordings=len(sessions))
+                      recordings=len(sessions), images=sum(lg.images for lg, _ in loggers),
+                      remapped=sum(lg.remapped for lg, _ in loggers))
 
 
 def _name(path: Path | str) -> str:

@@ -7,8 +7,9 @@ The pass copies every input message, and adds per camera frame the calibrated ca
 the frame with its corners drawn (the first frame of each view and every frame in none, an
 even sample of at most :data:`DRAWN_FRAMES` of them: a waved board makes every frame a view,
 and a full-colour image of each was most of what the log's writer compressed), the view's
-error and residuals (every view) and, for stereo, the rectified image. It also hands back
-the rectified images of one joint view for the report.
+error and residuals (every view, with the board points where the solution puts them) and, for
+stereo, the rectified image; at the end, each camera's projection uncertainty over its image.
+It also hands back the rectified images of one joint view for the report.
 """
 
 from __future__ import annotations
@@ -26,17 +27,18 @@ from replay.camera import rectify_maps
 from replay.formats import LogReader, LogWriter
 from replay.formats.background import BackgroundWriter
 from replay.frames import encode_image
-from replay.messages import CameraInfo, Image, PointStamped
+from replay.messages import F64, CameraInfo, Image, PointStamped
 from replay.progress import progress_bar
 from replay.records import CalibrationSummary, ViewResiduals
 from replay.topics import CALIBRATION_SUMMARY, CameraTopics
 
 from .pixels import TopicFrames
 from .solving import CalibratedCamera, RigSolution
+from .statistics import CameraStatistics
 from .views import DetectedFrame
 
 __all__ = ["DRAWN_FRAMES", "EVIDENCE_ZSTD_LEVEL", "Evidence", "drawn_frames", "write_evidence",
-           "write_summary"]
+           "write_summary", "write_uncertainty"]
 
 #: zstd level of calibration.mcap's chunks: camera frames are noise that compresses little,
 #: and the default level 3 was most of the writer thread's work (the 12-pair 640x480
@@ -152,13 +154,38 @@ def write_evidence(reader: LogReader, writer: LogWriter | BackgroundWriter,
                 writer.write(topics.residuals, ViewResiduals(
                     stamp, image.frame_id, rms, np.round(corners, 4),
                     np.round(joint.residuals_px[view], 5), outliers,
-                    until_ns=ends[ns].get(view)).to_message(),
+                    until_ns=ends[ns].get(view),
+                    corners_in_camera_m=_board_in_camera(
+                        board, frame, joint.camera_from_board(view))).to_message(),
                     log_time_ns=log_time)
     pair = (rectified_shown[0], rectified_shown[1]) if len(rectified_shown) == 2 else None
     return Evidence(pair)
+
+
+def _board_in_camera(board: Board, frame: DetectedFrame, camera_from_board: F64 | None
+                     ) -> F64 | None:
+    """The board points of a view's corners ``(N, 3)`` where the solution puts them, in the
+    camera's optical frame (m, rounded to 0.1 um); None without a solved pose."""
+    if camera_from_board is None or frame.detection is None:
+        return None
+    points = board.points_in_board()[frame.detection.ids]
+    return np.round(points @ camera_from_board[:3, :3].T + camera_from_board[:3, 3], 7)
 
 
 def write_summary(writer: LogWriter | BackgroundWriter, summary: CalibrationSummary, *,
                   log_time_ns: int) -> None:
     """The calibration summary, at the end of the log (``log_time_ns``: its last time)."""
     writer.write(CALIBRATION_SUMMARY, summary.to_message(indent=1), log_time_ns=log_time_ns)
+
+
+def write_uncertainty(writer: LogWriter | BackgroundWriter, solved: RigSolution,
+                      statistics: Sequence[CameraStatistics], *, stamp_ns: int,
+                      log_time_ns: int) -> None:
+    """Each camera's projection uncertainty at the working range (1 sigma, px) over its
+    image, as a ``32FC1`` image of the grid's values (see
+    :attr:`~replay.topics.CameraTopics.uncertainty`), at the end of the log."""
+    for camera, stats in zip(solved.cameras, statistics, strict=True):
+        sigma_px = stats.uncertainty.sigma_px.astype(np.float32)
+        writer.write(CameraTopics(camera.views.source.namespace).uncertainty,
+                     Image(stamp_ns, camera.camera_info.frame_id, "32FC1", sigma_px),
+                     log_time_ns=log_time_ns)

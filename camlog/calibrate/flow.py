@@ -38,7 +38,7 @@ from ..errors import CalibrationError, InputError, UsageError
 from ..processing.cameras import cameras_in, find_camera
 from ..requests.calibrate import CalibrateRequest
 from ..requests.fields import RequestError
-from .evidence import EVIDENCE_ZSTD_LEVEL, write_evidence, write_summary
+from .evidence import EVIDENCE_ZSTD_LEVEL, write_evidence, write_summary, write_uncertainty
 from .instants import ViewsOfRig
 from .offsets import measure_offsets
 from .remeasure import remeasured_rig
@@ -123,6 +123,8 @@ def _write_report(reader: LogReader, folder: Path, solved: RigSolution, *, board
         statistics = beside.result() if beside is not None else _statistics(solved, board)
         summary = build_summary(solved, statistics, board=board, options=options,
                                 scenario=scenario)
+        write_uncertainty(log, solved, statistics, stamp_ns=reader.end_ns or 0,
+                          log_time_ns=reader.end_ns or 0)
         write_summary(log, summary, log_time_ns=reader.end_ns or 0)
         write_files(folder, solved, statistics, summary=summary, evidence=evidence,
                     camera_name=camera_name)

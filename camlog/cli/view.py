@@ -28,15 +28,18 @@ def run(args: argparse.Namespace) -> int:
 
     options = LoggerOptions(every=request.every, jpeg_quality=request.jpeg_quality,
                             residual_scale=request.residual_scale,
-                            ground_truth=request.ground_truth)
+                            ground_truth=request.ground_truth,
+                            undistorted_scale=request.undistorted_scale
+                            if request.undistort else None)
     result = view_logs(
         request.logs, output=request.output, spawn=request.spawn, connect=request.connect,
         bind=request.bind, port=request.port, overwrite=request.overwrite,
         topics=request.topics, start_s=request.start, end_s=request.end,
         recover=request.recover, options=options, progress=request.progress, say=print)
-    images = sum(n for entity, n in result.counts.items() if entity.endswith("/image"))
-    print(f"logged {result.messages} messages ({images} images, {len(result.cameras)} cameras: "
-          f"{', '.join(result.cameras) or 'none'}) in {result.wall_s:.2f} s")
+    remapped = f", {result.remapped} of pinhole views" if result.remapped else ""
+    print(f"logged {result.messages} messages ({result.images} images{remapped}, "
+          f"{len(result.cameras)} cameras: {', '.join(result.cameras) or 'none'}) in "
+          f"{result.wall_s:.2f} s")
     if result.recordings > 1:
         print(f"{result.recordings} recordings: the logs are unrelated (no shared camera at a "
               "shared time), each keeps its own timeline")

@@ -130,7 +130,8 @@ def play_log(request: PlayRequest, *, options: LoggerOptions | None = None,
     count = 0
     with contextlib.ExitStack() as stack:
         session = open_logs(stack, [Path(p) for p in paths], topics=topics, start_s=start_s,
-                            end_s=end_s, recover=recover)
+                            end_s=end_s, recover=recover,
+                            undistorted_scale=(options or LoggerOptions()).undistorted_scale)
         destination: _Destination
         logger: SceneLogger | None = None
         if to_rerun:

@@ -118,6 +118,8 @@ def _frames(log: Location, topic: str, start_s: float | None, end_s: float | Non
 def export_images(request: ExportRequest) -> ExportResult:
     """Write the frames of ``topic`` as image files into ``output`` (or one MP4 there)."""
     log, topic, output, fmt = request.log, request.topic, request.output, request.file_format
+    if topic is None:
+        raise UsageError("name the image topic to export with --topic")
     every, start_s, end_s = request.every, request.start, request.end
     jpeg_quality, overwrite, recover = request.jpeg_quality, request.overwrite, request.recover
     progress = request.progress

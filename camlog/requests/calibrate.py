@@ -105,7 +105,7 @@ class CalibrateRequest:
     model: str | None = option(
         None, "--model", choices=LENS_MODEL_NAMES, metavar="MODEL",
         help="lens model: plumb_bob (default), rational_polynomial or equidistant (OpenCV's "
-             "fisheye; 'fisheye' is accepted for it)")
+             "fisheye; 'fisheye' and Foxglove's 'kannala_brandt' are accepted for it)")
     marker: float | None = option(None, "--marker", type=float, metavar="M",
                                   help="--pattern charuco: marker side in metres (--size "
                                        "counts squares)")

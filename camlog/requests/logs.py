@@ -11,7 +11,7 @@ from replay.format_names import DEFAULT_CRF, DEFAULT_START_NS, STILL_CODECS, VID
 from replay.storage import Location
 
 from . import fields as common
-from .fields import option, required
+from .fields import RequestError, option
 from .values import bounded_int, name, number, output_path
 
 __all__ = ["ConvertRequest", "ExportRequest", "ImportRequest", "InfoRequest"]
@@ -72,15 +72,28 @@ class ConvertRequest:
 
 @dataclass(frozen=True, kw_only=True)
 class ExportRequest:
-    """Write the images of a topic as PNG/JPEG files named by stamp, or one MP4."""
+    """Write the images of a topic as PNG/JPEG files named by stamp, or one MP4; or the
+    camera models of a rerun recording as calibration files."""
 
-    log: Location = common.input_log()
-    topic: str = required("--topic", metavar="T",
-                          help="image topic (sensor_msgs/Image or CompressedImage, any "
-                               "encoding)")
+    epilog: ClassVar[str] = (
+        "--calibration reads a rerun recording (.rrd) that camlog view wrote: every camera's "
+        "model (distortion model, D, K, R, P, size), as logged beside its Pinhole, becomes a "
+        "camera_info_manager YAML file in DIR named after the camera (stereo/left -> "
+        "stereo_left.yaml), every number as it was in the log. A Foxglove kannala_brandt "
+        "model is written as ROS's equidistant (the same k1..k4)."
+    )
+
+    log: Location = common.input_log("input log (never modified); with --calibration a rerun "
+                                     "recording (.rrd)")
+    topic: str | None = option(None, "--topic", metavar="T",
+                               help="image topic (sensor_msgs/Image or CompressedImage, any "
+                                    "encoding)")
+    calibration: bool = option(False, "--calibration", action="store_true", batch=False,
+                               help="write the camera models of a rerun recording (.rrd) "
+                                    "as calibration YAML files instead")
     output: Path = common.output(
-        "folder for the image files (or the MP4); with --format mp4 a name ending in .mp4 is "
-        "the video itself", metavar="DIR", checked=False)
+        "folder for the image files (or the MP4; the calibration files); with --format mp4 a "
+        "name ending in .mp4 is the video itself", metavar="DIR", checked=False)
     format: str | None = option(None, "--format", choices=("png", "jpg", "mp4"),
                                 help="png (default; 16-bit images stay 16-bit), jpg, or mp4 "
                                      "(one video; the default when DIR ends in .mp4)")
@@ -95,6 +108,11 @@ class ExportRequest:
     overwrite: bool = common.overwrite()
     recover: bool = common.recover()
     progress: bool = common.progress(True)
+
+    def __post_init__(self) -> None:
+        if (self.topic is None) == (not self.calibration):
+            raise RequestError(ExportRequest, "give {topic} (the images of a log) or "
+                                              "{calibration} (the camera models of a .rrd)")
 
     @property
     def file_format(self) -> str:

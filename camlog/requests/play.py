@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import ClassVar
 
 from replay.format_names import LOG_TIMES
+from rerun_export.options import UNDISTORTED_SCALE
 
 from . import fields as common
 from .fields import option
@@ -66,7 +67,12 @@ class ViewRequest(ToViewer):
 
     epilog: ClassVar[str] = (
         "Every camera is an entity world/NS with its Pinhole (from camera_info) and images; "
-        "a stereo rig gets its transform from the scenario record or the right camera's "
+        "a camera whose lens is not a pinhole (distortion, fisheye, a rectified stereo "
+        "camera) keeps its raw images and their overlays in raw/NS and gets pinhole views "
+        "world/NS/undistorted (wide for a fisheye that sees further, rectified for a stereo "
+        "pair) made from them, where the 3D view is true. Beside each Pinhole the camera's "
+        "full model (camlog export REC.rrd --calibration writes it back as YAML). "
+        "A stereo rig gets its transform from the scenario record or the right camera's "
         "P[0,3]. Calibration corners and residual arrows, red-pixel masks and centroids, "
         "Canny edges and projected ground truth are drawn on the images they belong to "
         "(processor outputs by frame_id); rectified images, per-view errors, red-pixel "
@@ -96,5 +102,13 @@ class ViewRequest(ToViewer):
     ground_truth: bool = option(True, "--no-ground-truth", action="store_const", const=False,
                                 help="do not project the simulator's target points into the "
                                      "images")
+    undistort: bool = option(True, "--no-undistort", action="store_const", const=False,
+                             help="make no pinhole views of distorted cameras: their raw "
+                                  "images go under a Pinhole of their K, as rerun alone "
+                                  "shows them (wrong off the image centre)")
+    undistorted_scale: float = option(
+        UNDISTORTED_SCALE, "--undistorted-scale", type=number(above=0.0, high=4.0), metavar="S",
+        help=f"the pinhole views' width and height, S times the raw image's (default "
+             f"{UNDISTORTED_SCALE:g}: a quarter of its pixels; 1 for full size)")
     recover: bool = common.recover()
     progress: bool | None = common.progress()

@@ -45,7 +45,10 @@ class ViewResiduals(JsonRecord):
     """One used calibration view: detected ``corners_px`` (N, 2) and ``residuals_px`` (N, 2),
     observed minus reprojected, the view's RMS over its inlier corners and the indices of
     the corners left out as outliers. A held pose's view is stamped at its first frame;
-    ``until_ns`` is the stamp of the last frame it covers (None: that frame alone)."""
+    ``until_ns`` is the stamp of the last frame it covers (None: that frame alone).
+    ``corners_in_camera_m`` (N, 3): where the solution puts the board points of the corners,
+    in the camera's optical frame (the calibrated model images them at ``corners_px -
+    residuals_px``)."""
 
     what = "residuals record"
 
@@ -56,6 +59,7 @@ class ViewResiduals(JsonRecord):
     residuals_px: F64
     outliers: list[int] = field(default_factory=list)
     until_ns: int | None = None
+    corners_in_camera_m: F64 | None = field(default=None, metadata=OMIT_NONE)
 
     def __post_init__(self) -> None:
         corners = np.asarray(self.corners_px, dtype=np.float64).reshape(-1, 2)
@@ -64,6 +68,11 @@ class ViewResiduals(JsonRecord):
             raise RecordError(f"{len(corners)} corners but {len(residuals)} residuals")
         object.__setattr__(self, "corners_px", corners)
         object.__setattr__(self, "residuals_px", residuals)
+        if self.corners_in_camera_m is not None:
+            points = np.asarray(self.corners_in_camera_m, dtype=np.float64)
+            if points.shape != (len(corners), 3):
+                raise RecordError(f"{len(corners)} corners but {len(points)} board points")
+            object.__setattr__(self, "corners_in_camera_m", points)
 
 
 @dataclass(frozen=True)

@@ -4,6 +4,9 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
+from replay.pinhole_views import PinholeView
 from rerun_export.blueprint import make_blueprint
 from rerun_export.rig import Rig
 from rerun_export.scene import CameraPlan, ScenePlan
@@ -46,3 +49,27 @@ def test_several_recordings_get_a_tab_each() -> None:
     assert [v.origin for v in cells(first)] == ["world/stereo_sync/left"]
     assert [v.origin for v in cells(second)] == ["world/stereo_camera/left",
                                                  "world/stereo_camera/right"]
+
+
+def test_a_camera_shown_through_views_has_them_beside_its_raw_image() -> None:
+    lens = plan(("/fish", "fish_optical"))
+    k = np.array([[100.0, 0, 31.5], [0, 100.0, 23.5], [0, 0, 1]])
+    lens.cameras["/fish"].views = [PinholeView(name, k, 64, 48, np.eye(3), 0.8)
+                                   for name in ("undistorted", "wide")]
+    blueprint = make_blueprint(lens)
+    (cell,) = cells(blueprint.root_container)
+    assert [v.origin for v in cell.contents] == ["raw/fish", "world/fish/undistorted",
+                                                 "world/fish/wide"]
+    # the camera's 3D entities are projected into each view; the uncertainty map is not
+    undistorted = cell.contents[1]
+    assert undistorted.contents == ["$origin/**", "world/fish/calibration/board/**",
+                                    "world/fish/ground_truth/**", "- $origin/uncertainty/**"]
+    # and the camera gets a 3D view (no rig pose: at the origin), seen from just behind and
+    # above it (image up is -y), looking along its optical axis (+z)
+    (bottom,) = blueprint.root_container.contents[1:]
+    (view_3d,) = bottom.contents[0].contents
+    eye = view_3d.properties["EyeControls3D"]
+    ((x, y, z),) = eye.position.as_arrow_array().to_pylist()
+    ((tx, ty, tz),) = eye.look_target.as_arrow_array().to_pylist()
+    assert x == 0 and y < 0 and z < 0 and (tx, ty) == (0, 0) and tz > 0
+    assert eye.eye_up.as_arrow_array().to_pylist() == [[0, -1, 0]]

@@ -146,7 +146,7 @@ def test_a_calibration_log_views_the_same_in_columns(mono_calibration_log: Path,
                     logger.log(raw)
                 logger.close()
     expected = tables(outputs[False])
-    corners = "/world/simple_camera/calibration/corners:Points2D:positions"
+    corners = "/raw/simple_camera/calibration/corners:Points2D:positions"
     assert sum(row.get(corners) is not None for row in expected["header_stamp"]) >= 30
     assert tables(outputs[True]) == expected
 

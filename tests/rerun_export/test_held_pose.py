@@ -14,7 +14,7 @@ from replay import Image, open_reader, open_writer
 from replay.records import ViewResiduals
 from rerun_export import view_logs
 
-CAMERA = "/world/simple_camera"
+CAMERA = "/raw/simple_camera"  # a calibrated (distorted) camera's raw image and overlays
 CORNERS = f"{CAMERA}/calibration/corners"
 
 

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from replay.camera import CameraModel
 from replay.display import Display
 from replay.formats.base import TopicInfo
+from replay.messages import CameraInfo
 from replay.records import ProcessedOutput
 from rerun_export.scene import plan_scene
 from rerun_export.survey import Survey
@@ -79,3 +81,25 @@ def test_baseline_rig_and_plane_distance() -> None:
     plan = plan_scene(found)
     assert plan.rig.source == {"/s/left": "baseline", "/s/right": "baseline"}
     assert plan.image_plane_distance_m == pytest.approx(0.25)  # 2.5 baselines
+
+
+def test_a_distorted_camera_gets_pinhole_views_and_a_raw_space() -> None:
+    """The calibrated camera_info draws the camera; a lens that is not a pinhole sends the
+    raw image to raw/NS and gets views; a pinhole camera, or none wanted, stays as it was."""
+    found = survey_of({"/c/image_raw": (IMAGE, 5), "/c/camera_info": (INFO, 5),
+                       "/c/calibrated/camera_info": (INFO, 5), "/p/image_raw": (IMAGE, 5),
+                       "/p/camera_info": (INFO, 5)}, {"/c/image_raw": "c", "/p/image_raw": "p"})
+    ideal = CameraModel.ideal(64, 48, 1.0).camera_info(stamp_ns=0, frame_id="c")
+    distorted = CameraInfo(0, "c", 64, 48, "plumb_bob", np.array([-0.2, 0.05, 0, 0, 0]),
+                           ideal.k)
+    found.camera_infos.update({"/c/camera_info": ideal, "/c/calibrated/camera_info": distorted,
+                               "/p/camera_info": ideal})
+    plan = plan_scene(found)
+    lens, pinhole = plan.cameras["/c"], plan.cameras["/p"]
+    assert lens.info_topics == ["/c/calibrated/camera_info", "/c/camera_info"]
+    assert [v.name for v in lens.views] == ["undistorted"] and lens.info is distorted
+    assert (lens.entity, lens.raw_entity) == ("world/c", "raw/c")
+    assert pinhole.views == [] and pinhole.raw_entity == "world/p"
+    assert plan.undistorted == 0.5  # half the raw images by default
+    off = plan_scene(found, undistorted_scale=None)
+    assert off.cameras["/c"].views == [] and off.cameras["/c"].raw_entity == "world/c"

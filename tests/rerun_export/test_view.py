@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 
 from replay import CameraInfo, Image, PointStamped, Text, open_reader, open_writer
+from replay.camera import CameraModel
+from replay.frames import Color, Frame, encode_compressed
 from rerun_export import LoggerOptions, view_logs
 from rerun_export.overlays import CENTROID_MARKER, MASK_PIXEL
 from tests.rrd import load_rrd, rerun_cli
@@ -104,25 +106,54 @@ def test_calibration_corners_residuals_and_errors(mono_calibration_log: Path,
     view_logs([mono_calibration_log], output=out, progress=False,
               options=LoggerOptions(residual_scale=10.0))
     rec = load_rrd(out)
-    cam = "/world/simple_camera"
+    # the calibrated model (k1, k2) draws the camera: its raw image and overlays in a 2D
+    # space of their own, an undistorted view under the camera
+    cam, raw = "/world/simple_camera", "/raw/simple_camera"
     views = [json.loads(m.data) for m in messages(mono_calibration_log,
                                                   "/simple_camera/calibration/residuals")
              if isinstance(m, Text)]
     assert len(views) > 20
-    corners = rec.column(f"{cam}/calibration/corners", "Points2D:positions")
+    corners = rec.column(f"{raw}/calibration/corners", "Points2D:positions")
     assert [len(row) for row in corners] == [42] * len(views)
     np.testing.assert_allclose(corners[0], views[0]["corners_px"], atol=1e-3)
-    arrows = rec.column(f"{cam}/calibration/residuals", "Arrows2D:vectors")
+    arrows = rec.column(f"{raw}/calibration/residuals", "Arrows2D:vectors")
     np.testing.assert_allclose(arrows[0], np.multiply(views[0]["residuals_px"], 10.0), atol=1e-4)
     errors = rec.column("/metrics/calibration_view_rms_px/simple_camera", "Scalars:scalars")
     np.testing.assert_allclose([e[0] for e in errors], [v["rms_px"] for v in views])
-    labels = rec.column(f"{cam}/calibration/status", "Boxes2D:labels")
+    labels = rec.column(f"{raw}/calibration/status", "Boxes2D:labels")
     assert labels[0][0].startswith(f"used: view RMS {views[0]['rms_px']:.3f} px")
     detections = len(messages(mono_calibration_log, "/simple_camera/calibration/detections"))
-    assert rec.count(f"{cam}/calibration/detections", "Image:buffer") == detections
+    assert rec.count(f"{raw}/calibration/detections", "Image:buffer") == detections
     # corners of a used view are cleared when the board moves: they never linger
-    assert rec.count(f"{cam}/calibration/corners", "Clear:is_recursive") >= len(views) - 1
-    assert rec.entities_with(PINHOLE) == [cam]
+    assert rec.count(f"{raw}/calibration/corners", "Clear:is_recursive") >= len(views) - 1
+    assert rec.entities_with(PINHOLE) == [f"{cam}/undistorted"]
+    # a view image per raw image that does not repeat the last (a held pose's frames do)
+    pixels = [m.pixels.tobytes() for m in messages(mono_calibration_log,
+                                                    "/simple_camera/image_raw")
+              if isinstance(m, Image)]
+    changes = sum(i == 0 or a != pixels[i - 1] for i, a in enumerate(pixels))
+    assert rec.count(f"{raw}/image", "Image:buffer") == len(pixels) == 120
+    assert 20 < rec.count(f"{cam}/undistorted/image", "Image:buffer") == changes < 120
+    # the board at its solved poses, in 3D: the calibrated model images its corners where
+    # the residuals say (corners minus residuals)
+    board = rec.column(f"{cam}/calibration/board", "Points3D:positions")
+    assert [len(row) for row in board] == [42] * len(views)
+    (info,) = [m for m in messages(mono_calibration_log, "/simple_camera/calibrated/camera_info")
+               if isinstance(m, CameraInfo)][:1]
+    model = CameraModel.from_camera_info(info)
+    np.testing.assert_allclose(
+        model.project(np.asarray(views[0]["corners_in_camera_m"])),
+        np.subtract(views[0]["corners_px"], views[0]["residuals_px"]), atol=2e-4)
+    np.testing.assert_allclose(board[0], views[0]["corners_in_camera_m"], atol=1e-6)
+    # the uncertainty map over the undistorted view, for the whole recording
+    uncertainty = f"{cam}/undistorted/uncertainty"
+    assert rec.count(uncertainty, "Image:buffer") == 1 and uncertainty in rec.static
+    (label,) = rec.column(f"{uncertainty}/scale", "Boxes2D:labels")
+    assert label[0].startswith("projection uncertainty, 1 sigma: dark 0, yellow ")
+    assert len(rec.column(f"{uncertainty}/contours", "LineStrips2D:strips")[0]) > 0
+    # the camera model beside the view: the calibrated one, as ost.yaml holds it
+    assert rec.column(cam, "CameraInfo:k")[-1] == info.k.reshape(-1).tolist()
+    assert rec.column(cam, "CameraInfo:d")[-1] == info.d.tolist()
     verify = rerun_cli("rrd", "verify", str(out), cwd=tmp_path)
     assert verify.returncode == 0, verify.stderr
 
@@ -206,3 +237,41 @@ def test_compressed_inputs_are_stored_as_they_are(red_log: Path, tmp_path: Path)
     # PNG processor outputs are decoded to classes: the same overlays as from raw images
     assert rec.count(f"{LEFT}/red_pixels/mask", "SegmentationImage:buffer") == 20
     assert rec.count(f"{LEFT}/edges", "SegmentationImage:buffer") == 20
+
+
+def test_jpeg_images_of_a_distorted_camera_are_remapped_and_an_ideal_camera_is_as_before(
+        tmp_path: Path) -> None:
+    """A distorted camera's JPEG frames go into the recording as they are and are decoded
+    (on the worker threads) to make its view; an ideal camera gets no view and keeps its
+    entities, with its full model beside its Pinhole."""
+    ideal = CameraModel.ideal(64, 48, 1.0)
+    distorted = CameraModel(64, 48, ideal.k, "plumb_bob", np.array([-0.3, 0.1, 0, 0, 0]))
+    log = tmp_path / "two.mcap"
+    t0 = 1_700_000_000_000_000_000
+    with open_writer(log) as writer:
+        for i in range(4):
+            stamp = t0 + i * 100_000_000
+            pixels = np.full((48, 64, 3), 60 * i, np.uint8)
+            frame = Frame(stamp, "lens", pixels, Color.RGB)
+            writer.write("/lens/image_raw/compressed", encode_compressed(frame),
+                         log_time_ns=stamp)
+            writer.write("/lens/camera_info", distorted.camera_info(stamp_ns=stamp,
+                                                                    frame_id="lens"),
+                         log_time_ns=stamp)
+            writer.write("/pin/image_raw", Image(stamp, "pin", "rgb8", pixels),
+                         log_time_ns=stamp)
+            writer.write("/pin/camera_info", ideal.camera_info(stamp_ns=stamp, frame_id="pin"),
+                         log_time_ns=stamp)
+    out = tmp_path / "two.rrd"
+    result = view_logs([log], output=out, progress=False)
+    assert (result.images, result.remapped) == (8, 4) and result.warnings == []
+    rec = load_rrd(out)
+    assert rec.count("/raw/lens/image", "EncodedImage:blob") == 4
+    assert rec.count("/world/lens/undistorted/image", "Image:buffer") == 4
+    (image_format,) = rec.column("/world/lens/undistorted/image", "Image:format")[:1]
+    assert (image_format[0]["width"], image_format[0]["height"]) == (32, 24)  # half size
+    # the ideal camera: its image under its own Pinhole, as before, and its model beside it
+    assert rec.count("/world/pin/image", "Image:buffer") == 4
+    assert not [e for e in rec.rows if e.startswith(("/raw/pin", "/world/pin/undistorted"))]
+    assert rec.entities_with(PINHOLE) == ["/world/lens/undistorted", "/world/pin"]
+    assert rec.column("/world/pin", "CameraInfo:k") == [ideal.k.reshape(-1).tolist()]

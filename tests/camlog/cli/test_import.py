@@ -53,13 +53,15 @@ def test_real_wide_stereo_imports_calibrates_and_views(
     assert main(["view", str(out / "calibration.mcap"), "-o", str(rrd), "--no-progress"]) == 0
     rec = load_rrd(rrd)
     for side in ("left", "right"):
-        corners = rec.column(f"/world/stereo/{side}/calibration/corners", "Points2D:positions")
+        corners = rec.column(f"/raw/stereo/{side}/calibration/corners", "Points2D:positions")
         assert [len(view) for view in corners] == [48] * 12
         assert rec.count(f"/rectified/stereo/{side}/image_rect/image", "Image:buffer") == 12
-    # the right camera placed by the calibrated P[0,3]: B along the left camera's x
+    # the right camera placed by the calibrated P[0,3]: B along the left camera's
+    # rectified x (nearly its own x)
     (translation,) = rec.column("/world/stereo/right", "Transform3D:translation")
     assert translation[0][0] == pytest.approx(summary["stereo"]["baseline_m"], rel=0.02)
-    assert rec.entities_with("Pinhole:image_from_camera") == ["/world/stereo/left",
-                                                              "/world/stereo/right"]
+    # each camera shown through the pair's rectified pinhole (P, turned by R)
+    assert rec.entities_with("Pinhole:image_from_camera") == [
+        "/world/stereo/left/rectified", "/world/stereo/right/rectified"]
     verify = rerun_cli("rrd", "verify", str(rrd), cwd=tmp_path)
     assert verify.returncode == 0, verify.stderr

@@ -58,6 +58,9 @@ SET_BY_THE_BATCH = {
     "progress": "a batch shows one bar of its own",
     "workers": "a batch gives each log its share of the cores",
     "format": "a step that writes a log writes MCAP (convert's format is a key)",
+    "calibration": "export's other input, a rerun recording: a batch's steps read logs",
+    "estimate_offset": "a step measures with offset = 'estimated': it always writes a log",
+    "offset_file": "the measured offset goes beside the step's log (OUT_offset.json)",
 }
 
 #: commands without a batch step, and why
@@ -106,6 +109,8 @@ COMPANIONS: dict[tuple[str, str], dict[str, Any]] = {
     ("calibrate", "check"): {"calibration": ("left.yaml",)},
     ("check", "size"): {"square": 0.01},
     ("check", "square"): {"size": "7x6"},
+    ("resync", "size"): {"square": 0.01},
+    ("resync", "square"): {"size": "7x6"},
 }
 
 
@@ -116,7 +121,8 @@ CALIBRATION = str(REPO_ROOT / "datasets" / "golden" / "expected" /
 
 #: a word for the options whose value has a shape of its own (by metavar)
 WORDS = {"WxH": "64x48", "FX,FY,CX,CY": "60,60,31.5,23.5",
-         "MODEL:K1,K2,...": "equidistant:0,0,0,0", "CAMERA:AXIS:DEGREES@S": "left:roll:1@2"}
+         "MODEL:K1,K2,...": "equidistant:0,0,0,0", "CAMERA:AXIS:DEGREES@S": "left:roll:1@2",
+         "CAMERA:MS[@S]": "right:17"}
 
 
 def word(arg: Arg) -> str:
@@ -165,6 +171,11 @@ def _typed(arg: Arg) -> Any:
     return [value] if arg.action in ("append", "extend") or arg.nargs == "+" else value
 
 
+#: command -> what its request needs though declared with a default (export's topic: the
+#: images to write, unless --calibration, which only the command line takes)
+NEEDED: dict[str, dict[str, Any]] = {"export": {"topic": "/c/image_raw"}}
+
+
 def _with(command: str, field: Field[Any], value: Any) -> dict[str, Any]:
     """``field = value`` and the fields a request of ``command`` needs beside it (a
     processor's option needs the processor's flag)."""
@@ -173,7 +184,7 @@ def _with(command: str, field: Field[Any], value: Any) -> dict[str, Any]:
     return {**{f.name: (required[f.name],) if arg_of(f).action in ("append", "extend")
                else required[f.name] for f in request_fields(COMMANDS[command][0])
                if f.default is dataclasses.MISSING},
-            **({processor: True} if dot else {}),
+            **({processor: True} if dot else {}), **NEEDED.get(command, {}),
             field.name: value, **COMPANIONS.get((command, field.name), {})}
 
 
