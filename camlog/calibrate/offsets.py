@@ -27,6 +27,7 @@ from processors.time_offset import (
     OffsetEstimate,
     estimate_board_offset,
 )
+from processors.time_offset.board import MIN_MOVING_FRAMES
 from replay.camera import CameraModel
 from replay.messages import F64
 from replay.records import Scenario, TimeOffset
@@ -112,6 +113,11 @@ def first_calibrations(cameras: list[CameraViews], board: Board,
     return out
 
 
+def _boards(views: CameraViews) -> int:
+    """How many of a camera's distinct frames hold a board that passed every check."""
+    return sum(f.candidate and f.detection is not None for f in views.frames)
+
+
 def _snapshots(views: CameraViews) -> bool:
     """Whether a camera's frames are snapshots: most of them further apart than
     :data:`~.views.SNAPSHOT_GAP_S`."""
@@ -131,6 +137,9 @@ def measure_offsets(cameras: list[CameraViews], board: Board, options: Calibrati
         return [CameraOffset(c, None, "the frames are snapshots, too far apart for the "
                                       "board's motion between them to be seen")
                 for c in range(1, len(cameras))]
+    if min(_boards(c) for c in cameras) < MIN_MOVING_FRAMES:  # the solve says why
+        few = f"a camera's board passed its checks in fewer than {MIN_MOVING_FRAMES} frames"
+        return [CameraOffset(c, None, few) for c in range(1, len(cameras))]
     seen = models or first_calibrations(cameras, board, options)
     reference = board_track(cameras[0], seen[0])
     out = []

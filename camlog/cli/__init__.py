@@ -181,28 +181,35 @@ def _run(argv: list[str], command: str | None, where: str, *, as_program: bool) 
             keep_freed_memory()
         return int(args.run(args))
     except KeyboardInterrupt:
-        print(f"{where}: interrupted", file=sys.stderr)
-        return 130
+        return _interrupted(where)
     except BrokenPipeError:  # e.g. `camlog info LOG | head -1`
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())  # exit writes too
         return 1
-    except OSError as err:  # disk full, permissions, names too long: with the path
-        if known_error(err):
-            print(f"{where}: error: {err}", file=sys.stderr)
-        else:
-            print(f"{where}: error: {os_error_text(err)}", file=sys.stderr)
-        return 1
-    except MemoryError:
-        print(f"{where}: error: out of memory", file=sys.stderr)
-        return 1
     except Exception as err:
-        if _INTERRUPTED.is_set():  # Ctrl-C, turned into another error by C code
-            print(f"{where}: interrupted", file=sys.stderr)
-            return 130
-        if not known_error(err):
-            raise
+        return _failed(err, where)
+
+
+def _interrupted(where: str) -> int:
+    """Ctrl-C: one line, exit status 130."""
+    print(f"{where}: interrupted", file=sys.stderr)
+    return 130
+
+
+def _failed(err: Exception, where: str) -> int:
+    """A known error, an OS error or memory running out as one line and exit status 1;
+    Ctrl-C that C code turned into another error as Ctrl-C; anything else raised again."""
+    if _INTERRUPTED.is_set():
+        return _interrupted(where)
+    if isinstance(err, OSError) and not known_error(err):
+        # disk full, permissions, names too long: with the path
+        print(f"{where}: error: {os_error_text(err)}", file=sys.stderr)
+    elif isinstance(err, MemoryError):
+        print(f"{where}: error: out of memory", file=sys.stderr)
+    elif isinstance(err, OSError) or known_error(err):
         print(f"{where}: error: {err}", file=sys.stderr)
-        return 1
+    else:
+        raise err
+    return 1
 
 
 def os_error_text(err: OSError) -> str:

@@ -135,6 +135,7 @@ def rig_stereo(rig_log: Path, tmp_path_factory: pytest.TempPathFactory) -> Calib
 
 
 @pytest.fixture(scope="session")
+@renders
 def late_board_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """stereo_moving_board for 20 s at 320x240 without motion blur (to render fast), the
     right camera stamping 17 ms late (``--latency right:17``)."""
@@ -142,6 +143,6 @@ def late_board_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     spec = spec_variant("stereo_moving_board", tmp, {
         "exposure_s = 0.004\nposition_m": "position_m",
         "exposure_s = 0.004\nrelative_to": "relative_to"})
-    assert main(["record", str(spec), "-o", str(tmp / "late.mcap"), "--resolution", "320x240",
-                 "--duration", "20", "--latency", "right:17", "--no-progress"]) == 0
+    cli("record", spec, "-o", tmp / "late.mcap", "--resolution", "320x240", "--duration", "20",
+        "--latency", "right:17", "--no-progress")
     return tmp / "late.mcap"
