@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 import pytest
 
 from processors.calibration.board import Board
 from processors.calibration.detect import (
+    MAX_TRACKED_BEND,
+    bend_squares,
     canonical_order,
     check_detection,
     find_chessboard,
@@ -14,7 +17,7 @@ from processors.calibration.detect import (
 )
 from processors.calibration.targets import detect_segment
 
-from .synthetic import render_board
+from .synthetic import project, random_poses, render_board, true_model
 
 BOARD = Board(7, 6, 0.01)
 SQUARE_PX = 30.0
@@ -95,6 +98,39 @@ def test_tracking_a_board_leaving_the_image_hands_over_to_detection() -> None:
     assert track_chessboard(image, truth - [25.0, 0.0], BOARD) is None
     found = detect_segment([image, image], BOARD)
     assert all(d is not None and d.accepted for d in found)
+
+
+def test_tracking_hands_over_when_a_corner_slid_off_the_grid(
+    rendered: tuple[np.ndarray, np.ndarray]
+) -> None:
+    # the junction at the end of the first row moved 8 px along it (0.27 squares), as a
+    # corner tracked through blur slides along the board's edge: cornerSubPix follows it,
+    # every square still alternates, and only the grid's shape tells the corner is wrong
+    image, truth = rendered
+    x, y = truth[BOARD.cols - 1].astype(int)
+    slid = image.copy()
+    slid[y - 12:y + 13, x - 12:x + 13] = image[y - 12:y + 13, x - 20:x + 5]
+    refined = cv2.cornerSubPix(slid, truth.astype(np.float32).reshape(-1, 1, 2), (11, 11),
+                               (-1, -1), (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT,
+                                          60, 0.001)).reshape(-1, 2)
+    np.testing.assert_allclose(refined[BOARD.cols - 1] - truth[BOARD.cols - 1], [8, 0],
+                               atol=0.05)
+    assert check_detection(slid, refined.astype(np.float64), BOARD).accepted
+    assert bend_squares(refined.astype(np.float64), BOARD) == pytest.approx(8 / SQUARE_PX,
+                                                                           abs=0.01)
+    assert track_chessboard(slid, truth, BOARD) is None
+    assert track_chessboard(image, truth, BOARD) is not None
+
+
+def test_a_lens_and_a_tilted_board_bend_the_grid_less_than_the_tracking_limit() -> None:
+    # k1 -0.2 at 800 px, boards tilted up to 0.8 rad anywhere in the image: the bend of a
+    # true grid stays well below the limit that sends a tracked board back to detection
+    rng = np.random.default_rng(3)
+    model = true_model()
+    board = Board(7, 6, 0.025)
+    bends = [bend_squares(project(model, pose, board), board)
+             for pose in random_poses(rng, 200, [model], board=board, max_tilt_rad=0.8)]
+    assert max(bends) < MAX_TRACKED_BEND / 2, max(bends)
 
 
 def test_a_frame_opencv_cannot_handle_is_rejected_with_its_reason() -> None:
