@@ -2,6 +2,7 @@
 
     python -m benchmarks            # full runs (several minutes on 2 cores)
     python -m benchmarks --quick    # short recordings: a smoke test of every benchmark
+    python -m benchmarks --write-docs   # and write each one's rows into docs/benchmarks.md
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import subprocess
 import sys
 import time
 
+from .docs import add_write_docs
 from .report import PREFIX
 
 #: module -> (full arguments, quick arguments)
@@ -35,7 +37,10 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="short runs (smoke test)")
     parser.add_argument("--only", nargs="+", choices=sorted(BENCHMARKS), help="run these only")
+    add_write_docs(parser)
     args = parser.parse_args()
+    if args.quick and args.write_docs:
+        parser.error("--write-docs writes measured figures: not with --quick")
     rows = []
     for module, (full, quick) in BENCHMARKS.items():
         if args.only and module not in args.only:
@@ -43,7 +48,9 @@ def main() -> None:
         started = time.perf_counter()
         print(f"--- benchmarks.{module}", flush=True)
         done = subprocess.run([sys.executable, "-m", f"benchmarks.{module}",
-                               *(quick if args.quick else full)], capture_output=True, text=True,
+                               *(quick if args.quick else full),
+                               *(["--write-docs"] if args.write_docs else [])],
+                              capture_output=True, text=True,
                               check=False)
         sys.stdout.write(done.stdout)
         if done.returncode != 0:

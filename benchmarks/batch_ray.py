@@ -13,7 +13,7 @@ from __future__ import annotations
 from camlog.batch.run import BatchResult, Engine, run_batch
 
 from .batch_speedup import batch_inputs
-from .report import emit
+from .report import emit, write_summary_rows
 
 
 def main() -> None:
@@ -32,6 +32,7 @@ def main() -> None:
           f"{process.wall_s:.1f} s (first log after {process.first_result_s:.1f} s), Ray "
           f"{ray.wall_s:.1f} s with its start-up (first log after {ray.first_result_s:.1f} s); "
           f"overhead {ray.wall_s / process.wall_s:.2f}x")
+    write_summary_rows("batch_ray", args)
 
 
 if __name__ == "__main__":

@@ -21,7 +21,8 @@ from camlog.batch.run import run_batch
 from recorder.record import record
 from recorder.scenario import load_scenario
 
-from .report import emit
+from .docs import add_write_docs
+from .report import emit, write_summary_rows
 
 PIPELINE = {
     "steps": [
@@ -51,6 +52,7 @@ def batch_inputs(doc: str | None, name: str) -> Iterator[BatchInputs]:
     parser = argparse.ArgumentParser(description=(doc or "").splitlines()[0])
     parser.add_argument("--logs", type=int, default=6)
     parser.add_argument("--frames", type=int, default=450, help="frames per camera per log")
+    add_write_docs(parser)
     args = parser.parse_args()
     pipeline = parse_pipeline(PIPELINE, name)
     with tempfile.TemporaryDirectory() as tmp_name:
@@ -78,6 +80,7 @@ def main() -> None:
          target=">= 1.6 (speed-up)")
     print(f"batch of {args.logs} logs ({args.frames} frames per camera): -j 1 {walls[1]:.1f} s, "
           f"-j 2 {walls[2]:.1f} s, speed-up {walls[1] / walls[2]:.2f}x (target >= 1.6)")
+    write_summary_rows("batch_speedup", args)
 
 
 if __name__ == "__main__":

@@ -53,7 +53,8 @@ from recorder.scenario import load_scenario
 from replay import open_reader
 
 from .calibration_truth import Accuracy, camlog_accuracy, opencv_reference
-from .report import cli_peak_rss_mb, emit
+from .docs import add_write_docs, markdown_row, write_rows
+from .report import cli_peak_rss_mb, emit, write_summary_rows
 
 
 @dataclass(frozen=True)
@@ -180,11 +181,36 @@ class Worst:
         return "  ".join(f"{k} {v:.4g}" for k, v in self.values.items())
 
 
+def docs_row(case: Case, mine: Worst, theirs: Worst, ratios: list[float],
+             failures: list[str]) -> list[str]:
+    """The case's row of the docs' accuracy table: camlog's worst figures over the seeds and
+    the plain OpenCV script's, with camlog's ratio to it per seed."""
+    v, ref = mine.values, theirs.values
+    maxdiff = (f"{v['maxdiff_left_px']:.3f} / {v['maxdiff_right_px']:.3f} px"
+               if "maxdiff_left_px" in v else f"{v['maxdiff_px']:.3f} px")
+    stereo = f"{v['rot_deg']:.3f}°, {v['baseline_pct']:.3f} %" if "rot_deg" in v else ""
+    opencv = ""
+    if "maxdiff_px" in ref:
+        opencv = f"{ref['maxdiff_px']:.2f} px"
+        if "rot_deg" in ref:
+            opencv += f", {ref['rot_deg']:.3f}°, {ref['baseline_pct']:.3f} %"
+        opencv += f" (camlog {', '.join(f'{r:.2f}×' for r in ratios)})"
+    if failures:
+        opencv += ("; " if opencv else "") + (f"fails at {len(failures)} seeds "
+                                               f"({failures[-1]})")
+    return [f"`{case.name}`: {case.scenario} (`{case.flags}`)", f"{v['fx_fy_pct']:.2g} %",
+            f"{v['cx_px']:.3f} px", f"{v['cy_px']:.3f} px", maxdiff, stereo,
+            f"{v['err_sigma']:.2f}", f"{v['unc_ratio']:.1f}×, {v['cv_ratio']:.1f}×", opencv]
+
+
 def accuracy_case(case: Case, seeds: range, duration: float | None, *, logs: Path,
-                  tmp: Path, fisheye: dict[str, float]) -> list[float]:
+                  tmp: Path, fisheye: dict[str, float], write_docs: bool = False) -> list[float]:
     """Record (into ``logs``, unless there already), calibrate and compare one case over the
-    seeds; print its rows and its worst; return every parameter's error/sigma."""
+    seeds; print its rows and its worst (with ``write_docs``, into the docs' accuracy table
+    too); return every parameter's error/sigma."""
     mine, theirs = Worst(), Worst()
+    ratios: list[float] = []
+    failures: list[str] = []
     zs: list[float] = []
     for seed in seeds:
         overrides: dict[str, Any] = {"seed": seed, **case.overrides}
@@ -210,11 +236,12 @@ def accuracy_case(case: Case, seeds: range, duration: float | None, *, logs: Pat
         try:
             ref = opencv_reference(run, run_board(case, path))
         except cv2.error as err:  # a plain script stops here too
-            print(f"{'  plain OpenCV':20} {seed:4d} failed: {str(err).strip().splitlines()[-1]}",
-                  flush=True)
+            failures.append(str(err).strip().splitlines()[-1])
+            print(f"{'  plain OpenCV':20} {seed:4d} failed: {failures[-1]}", flush=True)
             ref = None
         if ref is not None:
             ratio = max(a.max_difference_px) / max(ref.max_difference_px)
+            ratios.append(ratio)
             print(row("  plain OpenCV", seed, ref, f"camlog/OpenCV max difference {ratio:.2f}"),
                   flush=True)
             theirs.add(fx_fy_pct=ref.focal_percent, cx_px=ref.cx_px, cy_px=ref.cy_px,
@@ -230,6 +257,9 @@ def accuracy_case(case: Case, seeds: range, duration: float | None, *, logs: Pat
     print(f"worst over seeds {list(seeds)}: {case.name}: {mine.line()}")
     print(f"{'':>25}plain OpenCV: {theirs.line()}", flush=True)
     print(z_line(case.name, zs), flush=True)
+    if write_docs:
+        write_rows("calibration_accuracy", f"`{case.name}`:",
+                   [markdown_row(docs_row(case, mine, theirs, ratios, failures))])
     return zs
 
 
@@ -312,6 +342,7 @@ def main() -> None:
                              "there (default: a temporary folder)")
     parser.add_argument("--quick", action="store_true",
                         help="one seed, 10 s recordings, mono, stereo and speed (smoke test)")
+    add_write_docs(parser)
     args = parser.parse_args()
     chosen = args.cases.split(",")
     unknown = sorted(set(chosen) - {*CASE_NAMES, "speed"})
@@ -320,6 +351,8 @@ def main() -> None:
                      "speed)")
     duration, speed_duration = args.duration, args.speed_duration
     seeds = range(args.seeds)
+    if args.quick and args.write_docs:
+        parser.error("--write-docs writes measured figures: not with --quick")
     if args.quick:
         chosen, duration, speed_duration, seeds = ["mono", "stereo", "speed"], 10.0, 10.0, range(1)
     fisheye = {"duration_s": args.fisheye_duration, "rate_hz": args.fisheye_rate}
@@ -334,12 +367,13 @@ def main() -> None:
         for case in CASES:
             if case.name in chosen:
                 every_z += accuracy_case(case, seeds, duration, logs=logs, tmp=tmp,
-                                         fisheye=fisheye)
+                                         fisheye=fisheye, write_docs=args.write_docs)
         if every_z:
             print(z_line("every case", every_z), flush=True)
         if "speed" in chosen:
             speed(speed_duration, tmp)
     print(f"load average {os.getloadavg()[0]:.1f} at the end")
+    write_summary_rows("calibrate_speed", args)
     print("maxdiff: max projection difference against the true model over the image (16 px "
           "margin; fisheye within 80° of the axis), camera frames aligned by a rotation; "
           "unc/t, cv/t: projection uncertainty (rays, 1σ) and cross-validation over the true "

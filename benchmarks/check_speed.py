@@ -21,7 +21,8 @@ from camlog.check.flow import CheckOptions, check_log
 from replay import open_reader
 from replay.frames import FrameStream
 
-from .report import emit
+from .docs import add_write_docs
+from .report import emit, write_summary_rows
 
 
 def record_log(path: Path, duration_s: float, resolution: tuple[int, int]) -> None:
@@ -57,6 +58,7 @@ def check_s(log: Path) -> tuple[float, str]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_write_docs(parser)
     parser.add_argument("--duration", type=float, default=20.0, help="log length in s (20)")
     parser.add_argument("--resolution", default="640x480", help="WxH (640x480)")
     parser.add_argument("--repeats", type=int, default=3)
@@ -83,6 +85,7 @@ def main() -> None:
     emit("check: read + decode (reference)", baseline="read + decode",
          baseline_value=decode_x, measured="check", measured_value=check_x,
          unit="x real time", ratio=check_x / decode_x, target="(reference)")
+    write_summary_rows("check_speed", args)
 
 
 if __name__ == "__main__":

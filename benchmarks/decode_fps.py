@@ -25,7 +25,8 @@ import numpy as np
 from replay import CompressedImage, CompressedVideo, Image
 from replay.frames import FrameStream, VideoEncoder, decode_frame, encode_compressed
 
-from .report import emit
+from .docs import add_write_docs
+from .report import emit, write_summary_rows
 
 WIDTH, HEIGHT = 640, 480
 
@@ -122,6 +123,7 @@ def _camlog(messages: list[object]) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_write_docs(parser)
     parser.add_argument("--frames", type=int, default=60, help="frames per encoding (60)")
     parser.add_argument("--repeats", type=int, default=3, help="best of R runs (3)")
     args = parser.parse_args()
@@ -139,6 +141,7 @@ def main() -> None:
         emit(f"decode {encoding} 640x480", baseline=baseline, baseline_value=bare_fps,
              measured="decode_frame().rgb8()", measured_value=mine, unit="fps",
              ratio=mine / bare_fps, target=">= 0.8")
+    write_summary_rows("decode_fps", args)
 
 
 if __name__ == "__main__":

@@ -18,7 +18,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from .report import emit
+from .docs import add_write_docs
+from .report import emit, write_summary_rows
 
 
 def timed(argv: list[str]) -> tuple[float, float]:
@@ -33,6 +34,7 @@ def timed(argv: list[str]) -> tuple[float, float]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_write_docs(parser)
     parser.add_argument("--duration", type=float, default=8.0,
                         help="the demo's stereo recording in seconds (its default: 8)")
     args = parser.parse_args()
@@ -54,6 +56,7 @@ def main() -> None:
          target=".rrd <= 100 MB")
     print(f"demo: {demo_wall:.1f} s wall, {demo_cpu:.1f} CPU s (stereo record alone "
           f"{record_wall:.1f} s wall, {record_cpu:.1f} CPU s); demo.rrd {rrd_mb:.1f} MB")
+    write_summary_rows("demo_time", args)
 
 
 if __name__ == "__main__":

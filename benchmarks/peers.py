@@ -46,6 +46,7 @@ from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from .docs import add_write_docs, markdown_table, write_table
 from .processes import Run, clear, run_once, tool
 from .report import emit
 
@@ -241,8 +242,25 @@ def print_results(results: list[Result]) -> None:
         for r in results) + ")")
 
 
-def compare_peers(tmp: Path, duration_s: float, runs: int, view_s: float) -> None:
-    """camlog and each peer on the same inputs, side by side."""
+def markdown_rows(results: list[Result]) -> list[str]:
+    """The docs' table of the peers: wall, CPU and peak memory of each side, the ratios."""
+    def side(run: Run) -> str:
+        return f"{run.wall_s:.2f} s, {run.cpu_s:.2f} s, {run.peak_mb:.0f} MB"
+    rows = []
+    for r in results:
+        peer = "" if r.peer is None else f"{r.case.peer_name}: {side(r.peer)}"
+        cpu = "" if r.peer is None else f"{r.camlog.cpu_s / r.peer.cpu_s:.2f}"
+        rows.append([r.case.name, peer, side(r.camlog),
+                     "" if r.time_ratio is None else f"{r.time_ratio:.2f}", cpu,
+                     "" if r.memory_ratio is None else f"{r.memory_ratio:.2f}", r.case.target])
+    return markdown_table(["same work", "peer: wall, CPU, peak", "camlog: wall, CPU, peak",
+                           "wall ratio", "CPU ratio", "memory ratio", "target"], rows)
+
+
+def compare_peers(tmp: Path, duration_s: float, runs: int, view_s: float, *,
+                  write_docs: bool = False) -> None:
+    """camlog and each peer on the same inputs, side by side (and, with ``write_docs``, as
+    the docs' table)."""
     started = time.perf_counter()
     inputs = make_inputs(tmp, duration_s, view_s)
     floor = run_once(["true"]).peak_mb
@@ -252,6 +270,8 @@ def compare_peers(tmp: Path, duration_s: float, runs: int, view_s: float) -> Non
     results = [measure(case, runs) for case in cases(inputs, tmp)]
     print(f"median of {runs} runs each, load average now {os.getloadavg()[0]:.1f}")
     print_results(results)
+    if write_docs:
+        write_table("peers", markdown_rows(results))
     for r in results:
         if r.peer is not None and r.time_ratio is not None:
             emit(f"peers: {r.case.name}", baseline=r.case.peer_name,
@@ -273,6 +293,7 @@ def main() -> None:
     parser.add_argument("--memory", action="store_true",
                         help="also measure peak memory: view on 1- and 10-minute logs, demo")
     parser.add_argument("--keep", type=Path, help="work in this folder and keep the inputs")
+    add_write_docs(parser)
     args = parser.parse_args()
     for package in ("camlog", "replay", "processors", "recorder", "rerun_export"):
         compileall.compile_dir(REPO / package, quiet=1)
@@ -280,17 +301,21 @@ def main() -> None:
         tmp = args.keep or Path(tmp_name)
         tmp.mkdir(parents=True, exist_ok=True)
         if args.runs > 0:
-            compare_peers(tmp, args.duration, args.runs, args.view_duration)
+            compare_peers(tmp, args.duration, args.runs, args.view_duration,
+                          write_docs=args.write_docs)
         if args.memory:
             from .view_memory import measure_memory
 
             measure_memory(tmp)
         if args.growth:
-            print_growth(tmp, [int(s) for s in args.growth.split(",")], args.growth_runs)
+            print_growth(tmp, [int(s) for s in args.growth.split(",")], args.growth_runs,
+                         write_docs=args.write_docs)
 
 
-def print_growth(tmp: Path, seconds: list[int], runs: int) -> None:
-    """Cost growth: each command's time and peak per log length."""
+def print_growth(tmp: Path, seconds: list[int], runs: int, *, write_docs: bool = False) -> None:
+    """Cost growth: each command's time and peak per log length (and, with ``write_docs``,
+    the docs' table: wall seconds and peak memory per length, the peer in brackets, and the
+    cost of each extra minute of log between the two longest)."""
     rows: dict[str, dict[int, Result]] = {}
     for length_s, found in growth_cases(tmp, seconds):
         for case in found:
@@ -310,6 +335,31 @@ def print_growth(tmp: Path, seconds: list[int], runs: int) -> None:
                 cell += f" ({r.peer.wall_s:.2f} s {r.peer.cpu_s:.2f} s {r.peer.peak_mb:.0f} MB)"
             cells.append(f"{cell:>50}")
         print(f"{name:26}" + "".join(cells), flush=True)
+    if write_docs:
+        write_table("peers_growth", growth_rows(rows, seconds))
+
+
+def growth_rows(rows: dict[str, dict[int, Result]], seconds: list[int]) -> list[str]:
+    """The docs' cost-growth table (see :func:`print_growth`)."""
+    def cell(run: Run) -> str:
+        return f"{run.wall_s:.2f} s, {run.peak_mb:.0f} MB"
+    def per_minute(by_length: dict[int, Result], *, peer: bool) -> float:
+        long, longer = sorted(seconds)[-2:]
+        first, last = (by_length[s].peer if peer else by_length[s].camlog for s in (long, longer))
+        assert first is not None and last is not None
+        return (last.wall_s - first.wall_s) / (longer - long) * 60
+    table = []
+    for name, by_length in rows.items():
+        cells = []
+        for s in seconds:
+            r = by_length[s]
+            cells.append(cell(r.camlog) + ("" if r.peer is None else f" ({cell(r.peer)})"))
+        minute = f"{per_minute(by_length, peer=False):.2f} s"
+        if all(by_length[s].peer is not None for s in seconds):
+            minute += f" ({per_minute(by_length, peer=True):.2f} s)"
+        table.append([name, *cells, minute])
+    return markdown_table(["command", *(f"{s} s log" for s in seconds),
+                           "per extra minute of log"], table)
 
 
 if __name__ == "__main__":

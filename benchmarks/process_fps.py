@@ -31,7 +31,8 @@ from processors.registry import configure, spec_of
 from processors.spec import Configured, ProcessorSpec
 from replay import Image, PointStamped, open_reader
 
-from .report import emit
+from .docs import add_write_docs
+from .report import emit, write_summary_rows
 
 TOPIC = "/stereo_camera/left/image_raw"
 
@@ -104,6 +105,7 @@ def run(log: Path, repeats: int, tmp: Path) -> dict[str, float]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_write_docs(parser)
     parser.add_argument("--frames", type=int, default=300, help="frames per camera (300)")
     parser.add_argument("--resolution", default="640x480", help="WxH (640x480)")
     parser.add_argument("--repeats", type=int, default=3)
@@ -128,6 +130,7 @@ def main() -> None:
     emit("process: decode only (reference)", baseline="decode only",
          baseline_value=r["decode_fps"], measured="process", measured_value=r["process_fps"],
          unit="fps", ratio=r["process_fps"] / r["decode_fps"], target="(reference)")
+    write_summary_rows("process_fps", args)
 
 
 if __name__ == "__main__":

@@ -27,7 +27,8 @@ from recorder.record import CLOCK_STREAM, MOTION_STREAM, record, rng_for
 from recorder.render import SceneRenderer
 from recorder.scenario import Scenario, load_scenario
 
-from .report import emit
+from .docs import add_write_docs
+from .report import emit, write_summary_rows
 
 
 def bare_render_fps(scenario: Scenario) -> float:
@@ -77,6 +78,7 @@ def run(
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_write_docs(parser)
     parser.add_argument("scenario", nargs="?", default="mono_checkerboard")
     parser.add_argument("--frames", type=int, default=600)
     parser.add_argument("--repeats", type=int, default=2)
@@ -97,6 +99,7 @@ def main() -> None:
         emit(f"record {label}", baseline="bare render", baseline_value=r["bare_fps"],
              measured="record", measured_value=r["record_fps"], unit="fps", ratio=r["ratio"],
              target=">= 0.9")
+    write_summary_rows("record_fps", args)
 
 
 if __name__ == "__main__":

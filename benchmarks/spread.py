@@ -63,3 +63,24 @@ def table(results: Results, tools: list[str],
                 lines.append(f"{'':14} {figure:20}"
                              + "".join(f" {cell(c):>{width}}" for c in columns))
     return lines
+
+
+def markdown_rows(results: Results, tools: list[str], labels: dict[str, str],
+                  failed: dict[tuple[str, str], int] | None = None) -> dict[str, list[list[str]]]:
+    """Per case, the rows of the docs' table: its label (``labels``), then a row per figure
+    it measured (first cell empty) with ``median / p80`` per tool; the seeds each tool
+    calibrated (and failed on) end the case."""
+    failed = failed or {}
+    found: dict[str, list[list[str]]] = {}
+    for case, by_tool in results.items():
+        rows = []
+        for figure, value in FIGURES.items():
+            columns = [[v for a in by_tool.get(t, []) if (v := value(a)) is not None]
+                       for t in tools]
+            if any(columns):
+                rows.append(["", figure, *("" if not c else cell(c) for c in columns)])
+        rows.append(["", "seeds", *(_count(len(by_tool.get(t, [])), failed.get((case, t), 0))
+                                    for t in tools)])
+        rows[0][0] = labels.get(case, case)
+        found[case] = rows
+    return found

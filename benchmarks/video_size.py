@@ -22,13 +22,15 @@ from camlog.logs.convert import convert_log
 from camlog.requests.logs import ConvertRequest
 from replay.frames.video import DEFAULT_CRF
 
-from .report import emit
+from .docs import add_write_docs
+from .report import emit, write_summary_rows
 
 WIDTH, HEIGHT = 640, 480
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_write_docs(parser)
     parser.add_argument("--duration", type=float, default=10.0,
                         help="recording length in seconds (10; the claim is about 60)")
     parser.add_argument("--noise", type=float, default=2.0,
@@ -64,6 +66,7 @@ def main() -> None:
                  baseline_value=raw_mb, measured=f"h264 MCAP, PSNR {psnr:.1f} dB (worst topic)",
                  measured_value=video_mb, unit="MB", ratio=raw_mb / video_mb,
                  target="> 10x smaller at PSNR >= 38 dB")
+    write_summary_rows("video_size", args)
 
 
 if __name__ == "__main__":

@@ -30,7 +30,8 @@ from replay import open_reader
 from rerun_export import LoggerOptions, view_logs
 from rerun_export.images import COLOR_MODELS
 
-from .report import cli_peak_rss_mb, emit
+from .docs import add_write_docs
+from .report import cli_peak_rss_mb, emit, write_summary_rows
 
 
 def record_log(path: Path, duration_s: float) -> None:
@@ -76,6 +77,7 @@ def peak_rss_mb(log: Path, out: Path) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    add_write_docs(parser)
     parser.add_argument("--duration", type=float, default=60.0, help="log length in s (60)")
     parser.add_argument("--repeats", type=int, default=2, help="best of R interleaved runs")
     parser.add_argument("--log", type=Path, help="use this stereo log instead of recording")
@@ -124,6 +126,7 @@ def main() -> None:
     emit("view peak RSS, long vs short log", baseline=f"{span_s / 6:.0f} s log",
          baseline_value=peak_short, measured=f"{span_s:.0f} s log", measured_value=peak_long,
          unit="MB", ratio=peak_long / peak_short, target="flat (~1.0)")
+    write_summary_rows("view_fps", args)
 
 
 if __name__ == "__main__":

@@ -56,8 +56,9 @@ from .calibration_truth import (
     true_models,
     true_right_from_left,
 )
+from .docs import add_write_docs, markdown_row, write_rows
 from .mrcal_run import DEFAULT_VENV, MrcalError, mrcal_available, run_mrcal
-from .spread import TOOLS, Results, table
+from .spread import TOOLS, Results, markdown_rows, table
 
 #: the moving board seen through a distorted lens whose k3 is not zero (k1 k2 p1 p2 k3)
 MOVING_BLUR_K3_LENS = (-0.25, 0.1, 0.0, 0.0, -0.018)
@@ -271,6 +272,7 @@ def parse_arguments(argv: Sequence[str] | None) -> argparse.Namespace:
     parser.add_argument("--keep", type=Path, default=None, metavar="FILE",
                         help="append each case's seed to this JSON-lines file when done; seeds "
                              "already in it are read back, not run again (resumes a run)")
+    add_write_docs(parser)
     args = parser.parse_args(argv)
     check_seed_arguments(parser, args, CASE_NAMES)
     if args.duration is not None and args.duration <= 0:
@@ -296,6 +298,15 @@ def main(argv: Sequence[str] | None = None) -> None:
     failed = {key: len(v) for key, v in progress.failures.items()}
     tools = [t for t in TOOLS if mrcal_python is not None or t != "mrcal"]
     print("\n".join(table(progress.results, tools, failed)))
+    if args.write_docs:
+        write_docs(progress.results, failed)
+
+
+def write_docs(results: Results, failed: dict[tuple[str, str], int]) -> None:
+    """Each case's rows of the docs' table (the cases not run keep theirs)."""
+    labels = {c.name: f"`{c.name}`: {c.scenario}" for c in CASES}
+    for case, rows in markdown_rows(results, TOOLS, labels, failed).items():
+        write_rows("vs_mrcal", f"`{case}`:", [markdown_row(row) for row in rows])
 
 
 if __name__ == "__main__":

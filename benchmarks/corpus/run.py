@@ -23,6 +23,7 @@ from pathlib import Path
 
 import cv2
 
+from ..docs import add_write_docs, write_rows
 from .manifest import CorpusError, Dataset, default_cache, load_manifest
 from .reference import CameraResult, ReferenceResult, reference_calibration
 
@@ -166,8 +167,17 @@ def main() -> int:
     parser.add_argument("--keep", type=Path, help="keep logs and calibrations in this folder")
     parser.add_argument("--auto-order", action="store_true",
                         help="calibrate the pinhole datasets with -k auto")
+    add_write_docs(parser)
     args = parser.parse_args()
-    print("\n".join(run(args.cache, args.only, args.keep, auto_order=args.auto_order)))
+    lines = run(args.cache, args.only, args.keep, auto_order=args.auto_order)
+    print("\n".join(lines))
+    if args.write_docs:
+        if args.auto_order:
+            parser.error("--write-docs writes the table of the manifest's models: without "
+                         "--auto-order")
+        for line in lines[2:]:  # each calibrated dataset's row; the others keep theirs
+            if "| not fetched: " not in line:
+                write_rows("corpus", line.split("|")[1].strip(), [line])
     return 0
 
 

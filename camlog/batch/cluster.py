@@ -232,7 +232,7 @@ def _check_nodes(ray: Any, where: str, jobs: list[Job]) -> list[str]:
             raise ClusterError(
                 f"the Ray cluster at {where} cannot run camlog on node {node}: "
                 f"{_one_line(answer[7:])} (install camlog{'[cloud]' if schemes else ''} on "
-                "every node, or give the job a runtime environment: see the README)")
+                "every node, or give the job a runtime environment: see docs/batch.md)")
         if answer != VERSION:
             raise ClusterError(f"the Ray cluster at {where}: node {node} has camlog {answer}, "
                               f"this machine {VERSION}")

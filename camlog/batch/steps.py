@@ -256,8 +256,8 @@ STEPS: dict[str, StepKind] = {
 
 
 def keys_table() -> list[str]:
-    """The step kinds and their keys as Markdown table rows (the README and the pipeline
-    module document them with these lines)."""
+    """The step kinds and their keys as Markdown table rows (``docs/batch.md`` and the
+    pipeline module document them with these lines)."""
     rows = ["| step | keys (besides `run`, `name`, `input`) |", "|---|---|"]
     for name, kind in STEPS.items():
         own = ", ".join(f"`{k}`" for k in sorted(batch_keys(kind.request)))

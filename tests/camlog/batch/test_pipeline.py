@@ -164,16 +164,16 @@ def test_a_pipeline_file_of_many_megabytes_is_refused(tmp_path: Path) -> None:
     assert f"pipeline file {path} is larger than 4 MiB" in line, line
 
 
-def test_the_readme_and_the_docstring_list_every_step_and_its_keys() -> None:
+def test_the_docs_and_the_docstring_list_every_step_and_its_keys() -> None:
     import camlog.batch.pipeline
     from camlog.batch.steps import keys_lines, keys_table
 
-    readme = (REPO_ROOT / "README.md").read_text()
-    assert "\n".join(keys_table()) in readme, "README: paste camlog.batch.steps.keys_table()"
+    page = (REPO_ROOT / "docs" / "batch.md").read_text()
+    assert "\n".join(keys_table()) in page, "docs/batch.md: paste camlog.batch.steps.keys_table()"
     doc = camlog.batch.pipeline.__doc__ or ""
     assert "\n".join(keys_lines()) in doc, "pipeline.py: paste camlog.batch.steps.keys_lines()"
     for step in STEPS:
-        assert f"| `{step}` |" in readme and f"- {step}: " in doc
+        assert f"| `{step}` |" in page and f"- {step}: " in doc
 
 
 def test_a_request_error_found_when_the_step_runs_names_the_key(tmp_path: Path) -> None:

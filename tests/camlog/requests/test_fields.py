@@ -78,7 +78,7 @@ NO_GOLDEN = {
     "check": "drift windows of a long log: the golden logs are short and never drift",
     "play": "real-time pacing: its wall-clock timing is not a regression artifact",
     "import": "its input is a folder of images, not a golden log",
-    "view": "rerun's recordings change with rerun; the README's view tests read them back",
+    "view": "rerun's recordings change with rerun; the docs' view examples read them back",
 }
 
 #: (command, field) -> the fields it needs beside it, for the request's own checks
