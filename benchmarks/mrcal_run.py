@@ -25,7 +25,7 @@ from processors.calibration.robust import I64, BoardView
 from replay.camera import CameraModel
 from replay.messages import F64
 
-from .calibration_truth import detected, true_models
+from .calibration_truth import detected, nominal_focal_px, true_models
 
 HELPER = Path(__file__).with_name("mrcal_solve.py")
 DEFAULT_VENV = Path.home() / ".cache" / "camlog" / "mrcal-venv"
@@ -148,7 +148,7 @@ def run_mrcal(python: Path, run: CalibrationRun, board: Board, *,
     true lens model (:data:`LENSMODELS`), seeded with the true fx to the nearest 100 px."""
     truths = true_models(run)
     lensmodel = LENSMODELS[truths[0].distortion_model]
-    focal_px = round(float(truths[0].k[0, 0]), -2)
+    focal_px = nominal_focal_px(truths[0])
     payload = request(run, board, approximate_s=approximate_s, lensmodel=lensmodel,
                       focal_px=focal_px)
     done = subprocess.run([str(python), str(HELPER)], input=json.dumps(payload),
