@@ -21,6 +21,12 @@ it renders 19-26 pinhole views a frame (about 0.5-1.4 fps on 2 cores), so it is 
 of 0.5 s, 60 poses (about 2-4 minutes a seed). Cases run cheapest first; ``--cases`` picks
 some; ``--logs DIR`` keeps the recordings there and reuses them in later runs.
 
+Speed of a waved board (case ``moving_speed``): ``mono_moving_blur`` recorded for
+``--moving-duration`` (40 s) at 30 Hz, a distinct view in every frame, kept with ``--logs``;
+``calibrate`` by default (full report) and with ``--no-report`` against a plain OpenCV script
+(``findChessboardCorners`` and ``cornerSubPix`` on every frame, ``calibrateCamera`` with
+default flags), each ``--repeats`` times in turn in the same run, medians and their ratios.
+
 Speed (case ``speed``): ``mono_checkerboard`` and ``stereo_checkerboard`` recorded for
 ``--speed-duration`` (60 s) at 30 Hz, decode-only (read and decode every image, the floor of
 any offline calibrator) against ``calibrate`` with its full report, and the peak memory of the
@@ -48,6 +54,7 @@ from camlog.calibrate.flow import CalibrationRun, MeasureAgain, calibrate_log, c
 from camlog.cli.calibrate import add_arguments
 from camlog.requests.arguments import request_from_args
 from camlog.requests.calibrate import CalibrateRequest
+from processors.calibration.board import Board
 from recorder.record import record
 from recorder.scenario import load_scenario
 from replay import open_reader
@@ -323,11 +330,60 @@ def speed(duration: float, tmp: Path) -> None:
                   flush=True)
 
 
+def plain_script_s(path: Path, topic: str, board: Board) -> float:
+    """Seconds a plain OpenCV script takes: every frame decoded, ``findChessboardCorners``
+    and ``cornerSubPix`` on each, ``calibrateCamera`` with default flags on every board
+    found."""
+    started = time.perf_counter()
+    objects, images, size = [], [], (0, 0)
+    points = board.points_in_board().astype(np.float32)
+    criteria = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_MAX_ITER, 30, 0.001)
+    with open_reader(path) as reader:
+        for record in reader.frames([topic]):
+            gray = record.message.mono8()
+            size = (gray.shape[1], gray.shape[0])
+            found, corners = cv2.findChessboardCorners(gray, board.pattern_size)
+            if found:
+                images.append(cv2.cornerSubPix(gray, corners, (11, 11), (-1, -1), criteria))
+                objects.append(points)
+    cv2.calibrateCamera(objects, images, size, None, None)
+    return time.perf_counter() - started
+
+
+def moving_speed(duration: float, logs: Path, tmp: Path, *, repeats: int) -> None:
+    """A waved board (``mono_moving_blur``, ``duration`` s at 30 Hz: a distinct view in every
+    frame): camlog's default, with and without its report, against the plain OpenCV script,
+    each ``repeats`` times in turn; the medians and their ratios."""
+    case = next(c for c in CASES if c.name == "moving_blur")
+    path = logs / f"{case.scenario}_0_{duration:g}s.mcap"
+    if not path.exists():
+        record(load_scenario(case.scenario, {"duration_s": duration, "seed": 0}), path,
+               progress=False)
+    board = run_board(case, path)
+    plain: list[float] = []
+    full: list[float] = []
+    bare: list[float] = []
+    for _ in range(repeats):
+        plain.append(plain_script_s(path, "/simple_camera/image_raw", board))
+        for report, times in ((True, full), (False, bare)):
+            started = time.perf_counter()
+            calibrate(path, case.flags, tmp / "moving_out", report=report)
+            times.append(time.perf_counter() - started)
+    script = float(np.median(plain))
+    for label, times, most in (("default, full report", full, 2.0),
+                               ("--no-report", bare, 1.5)):
+        wall = float(np.median(times))
+        emit(f"calibrate waved board ({duration:.0f} s log, {label})",
+             baseline="plain OpenCV script", baseline_value=script, measured="calibrate",
+             measured_value=wall, unit="s", ratio=wall / script,
+             target=f"<= {most:g}x the plain script (median of {repeats})")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--cases", default=",".join([*CASE_NAMES, "speed"]),
-                        help=f"comma-separated, from {', '.join(CASE_NAMES)}, speed "
-                             "(default: all)")
+    parser.add_argument("--cases", default=",".join([*CASE_NAMES, "speed", "moving_speed"]),
+                        help=f"comma-separated, from {', '.join(CASE_NAMES)}, speed, "
+                             "moving_speed (default: all)")
     parser.add_argument("--duration", type=float, default=None,
                         help="seconds per recording (default: the scenario's, 20 s)")
     parser.add_argument("--fisheye-duration", type=float, default=30.0,
@@ -336,6 +392,10 @@ def main() -> None:
                         help="frame rate of the fisheye recording (default 4 Hz)")
     parser.add_argument("--speed-duration", type=float, default=60.0,
                         help="seconds of the speed case's recordings (default 60)")
+    parser.add_argument("--moving-duration", type=float, default=40.0,
+                        help="seconds of the moving_speed case's waved board (default 40)")
+    parser.add_argument("--repeats", type=int, default=3,
+                        help="runs of each side of the moving_speed case (default 3)")
     parser.add_argument("--seeds", type=int, default=3, help="seeds per case (default 3)")
     parser.add_argument("--logs", type=Path, default=None,
                         help="keep the recordings in this folder and reuse those already "
@@ -345,16 +405,17 @@ def main() -> None:
     add_write_docs(parser)
     args = parser.parse_args()
     chosen = args.cases.split(",")
-    unknown = sorted(set(chosen) - {*CASE_NAMES, "speed"})
+    unknown = sorted(set(chosen) - {*CASE_NAMES, "speed", "moving_speed"})
     if unknown:
         parser.error(f"unknown cases {', '.join(unknown)} (known: {', '.join(CASE_NAMES)}, "
-                     "speed)")
+                     "speed, moving_speed)")
     duration, speed_duration = args.duration, args.speed_duration
     seeds = range(args.seeds)
     if args.quick and args.write_docs:
         parser.error("--write-docs writes measured figures: not with --quick")
     if args.quick:
-        chosen, duration, speed_duration, seeds = ["mono", "stereo", "speed"], 10.0, 10.0, range(1)
+        chosen, duration, speed_duration, seeds = \
+            ["mono", "stereo", "speed", "moving_speed"], 10.0, 10.0, range(1)
     fisheye = {"duration_s": args.fisheye_duration, "rate_hz": args.fisheye_rate}
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores", flush=True)
     print(f"{'case':20} {'seed':>4} {'fx,fy %':>8} {'cx px':>7} {'cy px':>7} "
@@ -372,6 +433,9 @@ def main() -> None:
             print(z_line("every case", every_z), flush=True)
         if "speed" in chosen:
             speed(speed_duration, tmp)
+        if "moving_speed" in chosen:
+            moving_speed(10.0 if args.quick else args.moving_duration, logs, tmp,
+                         repeats=1 if args.quick else args.repeats)
     print(f"load average {os.getloadavg()[0]:.1f} at the end")
     write_summary_rows("calibrate_speed", args)
     print("maxdiff: max projection difference against the true model over the image (16 px "

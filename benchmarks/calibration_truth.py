@@ -18,7 +18,7 @@ import numpy as np
 
 from camlog.calibrate.flow import CalibrationRun
 from camlog.calibrate.solving import CalibratedCamera
-from camlog.calibrate.views import Frame
+from camlog.calibrate.views import DetectedFrame
 from processors.calibration.board import Board
 from processors.calibration.validation import projection_difference
 from replay.camera import CameraModel
@@ -111,12 +111,12 @@ def true_right_from_left(run: CalibrationRun) -> F64 | None:
 
 def camlog_accuracy(run: CalibrationRun) -> Accuracy:
     """camlog's result against the truth."""
-    return accuracy([c.solution.result.model for c in run.cameras], true_models(run),
-                    run.stereo.result.right_from_left if run.stereo is not None else None,
+    return accuracy([c.model for c in run.cameras], true_models(run),
+                    run.solved.stereo.right_from_left if run.solved.stereo is not None else None,
                     true_right_from_left(run))
 
 
-def detected(camera: CalibratedCamera) -> list[Frame]:
+def detected(camera: CalibratedCamera) -> list[DetectedFrame]:
     """The frames a plain script calibrates from: every distinct frame whose board passed
     detection."""
     return [f for f in camera.views.frames if f.candidate and f.detection is not None]

@@ -1,7 +1,7 @@
 """Drift-check throughput: seconds of a 30 Hz stereo log checked per second of wall time.
 
 On one recorded ``stereo_checkerboard`` log (640x480 by default, the right camera pitched
-0.1° half-way) the benchmark times ``check_log`` with its defaults (2 s windows, 5 pairs
+0.1° half-way) the benchmark times ``check_drift`` with its defaults (2 s windows, 5 pairs
 looked at per second) and reports the log's duration over the wall time: a multiple of real
 time. As a reference it also times reading and decoding every frame of both cameras.
 
@@ -17,7 +17,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from camlog.check.flow import CheckOptions, check_log
+from camlog.check.flow import CheckOptions, check_drift
 from replay import open_reader
 from replay.frames import FrameStream
 
@@ -52,7 +52,7 @@ def decode_s(log: Path) -> float:
 def check_s(log: Path) -> tuple[float, str]:
     """Wall time of the check and its verdict."""
     started = time.perf_counter()
-    checked = check_log(log, CheckOptions())
+    checked = check_drift(log, CheckOptions())
     return time.perf_counter() - started, checked.summary()
 
 

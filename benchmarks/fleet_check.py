@@ -217,14 +217,14 @@ SWEEP_START_S = 3.0
 def sweep(cache: Path, seeds: int) -> list[str]:
     """Smallest drifts found: each axis and size on the right camera from ``SWEEP_START_S``,
     over ``seeds`` seeds; one line per axis and size (found, onset errors)."""
-    from camlog.check.flow import CheckOptions, check_log
+    from camlog.check.flow import CheckOptions, check_drift
 
     lines = []
     for axis, sizes in SWEEP_DEG.items():
         for size in sizes:
             fleet = [FleetLog(900 + seed, Drift("right", axis, size, SWEEP_START_S))
                      for seed in range(seeds)]
-            onsets = [check_log(path, CheckOptions(window_s=WINDOW_S)).drifted_from_s()
+            onsets = [check_drift(path, CheckOptions(window_s=WINDOW_S)).drifted_from_s()
                       for path in record_fleet(fleet, cache)]
             found = [t - SWEEP_START_S for t in onsets if t is not None]
             lines.append(f"{axis:<5} {size:5.2f}°: found in {len(found)} of {seeds} logs"

@@ -101,14 +101,14 @@ class Comparison:
 
 def chosen_orders(run: CalibrationRun) -> list[str]:
     """The order each camera of a run that chose it was calibrated with."""
-    return [order_label(c.solution.order.options) if c.solution.order is not None else "?"
+    return [order_label(c.order.options) if c.order is not None else "?"
             for c in run.cameras]
 
 
 def steps_text(run: CalibrationRun) -> str:
     """Every camera's rungs of a run that chose its order: gain (%) and p of each."""
     return " | ".join(", ".join(f"{100 * s.gain:+.1f} % p {s.p_value:.2g}" for s in order.steps)
-                      for c in run.cameras if (order := c.solution.order) is not None)
+                      for c in run.cameras if (order := c.order) is not None)
 
 
 ORDER = Comparison(TOOLS, runs, chosen_orders, steps_text)

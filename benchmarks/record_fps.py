@@ -25,13 +25,13 @@ from recorder.motion import plan_trajectory
 from recorder.multiview import plan_camera_optics
 from recorder.record import CLOCK_STREAM, MOTION_STREAM, record, rng_for
 from recorder.render import SceneRenderer
-from recorder.scenario import Scenario, load_scenario
+from recorder.scenario import ScenarioSpec, load_scenario
 
 from .docs import add_write_docs
 from .report import emit, write_summary_rows
 
 
-def bare_render_fps(scenario: Scenario) -> float:
+def bare_render_fps(scenario: ScenarioSpec) -> float:
     """Frames per second of rendering alone, over the recording's own shots."""
     optics = [plan_camera_optics(c.model, c.supersample) for c in scenario.cameras]
     duration_s = max(n / c.rate_hz + c.phase_s
@@ -53,7 +53,7 @@ def bare_render_fps(scenario: Scenario) -> float:
         renderer.close()
 
 
-def record_fps(scenario: Scenario, out_dir: Path) -> tuple[float, float, int]:
+def record_fps(scenario: ScenarioSpec, out_dir: Path) -> tuple[float, float, int]:
     """Loop and end-to-end frames per second of a recording to MCAP, and its size in bytes."""
     path = out_dir / f"{scenario.name}.mcap"
     result = record(scenario, path, overwrite=True, progress=False)

@@ -9,10 +9,9 @@ from .base import Output, Processor
 from .errors import (
     ConfigError,
     FrameError,
-    InputError,
     OptionValueError,
     ProcessorError,
-    SyncError,
+    StampsError,
 )
 from .registry import PROCESSORS, configure, make_processor
 from .spec import Configured, Option, OptionKind, OutputSpec, ProcessorSpec
@@ -22,7 +21,6 @@ __all__ = [
     "ConfigError",
     "Configured",
     "FrameError",
-    "InputError",
     "Option",
     "OptionKind",
     "OptionValueError",
@@ -31,7 +29,7 @@ __all__ = [
     "Processor",
     "ProcessorError",
     "ProcessorSpec",
-    "SyncError",
+    "StampsError",
     "configure",
     "make_processor",
 ]

@@ -1,14 +1,20 @@
-"""Exception tree of the processors (image processing, stereo resync)."""
+"""Exception tree of the processors (image processing, stereo resync).
+
+Processors never read a log: what is wrong with one (empty, a topic missing, nothing to
+pair) is said by the command that reads it, in its own exception tree.
+"""
 
 from __future__ import annotations
+
+__all__ = ["ConfigError", "FrameError", "OptionValueError", "ProcessorError", "StampsError"]
 
 
 class ProcessorError(Exception):
     """Base of every error raised by :mod:`processors` and the commands that run them."""
 
 
-class InputError(ProcessorError):
-    """The input log cannot be processed: empty, topic missing, wrong message type."""
+class StampsError(ProcessorError):
+    """Stamps handed to stereo resync are not a sorted 1-D integer array."""
 
 
 class ConfigError(ProcessorError):
@@ -31,7 +37,3 @@ class OptionValueError(ConfigError):
 
 class FrameError(ProcessorError):
     """One frame could not be processed (undecodable, unsupported encoding, wrong size)."""
-
-
-class SyncError(ProcessorError):
-    """Stereo resync found nothing to pair (no partner within the slop)."""

@@ -5,9 +5,9 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from replay.camera import CameraModel, canonical_model
-from replay.format_names import CAMERA_MODELS
+from replay.camera import CameraModel
 from replay.frames import Frame, encode_image
+from replay.lens_models import LENS_MODELS, canonical_name
 from replay.messages import F64, CameraInfo
 
 from .base import Output
@@ -22,11 +22,11 @@ class Remap:
 
     def __init__(self, info: CameraInfo, *, rotation: F64, new_k: F64, processor: str,
                  output: str) -> None:
-        model = canonical_model(info.distortion_model)
+        model = canonical_name(info.distortion_model)
         problem = None
-        if model not in CAMERA_MODELS:
+        if model not in LENS_MODELS:
             problem = (f"cannot resample distortion model {model!r} (use "
-                       f"{', '.join(CAMERA_MODELS)})")
+                       f"{', '.join(LENS_MODELS)})")
         elif info.binning_x > 1 or info.binning_y > 1 or any(info.roi[:4]):
             problem = "binned or ROI camera models are not supported"
         elif info.width <= 0 or info.height <= 0:

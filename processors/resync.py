@@ -34,7 +34,7 @@ import numpy.typing as npt
 
 from replay.records import OffsetStats, ResyncStats
 
-from .errors import ConfigError, InputError
+from .errors import ConfigError, StampsError
 
 I64 = npt.NDArray[np.int64]
 
@@ -65,11 +65,11 @@ class Pairing:
 def _check_stamps(side: str, stamps_ns: npt.ArrayLike) -> I64:
     stamps = np.asarray(stamps_ns)
     if stamps.ndim != 1 or (stamps.size and not np.issubdtype(stamps.dtype, np.integer)):
-        raise InputError(f"{side} stamps must be a 1-D integer array, got {stamps.dtype}"
+        raise StampsError(f"{side} stamps must be a 1-D integer array, got {stamps.dtype}"
                          f"{list(stamps.shape)}")
     stamps = stamps.astype(np.int64)
     if np.any(np.diff(stamps) < 0):
-        raise InputError(f"{side} stamps must be sorted")
+        raise StampsError(f"{side} stamps must be sorted")
     return stamps
 
 

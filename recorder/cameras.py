@@ -9,8 +9,8 @@ from typing import Any
 import numpy as np
 
 from replay.camera import CameraModel, focal_from_hfov
-from replay.format_names import CAMERA_MODELS, FISHEYE_MODELS
 from replay.geometry import frame_from_axes, rotation_from_rpy
+from replay.lens_models import LENS_MODELS
 from replay.messages import F64
 
 from .spec_table import SpecTable
@@ -54,8 +54,8 @@ def parse_camera(
         raise f.fail("namespace", f"must start with '/', got {namespace!r}")
     width = f.integer("width", 640)
     height = f.integer("height", 480)
-    dist_model = f.text("distortion_model", "plumb_bob", choices=tuple(CAMERA_MODELS))
-    fisheye = dist_model in FISHEYE_MODELS
+    dist_model = f.text("distortion_model", "plumb_bob", choices=tuple(LENS_MODELS))
+    fisheye = LENS_MODELS[dist_model].fisheye
     # a pinhole's field of view stays below 180 degrees; a fisheye's may pass it
     hfov = f.number("hfov_rad", 0.6, low=1e-3, high=2 * math.pi - 0.1 if fisheye else 3.0)
     fx0 = (width / 2) / (hfov / 2) if fisheye else focal_from_hfov(width, hfov)
@@ -63,7 +63,7 @@ def parse_camera(
     fy = f.number("fy", fx, positive=True)
     cx = f.number("cx", (width - 1) / 2)
     cy = f.number("cy", (height - 1) / 2)
-    count = CAMERA_MODELS[dist_model]
+    count = len(LENS_MODELS[dist_model].coefficients)
     distortion = f.vector("distortion", None, [0.0] * count)
     if distortion.size > count:
         raise f.fail("distortion", f"{dist_model} takes at most {count} coefficients, "

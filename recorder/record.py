@@ -22,8 +22,7 @@ from replay._version import VERSION
 from replay.formats import LogWriter
 from replay.formats.background import BackgroundWriter
 from replay.geometry import invert, quat_xyzw_from_rotation
-from replay.records import RenderView, ScenarioCamera, ScenarioDrift
-from replay.records import Scenario as ScenarioRecord
+from replay.records import RenderView, Scenario, ScenarioCamera, ScenarioDrift
 from replay.topics import SCENARIO, CameraTopics
 
 from .clock import Shot, schedule
@@ -33,7 +32,7 @@ from .exposure import rendered_shots
 from .motion import plan_trajectory
 from .multiview import CameraOptics, MultiViewOptics, plan_camera_optics
 from .render import SceneRenderer, gl_backend
-from .scenario import Scenario
+from .scenario import ScenarioSpec
 from .targets import target_record
 
 #: seed streams, so that changing one aspect of a scenario does not reshuffle the others
@@ -63,7 +62,7 @@ class RecordResult:
         return sum(self.frames.values()) / self.loop_s if self.loop_s > 0 else 0.0
 
 
-def rng_for(scenario: Scenario, stream: int, index: int) -> np.random.Generator:
+def rng_for(scenario: ScenarioSpec, stream: int, index: int) -> np.random.Generator:
     """The random generator of one seed stream (motion, clock, noise) and index."""
     return np.random.default_rng([scenario.seed, stream, index])
 
@@ -79,8 +78,8 @@ def _views_record(optics: CameraOptics) -> dict[str, Any]:
 
 
 def scenario_record(
-    scenario: Scenario, optics: list[CameraOptics], dropped: dict[int, np.ndarray]
-) -> ScenarioRecord:
+    scenario: ScenarioSpec, optics: list[CameraOptics], dropped: dict[int, np.ndarray]
+) -> Scenario:
     """Everything that shaped the recording, stored in the log (``/camlog/scenario``)."""
     import mujoco
 
@@ -101,7 +100,7 @@ def scenario_record(
                             degrees=d.degrees, start_s=d.start_s,
                             start_stamp_ns=scenario.start_stamp_ns + round(d.start_s * 1e9))
               for d in scenario.drifts]
-    return ScenarioRecord(
+    return Scenario(
         scenario=scenario.name, source=scenario.source, seed=scenario.seed,
         camlog_version=VERSION, mujoco_version=mujoco.__version__,
         renderer=f"mujoco/{gl_backend()}", spec=scenario.spec, cameras=cameras,
@@ -114,7 +113,7 @@ class _Pipeline:
     that also finishes frames there (warp, noise, encoding) before writing them."""
 
     def __init__(
-        self, scenario: Scenario, optics: list[CameraOptics], open_log: Callable[[], LogWriter]
+        self, scenario: ScenarioSpec, optics: list[CameraOptics], open_log: Callable[[], LogWriter]
     ) -> None:
         self.scenario = scenario
         self.optics = optics
@@ -159,7 +158,7 @@ class _Pipeline:
 
 
 def record(
-    scenario: Scenario,
+    scenario: ScenarioSpec,
     output: str | Path,
     *,
     fmt: str | None = None,

@@ -13,7 +13,7 @@ from replay.messages import F64
 from .errors import RenderError
 from .multiview import CameraOptics
 from .optics import Optics
-from .scenario import Scenario
+from .scenario import ScenarioSpec
 from .scene import build_mjcf, camera_light_name, view_camera_name
 
 
@@ -48,7 +48,7 @@ class SceneRenderer:
     """Owns the MuJoCo model, its renderers (one per pinhole render size, one for every
     multi-view camera's views) and the target mocap poses."""
 
-    def __init__(self, scenario: Scenario, optics: list[CameraOptics]) -> None:
+    def __init__(self, scenario: ScenarioSpec, optics: list[CameraOptics]) -> None:
         self.mujoco = _import_mujoco()
         mj = self.mujoco
         sizes = {size for o in optics for size in o.render_sizes}

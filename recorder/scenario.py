@@ -25,7 +25,7 @@ from .targets import check_target
 
 
 @dataclass(frozen=True)
-class Scenario:
+class ScenarioSpec:
     """A resolved scenario: cameras, targets, motion, timing and seed (all that shapes it)."""
 
     name: str
@@ -65,7 +65,7 @@ class Scenario:
 
 def load_scenario(
     name_or_path: str | None = None, overrides: dict[str, Any] | None = None
-) -> Scenario:
+) -> ScenarioSpec:
     """Load a built-in scenario by name or a spec file by path, then apply ``overrides``."""
     name_or_path = name_or_path or DEFAULT_SCENARIO
     path = Path(name_or_path)
@@ -122,7 +122,7 @@ def apply_overrides(raw: dict[str, Any], overrides: dict[str, Any]) -> dict[str,
     return out
 
 
-def parse_scenario(raw: dict[str, Any], source: str) -> Scenario:
+def parse_scenario(raw: dict[str, Any], source: str) -> ScenarioSpec:
     """Validate raw spec data and resolve cameras, rig poses and targets."""
     top = SpecTable(raw, "", source)
     name = top.text("name")
@@ -161,7 +161,7 @@ def parse_scenario(raw: dict[str, Any], source: str) -> Scenario:
     drifts = tuple(parse_drift(d, f"drifts[{i}].", source, cameras)
                    for i, d in enumerate(drifts_raw))
     top.check_unknown()
-    scenario = Scenario(name, description, seed, duration_s, frames, start_stamp_ns,
+    scenario = ScenarioSpec(name, description, seed, duration_s, frames, start_stamp_ns,
                         tuple(cameras), targets, raw, source, drifts)
     if max(scenario.frame_counts) > MAX_FRAMES:
         raise ScenarioError(f"{source}: {max(scenario.frame_counts)} frames per camera is more "

@@ -14,7 +14,7 @@ from replay.geometry import OPTICAL_FROM_MJCAMERA, quat_xyzw_from_rotation
 from replay.messages import F64
 
 from .optics import View
-from .scenario import Scenario
+from .scenario import ScenarioSpec
 from .targets import CIRCLE_SLICES, PLANAR_KINDS, target_geoms
 
 #: MuJoCo's headlight shines along the rendering camera's view; a camera rendered as several
@@ -54,7 +54,7 @@ def _view_camera(name: str, world_from_camera: F64, view: View) -> str:
 
 
 def build_mjcf(
-    scenario: Scenario, *, offscreen_size: tuple[int, int],
+    scenario: ScenarioSpec, *, offscreen_size: tuple[int, int],
     views: dict[str, tuple[View, ...]] | None = None,
 ) -> str:
     """MJCF text of the scenario's scene; ``offscreen_size`` is the largest render (W, H);

@@ -12,14 +12,14 @@ from fractions import Fraction
 
 from .errors import EncodingError, UnsupportedEncodingError
 
-__all__ = ["LAYOUTS", "Layout", "check_buffer", "layout_of"]
+__all__ = ["LAYOUTS", "BufferLayout", "check_buffer", "layout_of"]
 
 #: numpy dtype name of a value -> its bytes
 VALUE_BYTES = {"uint8": 1, "uint16": 2, "int16": 2, "float32": 4}
 
 
 @dataclass(frozen=True, slots=True)
-class Layout:
+class BufferLayout:
     """``channels`` values of type ``value`` (a numpy dtype name) per pixel; semi-planar YUV
     (nv21, nv24) holds its chroma plane below the luma plane: its buffer has ``rows`` times
     as many rows of ``width`` values as the image has rows."""
@@ -38,24 +38,25 @@ class Layout:
 BAYER_PATTERNS = ("rggb", "bggr", "gbrg", "grbg")
 
 #: raw encoding name -> its buffer layout
-LAYOUTS: dict[str, Layout] = {
-    **{name: Layout("uint8", 3) for name in ("rgb8", "bgr8", "8UC3")},
-    **{name: Layout("uint8", 4) for name in ("rgba8", "bgra8", "8UC4")},
-    **{name: Layout("uint16", 3) for name in ("rgb16", "bgr16")},
-    **{name: Layout("uint16", 4) for name in ("rgba16", "bgra16")},
-    **{name: Layout("uint8", 1) for name in ("mono8", "8UC1")},
-    **{name: Layout("uint16", 1) for name in ("mono16", "16UC1")},
-    **{name: Layout("uint8", 2) for name in ("8UC2", "yuv422", "uyvy", "yuv422_yuy2", "yuyv")},
-    "16SC1": Layout("int16", 1),
-    "32FC1": Layout("float32", 1),
-    **{f"bayer_{pattern}8": Layout("uint8", 1) for pattern in BAYER_PATTERNS},
-    **{f"bayer_{pattern}16": Layout("uint16", 1) for pattern in BAYER_PATTERNS},
-    "nv21": Layout("uint8", 1, Fraction(3, 2)),
-    "nv24": Layout("uint8", 1, Fraction(3)),
+LAYOUTS: dict[str, BufferLayout] = {
+    **{name: BufferLayout("uint8", 3) for name in ("rgb8", "bgr8", "8UC3")},
+    **{name: BufferLayout("uint8", 4) for name in ("rgba8", "bgra8", "8UC4")},
+    **{name: BufferLayout("uint16", 3) for name in ("rgb16", "bgr16")},
+    **{name: BufferLayout("uint16", 4) for name in ("rgba16", "bgra16")},
+    **{name: BufferLayout("uint8", 1) for name in ("mono8", "8UC1")},
+    **{name: BufferLayout("uint16", 1) for name in ("mono16", "16UC1")},
+    **{name: BufferLayout("uint8", 2)
+       for name in ("8UC2", "yuv422", "uyvy", "yuv422_yuy2", "yuyv")},
+    "16SC1": BufferLayout("int16", 1),
+    "32FC1": BufferLayout("float32", 1),
+    **{f"bayer_{pattern}8": BufferLayout("uint8", 1) for pattern in BAYER_PATTERNS},
+    **{f"bayer_{pattern}16": BufferLayout("uint16", 1) for pattern in BAYER_PATTERNS},
+    "nv21": BufferLayout("uint8", 1, Fraction(3, 2)),
+    "nv24": BufferLayout("uint8", 1, Fraction(3)),
 }
 
 
-def layout_of(encoding: str) -> Layout:
+def layout_of(encoding: str) -> BufferLayout:
     """The layout of a raw encoding; :class:`UnsupportedEncodingError` naming the supported
     ones."""
     layout = LAYOUTS.get(encoding)

@@ -14,8 +14,7 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from .format_names import CAMERA_MODELS
-from .lens_models import LensModel, canonical_name, lens_model
+from .lens_models import LENS_MODELS, LensModel, canonical_name, lens_model
 from .messages import F64, CameraInfo
 from .projections import PROJECTIONS, Projection
 
@@ -23,12 +22,6 @@ from .projections import PROJECTIONS, Projection
 def focal_from_hfov(width: int, hfov_rad: float) -> float:
     """Focal length in pixels: ``fx = (W / 2) / tan(hfov / 2)``."""
     return (width / 2.0) / math.tan(hfov_rad / 2.0)
-
-
-def canonical_model(name: str) -> str:
-    """The ROS name of a distortion model (``fisheye`` -> ``equidistant``); an empty name is
-    plumb_bob, as camera_info_manager reads it."""
-    return canonical_name(name)
 
 
 @dataclass(frozen=True)
@@ -42,12 +35,12 @@ class CameraModel:
     d: F64 = field(default_factory=lambda: np.zeros(5))
 
     def __post_init__(self) -> None:
-        if self.distortion_model not in CAMERA_MODELS:
+        if self.distortion_model not in LENS_MODELS:
             raise ValueError(
                 f"unknown distortion model {self.distortion_model!r} "
-                f"(use {', '.join(CAMERA_MODELS)})"
+                f"(use {', '.join(LENS_MODELS)})"
             )
-        n = CAMERA_MODELS[self.distortion_model]
+        n = len(LENS_MODELS[self.distortion_model].coefficients)
         d = np.zeros(n)
         given = np.asarray(self.d, dtype=np.float64).reshape(-1)
         if given.size > n:
@@ -66,7 +59,7 @@ class CameraModel:
     @classmethod
     def from_camera_info(cls, info: CameraInfo) -> CameraModel:
         """The model of a CameraInfo (``fisheye`` read as ``equidistant``)."""
-        return cls(info.width, info.height, info.k, canonical_model(info.distortion_model),
+        return cls(info.width, info.height, info.k, canonical_name(info.distortion_model),
                    info.d)
 
     @property

@@ -1,13 +1,11 @@
 """Names and defaults that argument parsers offer, without loading any library: the log
-formats and image codecs camlog writes, the camera models it understands, replay's log times
-and the first stamp of an import (``--format``, ``--compress``, ``--model`` choices)."""
+formats and image codecs camlog writes, replay's log times and the first stamp of an import
+(``--format``, ``--compress`` choices). The lens models are
+:data:`replay.lens_models.LENS_MODELS`."""
 
 from __future__ import annotations
 
-from .lens_models import LENS_MODELS, MODEL_ALIASES
-
-__all__ = ["CAMERA_MODELS", "DEFAULT_CRF", "DEFAULT_START_NS", "DISTORTION_MODELS",
-           "FISHEYE_MODELS", "LOG_TIMES", "MODEL_ALIASES", "STILL_CODECS", "VIDEO_CODEC_NAMES",
+__all__ = ["DEFAULT_CRF", "DEFAULT_START_NS", "LOG_TIMES", "STILL_CODECS", "VIDEO_CODEC_NAMES",
            "WRITE_FORMATS"]
 
 #: ``--format`` names, in the order of :data:`replay.formats.FORMATS`
@@ -23,14 +21,6 @@ VIDEO_CODEC_NAMES = ("h264", "h265")
 #: 39-40 dB PSNR on 640x480 images with 2 levels of sensor noise and still shrinks such a
 #: log far more than tenfold (``benchmarks.video_size``)
 DEFAULT_CRF = 18
-
-#: every model :class:`~replay.camera.CameraModel` understands (ROS ``distortion_model`` names,
-#: in the order of :data:`~replay.lens_models.LENS_MODELS`) -> its number of coefficients
-CAMERA_MODELS = {m.name: len(m.coefficients) for m in LENS_MODELS.values()}
-#: the pinhole models of :data:`CAMERA_MODELS`
-DISTORTION_MODELS = {name: n for name, n in CAMERA_MODELS.items() if not LENS_MODELS[name].fisheye}
-#: the fisheye models of :data:`CAMERA_MODELS` (their field of view may pass 180 degrees)
-FISHEYE_MODELS = {name: n for name, n in CAMERA_MODELS.items() if LENS_MODELS[name].fisheye}
 
 #: what ``camlog play`` writes as a message's log time: the replay's wall clock or the log's
 LOG_TIMES = ("replay", "original")

@@ -21,7 +21,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["LENS_MODELS", "MODEL_ALIASES", "LensModel", "canonical_name", "lens_model"]
+__all__ = ["LENS_MODELS", "LENS_MODEL_NAMES", "MODEL_ALIASES", "LensModel", "canonical_name",
+           "lens_model"]
 
 
 @dataclass(frozen=True)
@@ -58,6 +59,9 @@ LENS_MODELS: dict[str, LensModel] = {m.name: m for m in (
 )}
 #: other names of the models (OpenCV and Kalibr call the equidistant model "fisheye")
 MODEL_ALIASES = {"fisheye": "equidistant"}
+#: every name a lens model may be given by: the ROS names, then the aliases (``--model``'s
+#: choices)
+LENS_MODEL_NAMES = (*LENS_MODELS, *MODEL_ALIASES)
 
 
 def canonical_name(name: str) -> str:
@@ -73,5 +77,5 @@ def lens_model(name: str) -> LensModel:
     try:
         return LENS_MODELS[canonical_name(name)]
     except KeyError:
-        known = ", ".join([*LENS_MODELS, *MODEL_ALIASES])
+        known = ", ".join(LENS_MODEL_NAMES)
         raise KeyError(f"unknown lens model {name!r} (use {known})") from None

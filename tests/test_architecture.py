@@ -163,6 +163,26 @@ def private_uses(modules: dict[str, Module]) -> list[str]:
     return wrong
 
 
+#: the command modules' protocol (camlog.cli.COMMANDS): every one defines these functions
+COMMAND_PROTOCOL = {"add_arguments", "run"}
+
+
+def twins(modules: dict[str, Module]) -> dict[str, list[str]]:
+    """Names given to two things: every class name, and every public module-level function
+    name (but the command modules' protocol), defined in more than one place, with where."""
+    places: dict[str, list[str]] = {}
+    for module in modules.values():
+        for node in ast.walk(module.tree):
+            if isinstance(node, ast.ClassDef):
+                places.setdefault(node.name, []).append(f"{module.where}:{node.lineno}")
+        for node in module.tree.body:
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef) and \
+                    not node.name.startswith("_") and not (
+                        module.name.startswith("camlog.cli.") and node.name in COMMAND_PROTOCOL):
+                places.setdefault(f"{node.name}()", []).append(f"{module.where}:{node.lineno}")
+    return {name: where for name, where in places.items() if len(where) > 1}
+
+
 def _classes(modules: dict[str, Module]) -> dict[str, list[ast.ClassDef]]:
     classes: dict[str, list[ast.ClassDef]] = {}
     for module in modules.values():
@@ -272,6 +292,15 @@ def test_the_checks_find_what_they_look_for() -> None:
                   "    def far(self, a, b, c, d, e, f, g, h, *, i):\n        pass\n",
     )
     assert crowded(many) == ["camlog.m:1 wide (9)", "camlog.m:14 K.far (9)"]
+    named = _sample(
+        replay__a="class Frame:\n    pass\n\ndef load():\n    pass\n\ndef _own():\n    pass\n",
+        camlog__b="def f():\n    class Frame:\n        pass\n\ndef load():\n    pass\n\n"
+                  "def _own():\n    pass\n",
+        camlog__cli__c="def run():\n    pass\n",
+        camlog__cli__d="def run():\n    pass\n",
+    )
+    assert twins(named) == {"Frame": ["replay.a:1", "camlog.b:2"],
+                            "load()": ["replay.a:4", "camlog.b:5"]}
 
 
 def test_the_source_tree_is_read() -> None:
@@ -290,6 +319,10 @@ def test_no_import_cycles() -> None:
 
 def test_no_private_names_across_modules() -> None:
     assert private_uses(MODULES) == []
+
+
+def test_one_name_per_concept() -> None:
+    assert twins(MODULES) == {}
 
 
 def test_public_functions_take_few_parameters() -> None:

@@ -25,7 +25,7 @@ from typing import Any
 from replay import storage
 
 from ..errors import ClusterError, UsageError
-from .jobs import Job, run_job
+from .jobs import BatchJob, run_job
 
 PROBE_TIMEOUT_S = 120.0
 CONNECT_TIMEOUT_S = 5.0
@@ -34,7 +34,7 @@ CONNECT_TIMEOUT_S = 5.0
 GCS_START_WAIT_S = 120
 
 
-def run_on_ray(jobs: list[Job], *, address: str | None, jobs_at_once: int | None,
+def run_on_ray(jobs: list[BatchJob], *, address: str | None, jobs_at_once: int | None,
                cpus_per_log: float, retries: int, done: Callable[[dict[str, Any]], None],
                show: Callable[[int, int], None], notes: list[str]) -> None:
     """Run ``jobs`` as Ray tasks; ``done`` gets each status, ``show`` (running, queued)."""
@@ -187,12 +187,12 @@ def _refusal(err: BaseException, address: str) -> str:
     return reason
 
 
-def _needed_filesystems(jobs: Iterable[Job]) -> list[str]:
+def _needed_filesystems(jobs: Iterable[BatchJob]) -> list[str]:
     return sorted({storage.scheme(loc) for job in jobs for loc in (job.log, job.out_dir)
                    if storage.is_remote(loc)})
 
 
-def _check_nodes(ray: Any, where: str, jobs: list[Job]) -> list[str]:
+def _check_nodes(ray: Any, where: str, jobs: list[BatchJob]) -> list[str]:
     """Ask every live node to import camlog and the needed filesystems; their ids."""
     from ray.util.scheduling_strategies import NodeAffinitySchedulingStrategy
 
@@ -239,11 +239,11 @@ def _check_nodes(ray: Any, where: str, jobs: list[Job]) -> list[str]:
     return nodes
 
 
-def _run(ray: Any, task: Any, jobs: list[Job], *, limit: int, cpus_per_log: float,
+def _run(ray: Any, task: Any, jobs: list[BatchJob], *, limit: int, cpus_per_log: float,
          retries: int, done: Callable[[dict[str, Any]], None],
          show: Callable[[int, int], None]) -> None:
     waiting = list(reversed(jobs))
-    in_flight: dict[Any, Job] = {}
+    in_flight: dict[Any, BatchJob] = {}
     last_count = 0.0
     while waiting or in_flight:
         while waiting and len(in_flight) < limit:

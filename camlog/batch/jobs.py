@@ -43,7 +43,7 @@ KNOWN_ERRORS = (CamlogError, ReplayError, ProcessorError, RecorderError, OSError
 
 
 @dataclass(frozen=True)
-class Job:
+class BatchJob:
     """One log through the pipeline; everything a worker needs (paths or URIs)."""
 
     log: Location
@@ -64,7 +64,7 @@ def _file_size(location: str) -> int | None:
         return None
 
 
-def up_to_date(job: Job) -> dict[str, Any] | None:
+def up_to_date(job: BatchJob) -> dict[str, Any] | None:
     """The previous status when the outputs are complete for this input and pipeline."""
     try:
         status = json_loads(storage.read_bytes(storage.join(job.out_dir, STATUS_FILE)),
@@ -96,7 +96,7 @@ def node_name() -> str:
     return socket.gethostname()
 
 
-def run_job(job: Job) -> dict[str, Any]:
+def run_job(job: BatchJob) -> dict[str, Any]:
     """Run every step on one log; never raises for a bad log (the error is the status)."""
     import cv2
 
@@ -131,7 +131,7 @@ def run_job(job: Job) -> dict[str, Any]:
     return status
 
 
-def _run_steps(job: Job, status: dict[str, Any], scratch: Path | None) -> None:
+def _run_steps(job: BatchJob, status: dict[str, Any], scratch: Path | None) -> None:
     """The steps, into the output folder (local) or a scratch folder then uploaded."""
     remote_out = storage.is_remote(job.out_dir)
     out = scratch / "out" if remote_out and scratch else storage.local_path(job.out_dir)

@@ -18,7 +18,7 @@ from concurrent.futures.process import BrokenProcessPool
 from multiprocessing import get_context
 from typing import Any
 
-from .jobs import Job, run_job
+from .jobs import BatchJob, run_job
 
 #: thread pools of numerical libraries, sized per job so that parallel jobs do not
 #: oversubscribe the cores (read when a worker process starts)
@@ -47,19 +47,19 @@ def _init_worker(parent_pid: int, started: Any) -> None:
     _WORKER["started"] = started
 
 
-def _run_in_worker(job: Job) -> dict[str, Any]:
+def _run_in_worker(job: BatchJob) -> dict[str, Any]:
     _WORKER["started"].put(job.key)
     return run_job(job)
 
 
-def crashed_status(job: Job, attempts: int, why: str) -> dict[str, Any]:
+def crashed_status(job: BatchJob, attempts: int, why: str) -> dict[str, Any]:
     """Status of a log whose worker died ``attempts`` times."""
     return {"log": str(job.log), "out_dir": job.key, "status": "failed", "steps": [],
             "error": f"its worker died {attempts} times ({why})",
             "node": socket.gethostname(), "seconds": 0.0}
 
 
-def run_processes(jobs: list[Job], n: int, done: Callable[[dict[str, Any]], None],
+def run_processes(jobs: list[BatchJob], n: int, done: Callable[[dict[str, Any]], None],
                   show: Callable[[int, int], None], *, attempts: int = 3) -> None:
     """Run ``jobs`` in ``n`` processes; ``done`` gets each status, ``show`` (running,
     queued) counts as they change."""
@@ -76,7 +76,7 @@ def run_processes(jobs: list[Job], n: int, done: Callable[[dict[str, Any]], None
             with ProcessPoolExecutor(max_workers=n, mp_context=context,
                                      initializer=_init_worker,
                                      initargs=(os.getpid(), started)) as pool:
-                futures: dict[Future[dict[str, Any]], Job] = {
+                futures: dict[Future[dict[str, Any]], BatchJob] = {
                     pool.submit(_run_in_worker, job): job for job in remaining}
                 remaining = _collect(futures, started, tries=tries, attempts=attempts,
                                      done=done, show=show)
@@ -88,12 +88,12 @@ def run_processes(jobs: list[Job], n: int, done: Callable[[dict[str, Any]], None
                 os.environ[name] = value
 
 
-def _collect(futures: dict[Future[dict[str, Any]], Job], started: Any, *,
+def _collect(futures: dict[Future[dict[str, Any]], BatchJob], started: Any, *,
              tries: dict[str, int], attempts: int, done: Callable[[dict[str, Any]], None],
-             show: Callable[[int, int], None]) -> list[Job]:
+             show: Callable[[int, int], None]) -> list[BatchJob]:
     """Wait for one pool's jobs; the jobs to run again in a new pool."""
     running: set[str] = set()
-    again: list[Job] = []
+    again: list[BatchJob] = []
     pending = set(futures)
     while pending:
         finished, pending = wait(pending, timeout=POLL_S, return_when=FIRST_COMPLETED)

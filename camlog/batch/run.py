@@ -22,7 +22,7 @@ from replay import storage
 from replay.storage import Location
 
 from ..errors import UsageError
-from .jobs import Job
+from .jobs import BatchJob
 from .pipeline import Pipeline
 
 ENGINES = ("process", "ray")
@@ -37,9 +37,9 @@ def log_name(log: Location) -> str:
 
 
 def plan_jobs(pipeline: Pipeline, logs: Iterable[Location], out_dir: Location,
-              workers: int) -> list[Job]:
+              workers: int) -> list[BatchJob]:
     """One job per log, each with its own output folder (names made unique)."""
-    planned: list[Job] = []
+    planned: list[BatchJob] = []
     used: set[str] = set()
     for log in logs:
         name = log_name(log)
@@ -47,7 +47,7 @@ def plan_jobs(pipeline: Pipeline, logs: Iterable[Location], out_dir: Location,
         while unique in used:
             unique, n = f"{name}_{n}", n + 1
         used.add(unique)
-        planned.append(Job(log, storage.join(out_dir, unique), pipeline, workers))
+        planned.append(BatchJob(log, storage.join(out_dir, unique), pipeline, workers))
     return planned
 
 

@@ -144,9 +144,9 @@ def _resync(request: ResyncRequest, o: dict[str, Any], out: Path,
 def _calibrate(request: CalibrateRequest, o: dict[str, Any], out: Path,
                workers: int) -> StepOutcome:
     if request.check:
-        from ..calibrate.check import check_log
+        from ..calibrate.check import measure_calibration
 
-        checked = check_log(request)
+        checked = measure_calibration(request)
         path = out / "check.txt"
         write_text_atomic(path, "\n".join(checked.lines()) + "\n")
         return StepOutcome(None, {"views": checked.views}, [path])
@@ -205,10 +205,10 @@ def _info(request: InfoRequest, o: dict[str, Any], out: Path, workers: int) -> S
 
 
 def _check(request: CheckRequest, o: dict[str, Any], out: Path, workers: int) -> StepOutcome:
-    from ..check.flow import check_log, options_of
+    from ..check.flow import check_drift, options_of
     from ..check.report import write_report
 
-    checked = check_log(request.logs[0], options_of(request))
+    checked = check_drift(request.logs[0], options_of(request))
     flagged = [s for s in checked.series if any(s.flagged)]
     figures: dict[str, Any] = {
         "flagged_windows": int(sum(sum(s.flagged) for s in checked.series))}

@@ -50,7 +50,7 @@ class CheckResult:
         return out
 
 
-def check_log(request: CalibrateRequest) -> CheckResult:
+def measure_calibration(request: CalibrateRequest) -> CheckResult:
     """Linearity and reprojection error per view (mono), plus epipolar error (stereo), of the
     request's ``calibration`` files on its log.
 

@@ -28,8 +28,8 @@ from replay.records import CalibrationSummary, ViewResiduals
 from replay.topics import CALIBRATION_SUMMARY, CameraTopics
 
 from .pixels import TopicFrames
-from .solving import CalibratedCamera, StereoSolution
-from .views import Frame
+from .solving import RigSolution
+from .views import DetectedFrame
 
 __all__ = ["EVIDENCE_ZSTD_LEVEL", "Evidence", "write_evidence", "write_summary"]
 
@@ -51,37 +51,37 @@ def _rectify_maps(info: CameraInfo) -> tuple[np.ndarray, np.ndarray]:
     return rectify_maps(info, cv2.CV_16SC2)
 
 
-def hold_ends(frames: Sequence[Frame], view_of: Mapping[int, int]) -> dict[int, int]:
-    """Per view (named by its first frame's index), the stamp of the last frame it covers:
+def hold_ends(frames: Sequence[DetectedFrame], view_of: Mapping[int, int]) -> dict[int, int]:
+    """Per view (``view_of``: frame index -> view), the stamp of the last frame it covers:
     the frames of its held pose and their byte-for-byte repeats."""
     ends: dict[int, int] = {}
     current: int | None = None
     for frame in frames:
         if not frame.duplicate:
-            current = view_of.get(frame.index, frame.index)
+            current = view_of.get(frame.index)
         if current is not None:
             ends[current] = frame.stamp_ns
     return ends
 
 
 def write_evidence(reader: LogReader, writer: LogWriter | BackgroundWriter,
-                   cameras: list[CalibratedCamera], *, board: Board,
-                   stereo: StereoSolution | None, progress: bool | None) -> Evidence:
+                   solved: RigSolution, *, board: Board, progress: bool | None) -> Evidence:
     """Write into ``writer`` the log of ``reader`` plus the calibration's annotated topics
     (a :class:`~replay.formats.background.BackgroundWriter` compresses and writes them while
     this pass draws the next frames)."""
+    cameras, stereo, joint = solved.cameras, solved.stereo, solved.joint
     by_topic = {c.views.source.image_topic: c for c in cameras}
     counters = dict.fromkeys(by_topic, 0)
-    ends = {c.views.source.namespace: hold_ends(c.views.frames, c.solution.view_of)
-            for c in cameras}
+    ends = {c.views.source.namespace: hold_ends(c.views.frames, c.view_of) for c in cameras}
     maps = {c.views.source.namespace: _rectify_maps(c.camera_info) for c in cameras} \
         if stereo is not None else {}
-    # frames of the joint views, per camera, and the one the report shows
-    joint = {cameras[0].views.source.namespace: {li for li, _ in stereo.pairs},
-             cameras[-1].views.source.namespace: {ri for _, ri in stereo.pairs}} \
+    # frames of the joint views (their first), per camera, and the one the report shows
+    pairs = [(solved.first_frame(lv), solved.first_frame(rv)) for lv, rv in stereo.pairs] \
+        if stereo is not None else []
+    rectified_frames = {cameras[0].views.source.namespace: {li for li, _ in pairs},
+                        cameras[-1].views.source.namespace: {ri for _, ri in pairs}} \
         if stereo is not None else {}
-    shown = stereo.pairs[len(stereo.pairs) // 2] if stereo is not None and stereo.pairs \
-        else None
+    shown = pairs[len(pairs) // 2] if pairs else None
     rectified_shown: dict[int, np.ndarray] = {}
     bar = progress_bar(total=reader.message_count, unit="msg", desc="write",
                        progress=progress)
@@ -105,7 +105,7 @@ def write_evidence(reader: LogReader, writer: LogWriter | BackgroundWriter,
                 stamp, image.frame_id, info.width, info.height, info.distortion_model,
                 info.d, info.k, info.r, info.p), log_time_ns=log_time)
             # a joint view's frame may repeat the previous one on one side: rectify it anyway
-            if frame.index in joint.get(ns, ()):
+            if frame.index in rectified_frames.get(ns, ()):
                 rectified = image.with_pixels(cv2.remap(image.pixels, *maps[ns],
                                                         cv2.INTER_LINEAR))
                 writer.write(topics.image_rect, encode_image(rectified), log_time_ns=log_time)
@@ -113,29 +113,27 @@ def write_evidence(reader: LogReader, writer: LogWriter | BackgroundWriter,
                 if shown is not None and frame.index == shown[side]:
                     rectified_shown[side] = rectified.bgr8()
             # a held pose is one view: its first frame carries the annotation
-            view = camera.solution.view_of.get(frame.index, frame.index)
-            if frame.duplicate or view != frame.index:
+            view = camera.view_of.get(frame.index)
+            if frame.duplicate or (view is not None and solved.first_frame(view) != frame.index):
                 continue
-            status, used = camera.solution.status(frame)
+            status, used = solved.status(camera, frame)
             corners = frame.detection.corners_px if frame.detection is not None else None
             annotated = cv2.cvtColor(
                 annotate_detection(image.bgr8(), corners, board.pattern_size, status, used),
                 cv2.COLOR_BGR2RGB)
             writer.write(topics.detections, Image(stamp, image.frame_id, "rgb8", annotated),
                          log_time_ns=log_time)
-            result = camera.solution.result
             # a held pose's view is recorded at its first frame
-            if used and corners is not None and frame.index in result.view_rms_px:
-                rms = result.view_rms_px[frame.index]
+            if used and corners is not None and view is not None:
+                rms = joint.view_rms_px(view)
                 writer.write(topics.view_error, PointStamped(
                     stamp, image.frame_id, np.array([rms, 0.0, 0.0], dtype=np.float64)),
                     log_time_ns=log_time)
-                inliers = result.inliers.get(frame.index)
-                outliers = np.flatnonzero(~inliers).tolist() if inliers is not None else []
+                outliers = np.flatnonzero(~joint.inliers[view]).tolist()
                 writer.write(topics.residuals, ViewResiduals(
                     stamp, image.frame_id, rms, np.round(corners, 4),
-                    np.round(result.residuals_px[frame.index], 5), outliers,
-                    until_ns=ends[ns].get(frame.index)).to_message(),
+                    np.round(joint.residuals_px[view], 5), outliers,
+                    until_ns=ends[ns].get(view)).to_message(),
                     log_time_ns=log_time)
     pair = (rectified_shown[0], rectified_shown[1]) if len(rectified_shown) == 2 else None
     return Evidence(pair)

@@ -2,8 +2,11 @@
 
 The steps are plain functions from value to value: :func:`~.views.detect_views` (the pass
 over the log), :func:`~.solving.solve_rig` (every camera, the rig and every board pose at once),
+:func:`~.statistics.camera_statistics` (what the solution says of its own accuracy),
 :func:`~.summary.build_summary`, :func:`~.evidence.write_evidence` (the second pass, which
-copies the log) and :func:`~.report.write_files`. Every output is written into a hidden
+copies the log) and :func:`~.report.write_files`. With the report, a short log's statistics
+are computed on a thread of their own while the evidence pass runs, and joined right after it
+(:func:`_write_report`): their error is raised there. Every output is written into a hidden
 temporary folder and moved into place only when all of it succeeded.
 """
 
@@ -12,6 +15,7 @@ from __future__ import annotations
 import os
 import time
 from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import partial
@@ -26,7 +30,7 @@ from processors.calibration.options import CalibrationOptions
 from replay.atomic import AtomicFolder
 from replay.formats import LogReader, open_reader, open_writer
 from replay.formats.background import BackgroundWriter
-from replay.records import CalibrationSummary, Scenario
+from replay.records import CalibrationSummary, Scenario, ScenarioCamera
 from replay.storage import Location, local_paths
 
 from ..errors import CalibrationError, InputError, UsageError
@@ -37,14 +41,8 @@ from .evidence import EVIDENCE_ZSTD_LEVEL, write_evidence, write_summary
 from .instants import ViewsOfRig
 from .remeasure import remeasured_rig
 from .report import output_names, write_files
-from .solving import (
-    CalibratedCamera,
-    RigSolution,
-    StereoSolution,
-    calibrated_cameras,
-    guiding_models,
-    solve_rig,
-)
+from .solving import CalibratedCamera, RigSolution, guiding_models, solve_rig
+from .statistics import CameraStatistics, beside_the_pass, camera_statistics
 from .summary import build_summary
 from .views import CameraViews, LogViews, detect_views, with_speed_limit
 
@@ -59,14 +57,18 @@ MeasureAgain = Callable[[list[CameraViews], ViewsOfRig, JointResult], ViewsOfRig
 class CalibrationRun:
     """Everything :func:`calibrate_log` computed and where it wrote it."""
 
-    cameras: list[CalibratedCamera]
-    stereo: StereoSolution | None
     solved: RigSolution
+    statistics: list[CameraStatistics]  # per camera, in camera order
     output_dir: Path
     files: list[Path]
     wall_s: float
     summary: CalibrationSummary
     warnings: list[str]  # what the user should know, e.g. frames that did not decode
+
+    @property
+    def cameras(self) -> list[CalibratedCamera]:
+        """The calibrated cameras, in the order named."""
+        return self.solved.cameras
 
 
 def _check_size(views: CameraViews) -> None:
@@ -98,26 +100,38 @@ def _namespaces(log: Location, cameras: list[str], *, recover: bool) -> list[str
     return spaces
 
 
-def _write_report(reader: LogReader, folder: Path, calibrated: list[CalibratedCamera],
-                  solved: RigSolution, *, board: Board, options: CalibrationOptions,
-                  scenario: Scenario | None, camera_name: str | None,
-                  progress: bool | None) -> CalibrationSummary:
+def _write_report(reader: LogReader, folder: Path, solved: RigSolution, *, board: Board,
+                  options: CalibrationOptions, scenario: Scenario | None,
+                  camera_name: str | None, progress: bool | None
+                  ) -> tuple[CalibrationSummary, list[CameraStatistics]]:
     """calibration.mcap, the calibration files, the figures and report.md into ``folder``;
-    the summary they show.
+    the summary they show and the statistics it holds.
 
     calibration.mcap is compressed and written on a thread of its own while this one
-    annotates the frames and draws the figures (and another one may still compute the
-    statistics); it is complete, or its error raised, when this returns."""
+    annotates the frames; a short log's statistics are computed on another one meanwhile
+    (:func:`~.statistics.beside_the_pass`) and joined when the pass is done, a long log's
+    then. The log is complete, or its error raised, when this returns."""
     with BackgroundWriter(partial(open_writer, folder / "calibration.mcap",
                                   compression_level=EVIDENCE_ZSTD_LEVEL)) as log:
-        evidence = write_evidence(reader, log, calibrated, board=board, stereo=solved.stereo,
-                                  progress=progress)
-        summary = build_summary(calibrated, solved, board=board, options=options,
+        # leaving the pool waits for its thread, the pass's error first
+        with ThreadPoolExecutor(max_workers=1, thread_name_prefix="camlog-statistics") as pool:
+            beside = pool.submit(_statistics, solved, board) if beside_the_pass(solved) \
+                else None
+            evidence = write_evidence(reader, log, solved, board=board, progress=progress)
+        statistics = beside.result() if beside is not None else _statistics(solved, board)
+        summary = build_summary(solved, statistics, board=board, options=options,
                                 scenario=scenario)
         write_summary(log, summary, log_time_ns=reader.end_ns or 0)
-        write_files(folder, calibrated, stereo=solved.stereo, summary=summary,
-                    evidence=evidence, camera_name=camera_name)
-    return summary
+        write_files(folder, solved, statistics, summary=summary, evidence=evidence,
+                    camera_name=camera_name)
+    return summary, statistics
+
+
+def _statistics(solved: RigSolution, board: Board) -> list[CameraStatistics]:
+    """Each camera's statistics (:func:`~.statistics.camera_statistics`); singular
+    equations as one line."""
+    with _singular_is_one_line():
+        return camera_statistics(solved, points_in_board=board.points_in_board())
 
 
 def cameras_of(request: CalibrateRequest) -> list[str]:
@@ -200,28 +214,32 @@ def calibrate_log(request: CalibrateRequest, *, workers: int | None = None,
         elif remeasures(board, options.distortion_model):
             remeasure = partial(remeasured_rig, reader, cameras_views, board=board,
                                 workers=workers, progress=progress)
-        # with the report, a short log's statistics are computed while the evidence pass runs
+        scenario = found.scenario
         with _singular_is_one_line():
             solved = solve_rig(cameras_views, board, options, approximate_s=approximate_s,
-                               diameter_m=diameter_m, background=report, remeasure=remeasure,
-                               as_rig=as_rig)
-        solutions, stereo = solved.cameras, solved.stereo
-        scenario = found.scenario
-        truth = [scenario.camera_for(s.views.source.namespace,
-                                     s.views.log_info.frame_id if s.views.log_info else None)
-                 if scenario is not None else None for s in solutions]
-        calibrated = calibrated_cameras(solutions, stereo, truth)
+                               diameter_m=diameter_m, remeasure=remeasure, as_rig=as_rig,
+                               truth=_truth(scenario, cameras_views))
         if report:
-            summary = _write_report(reader, staged.path, calibrated, solved, board=board,
-                                    options=options, scenario=scenario, camera_name=camera_name,
-                                    progress=progress)
+            summary, statistics = _write_report(
+                reader, staged.path, solved, board=board, options=options, scenario=scenario,
+                camera_name=camera_name, progress=progress)
         else:
-            summary = build_summary(calibrated, solved, board=board, options=options,
+            statistics = _statistics(solved, board)
+            summary = build_summary(solved, statistics, board=board, options=options,
                                     scenario=scenario)
-            write_files(staged.path, calibrated, stereo=stereo, summary=summary, evidence=None,
+            write_files(staged.path, solved, statistics, summary=summary, evidence=None,
                         camera_name=camera_name)
     diameter_warning = solved.circles.warning() if solved.circles is not None else None
-    return CalibrationRun(calibrated, stereo, solved, output_dir, staged.files,
+    return CalibrationRun(solved, statistics, output_dir, staged.files,
                           time.perf_counter() - started, summary,
                           [*reader.warnings, *found.warnings,
                            *([diameter_warning] if diameter_warning else [])])
+
+
+def _truth(scenario: Scenario | None, cameras: list[CameraViews]
+           ) -> list[ScenarioCamera | None] | None:
+    """Each camera's simulator record, in a simulated log (None otherwise)."""
+    if scenario is None:
+        return None
+    return [scenario.camera_for(c.source.namespace,
+                                c.log_info.frame_id if c.log_info else None) for c in cameras]

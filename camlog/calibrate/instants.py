@@ -22,7 +22,7 @@ from processors.calibration.joint import BoardView
 from processors.resync import pair_stamps
 
 from ..errors import CalibrationError
-from .views import SNAPSHOT_GAP_S, CameraViews, Frame, size_hint
+from .views import SNAPSHOT_GAP_S, CameraViews, DetectedFrame, size_hint
 
 #: an approximately paired stereo frame joins its partner while the board moves less than
 #: this (px per frame) in both
@@ -118,7 +118,7 @@ class _Stillness:
     @classmethod
     def of(cls, views: CameraViews) -> _Stillness:
         frames = sorted(views.frames, key=lambda f: f.stamp_ns)
-        runs: list[list[Frame]] = []
+        runs: list[list[DetectedFrame]] = []
         for before, frame in zip([None, *frames], frames, strict=False):
             if before is not None and _same_board(before, frame):
                 runs[-1].append(frame)
@@ -133,7 +133,7 @@ class _Stillness:
         return cls(start, end, {frames[int(i)].index for i in np.flatnonzero(alone)})
 
 
-def _same_board(before: Frame, after: Frame) -> bool:
+def _same_board(before: DetectedFrame, after: DetectedFrame) -> bool:
     """Whether consecutive frames of one camera show the board at one pose."""
     if after.duplicate:
         return True

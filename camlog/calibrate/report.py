@@ -21,7 +21,8 @@ from replay.rig_yaml import rig_to_yaml
 
 from .evidence import Evidence
 from .markdown import markdown_report
-from .solving import CalibratedCamera, StereoSolution
+from .solving import CalibratedCamera, RigSolution
+from .statistics import CameraStatistics
 
 __all__ = ["FIGURES", "camera_file_stem", "output_names", "write_files"]
 
@@ -57,30 +58,33 @@ def output_names(stereo: bool, *, report: bool = True, rig: list[str] | None = N
             "calibration.json"]
 
 
-def _figures(folder: Path, camera: CalibratedCamera, prefix: str) -> list[str]:
-    """The camera's coverage, per-view error and residual figures; their file names."""
-    solution, size = camera.solution, camera.views.size
-    result, namespace = solution.result, camera.views.source.namespace
-    used, rejected = solution.used_corners(), solution.rejected_corners()
-    order = sorted({*result.view_rms_px, *result.rejected})
+def _figures(folder: Path, solved: RigSolution, camera: CalibratedCamera,
+             statistics: CameraStatistics, prefix: str) -> list[str]:
+    """The camera's coverage, per-view error, residual and uncertainty figures; their file
+    names."""
+    size, namespace, joint = camera.views.size, camera.views.source.namespace, solved.joint
+    used, rejected = solved.used_corners(camera), solved.rejected_corners(camera)
+    # views are not judged by their RMS (outliers are single corners): no limit line
+    order = sorted(camera.view_ids, key=solved.first_frame)
+    uncertainty = statistics.uncertainty
     figures = {
         "coverage.png": coverage_figure(
             size, used, rejected,
             f"{namespace}: {len(used)} views used, {len(rejected)} rejected",
-            solution.coverage.bars()),
+            camera.coverage.bars()),
         "view_errors.png": view_error_figure(
-            [result.view_rms_px.get(i, 0.0) for i in order],
-            [i in result.rejected for i in order], solution.outlier_limit_px(),
+            [0.0 if v in joint.rejected else joint.view_rms_px(v) for v in order],
+            [v in joint.rejected for v in order], None,
             f"{namespace}: per-view reprojection error"),
         "residuals.png": residual_figure(
-            size, used, [result.residuals_px[i] for i in result.view_ids],
+            size, used, [joint.residuals_px[v] for v in solved.used_views(camera)],
             f"{namespace}: residuals (observed - projected)"),
         "uncertainty.png": uncertainty_figure(
-            size, solution.uncertainty.pixels, solution.uncertainty.sigma_px,
+            size, uncertainty.pixels, uncertainty.sigma_px,
             f"{namespace}: projection uncertainty (1 sigma) at "
-            f"{solution.uncertainty.range_m:.2f} m: median "
-            f"{solution.uncertainty.median_px:.3f} px, worst "
-            f"{solution.uncertainty.worst_px:.3f} px",
+            f"{uncertainty.range_m:.2f} m: median "
+            f"{uncertainty.median_px:.3f} px, worst "
+            f"{uncertainty.worst_px:.3f} px",
             np.concatenate(used) if used else None),
     }
     for name, image in figures.items():
@@ -88,31 +92,33 @@ def _figures(folder: Path, camera: CalibratedCamera, prefix: str) -> list[str]:
     return [f"{prefix}{name}" for name in figures]
 
 
-def _write_rig(folder: Path, cameras: list[CalibratedCamera], *, summary: CalibrationSummary,
-               evidence: Evidence | None, camera_name: str | None) -> list[str]:
+def _write_rig(folder: Path, solved: RigSolution, statistics: list[CameraStatistics], *,
+               summary: CalibrationSummary, evidence: Evidence | None,
+               camera_name: str | None) -> list[str]:
     """A rig's files: one calibration per camera, named after its namespace, and rig.yaml;
     with the ``evidence`` its figures' names."""
     assert summary.rig is not None
     figures: list[str] = []
-    for camera in cameras:
+    for camera, camera_statistics in zip(solved.cameras, statistics, strict=True):
         source = camera.views.source
         stem = camera_file_stem(source.namespace)
         name = f"{camera_name}/{source.name}" if camera_name else source.name
         (folder / f"{stem}.yaml").write_text(calibration_to_yaml(camera.camera_info,
                                                                  camera_name=name))
         if evidence is not None:
-            figures += _figures(folder, camera, f"{stem}_")
+            figures += _figures(folder, solved, camera, camera_statistics, f"{stem}_")
     (folder / "rig.yaml").write_text(rig_to_yaml(summary.rig))
     return figures
 
 
-def _write_camera_calibration(folder: Path, cameras: list[CalibratedCamera], *,
-                              stereo: StereoSolution | None, evidence: Evidence | None,
+def _write_camera_calibration(folder: Path, solved: RigSolution,
+                              statistics: list[CameraStatistics], *, evidence: Evidence | None,
                               camera_name: str | None) -> list[str]:
     """A mono camera's or a stereo pair's files (camera_calibration's names); with the
     ``evidence`` its figures' names."""
     figures: list[str] = []
-    for index, camera in enumerate(cameras):
+    cameras, stereo = solved.cameras, solved.stereo
+    for index, (camera, camera_statistics) in enumerate(zip(cameras, statistics, strict=True)):
         side = "left" if index == 0 else "right"
         name = camera_name or camera.views.source.name
         if stereo is not None:
@@ -121,7 +127,8 @@ def _write_camera_calibration(folder: Path, cameras: list[CalibratedCamera], *,
         (folder / yaml_name).write_text(calibration_to_yaml(camera.camera_info,
                                                             camera_name=name))
         if evidence is not None:
-            figures += _figures(folder, camera, "" if stereo is None else f"{side}_")
+            figures += _figures(folder, solved, camera, camera_statistics,
+                                "" if stereo is None else f"{side}_")
     if stereo is not None:
         left, right = cameras
         (folder / "ost.txt").write_text(ost_text(left=left.camera_info,
@@ -129,23 +136,24 @@ def _write_camera_calibration(folder: Path, cameras: list[CalibratedCamera], *,
         if evidence is not None and evidence.rectified_pair is not None:
             cv2.imwrite(str(folder / "rectified.png"), rectified_pair_figure(
                 *evidence.rectified_pair,
-                f"rectified pair: epipolar RMS {stereo.result.epipolar_rms_px:.3f} px"))
+                f"rectified pair: epipolar RMS {stereo.epipolar_rms_px:.3f} px"))
             figures.append("rectified.png")
     else:
         (folder / "ost.txt").write_text(ost_text(cameras[0].camera_info))
     return figures
 
 
-def write_files(folder: Path, cameras: list[CalibratedCamera], *,
-                stereo: StereoSolution | None, summary: CalibrationSummary,
-                evidence: Evidence | None, camera_name: str | None) -> None:
+def write_files(folder: Path, solved: RigSolution, statistics: list[CameraStatistics], *,
+                summary: CalibrationSummary, evidence: Evidence | None,
+                camera_name: str | None) -> None:
     """Calibration files and the JSON summary into ``folder``, and with the ``evidence``
-    pass's results the figures and the Markdown report."""
+    pass's results the figures (with each camera's ``statistics``) and the Markdown
+    report."""
     if summary.rig is not None:
-        figures = _write_rig(folder, cameras, summary=summary, evidence=evidence,
+        figures = _write_rig(folder, solved, statistics, summary=summary, evidence=evidence,
                              camera_name=camera_name)
     else:
-        figures = _write_camera_calibration(folder, cameras, stereo=stereo, evidence=evidence,
+        figures = _write_camera_calibration(folder, solved, statistics, evidence=evidence,
                                             camera_name=camera_name)
     (folder / "calibration.json").write_text(summary.to_json_text(indent=1) + "\n")
     if evidence is not None:

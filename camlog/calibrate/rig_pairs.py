@@ -24,22 +24,21 @@ __all__ = ["PairSolution", "rig_pairs"]
 @dataclass(frozen=True)
 class PairSolution:
     """Two cameras of a rig (indices ``first`` < ``second``): ``result.right_from_left`` is
-    ``second_from_first``; ``result.view_ids`` index ``instants``, the instants both saw."""
+    ``second_from_first``; ``result.pairs`` are the joint views used (view of ``first``,
+    view of ``second``, as the rig's views are numbered)."""
 
     first: int
     second: int
     result: StereoResult
-    instants: list[int]
 
 
-def _joint_views(rig: ViewsOfRig, first: int, second: int) -> tuple[list[tuple[int, int]],
-                                                                     list[int]]:
-    """(view of ``first``, view of ``second``) at every instant both saw, and the instants."""
+def _joint_views(rig: ViewsOfRig, first: int, second: int) -> list[tuple[int, int]]:
+    """(view of ``first``, view of ``second``) at every instant both saw."""
     at: dict[int, dict[int, int]] = {}
     for index, view in enumerate(rig.views):
         at.setdefault(view.instant, {})[view.camera] = index
-    shared = [instant for instant, cameras in at.items() if {first, second} <= cameras.keys()]
-    return [(at[i][first], at[i][second]) for i in shared], shared
+    return [(cameras[first], cameras[second]) for cameras in at.values()
+            if {first, second} <= cameras.keys()]
 
 
 def rig_pairs(joint: JointResult, rig: ViewsOfRig, *, points_in_board: F64,
@@ -49,7 +48,7 @@ def rig_pairs(joint: JointResult, rig: ViewsOfRig, *, points_in_board: F64,
     covariance: F64 | None = None
     out = []
     for first, second in combinations(range(len(joint.models)), 2):
-        views, instants = _joint_views(rig, first, second)
+        views = _joint_views(rig, first, second)
         usable = [p for p in views if p[0] not in joint.rejected and p[1] not in joint.rejected]
         if not usable:
             continue
@@ -58,5 +57,5 @@ def rig_pairs(joint: JointResult, rig: ViewsOfRig, *, points_in_board: F64,
         result = stereo_result(joint, views, points_in_board=points_in_board,
                                square_m=square_m, cameras=(first, second),
                                global_covariance=covariance)
-        out.append(PairSolution(first, second, result, instants))
+        out.append(PairSolution(first, second, result))
     return out

@@ -4,16 +4,17 @@ Every view of every camera goes into one least-squares problem
 (:func:`processors.calibration.joint.calibrate_cameras`): intrinsics of all cameras, the rig
 and every board pose, outlier corners left out, blurred views weighted down; a circle grid's
 circles are modelled as discs of the diameter given or measured in the views (their
-detections are the centroids of the discs' images). The solvers know nothing of frames;
-here their views are mapped back to frame indices, a view being named by its first frame,
-which is what every later step (summary, evidence, report) speaks.
+detections are the centroids of the discs' images). The solvers know nothing of frames: a
+view is numbered by its index in the rig's views (:class:`~.instants.ViewsOfRig`), in the
+solver as in every later step (summary, evidence, report), and its frames are
+``rig.frames_of[view]``. The result is a :class:`RigSolution`: one :class:`CalibratedCamera`
+per camera, the joint solve (the rig, every board pose) and the views.
 """
 
 from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
-from concurrent.futures import Future
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -28,14 +29,12 @@ from processors.calibration.joint import (
     check_view_counts,
 )
 from processors.calibration.model_order import OrderChoice, choose_orders
-from processors.calibration.mono import MonoResult, mono_camera_info
+from processors.calibration.mono import mono_camera_info
 from processors.calibration.options import CalibrationOptions
 from processors.calibration.robust import seed_camera
 from processors.calibration.selection import Coverage, coverage, view_parameters
 from processors.calibration.stereo import StereoResult, orient_right_views, stereo_result
 from processors.calibration.targets import guides_charuco
-from processors.calibration.uncertainty import UncertaintyMap
-from processors.calibration.validation import CrossValidation
 from processors.errors import ProcessorError
 from replay.camera import CameraModel
 from replay.messages import F64, CameraInfo
@@ -45,105 +44,83 @@ from ..errors import CalibrationError
 from .circles import CircleSize, circle_size
 from .instants import ViewsOfRig, rig_views
 from .rig_pairs import PairSolution, rig_pairs
-from .statistics import CameraStatistics, camera_statistics
-from .views import CameraViews, Frame
+from .views import CameraViews, DetectedFrame
 
-__all__ = ["CalibratedCamera", "CameraSolution", "RigSolution", "StereoSolution",
-           "calibrated_cameras", "solve_rig"]
+__all__ = ["CalibratedCamera", "RigSolution", "guiding_models", "solve_rig"]
 
 
 @dataclass(frozen=True)
-class CameraSolution:
-    """One camera of the joint calibration. ``result``'s view ids are frame indices: each
-    view is named by its first frame; ``view_of`` maps every frame of a view to that name."""
+class CalibratedCamera:
+    """One calibrated camera: its frames and detections, the model solved and the
+    camera_info to publish (mono: camera_calibration's P; stereo: the rectification), its
+    views in the rig's numbering and, in simulated logs, its truth."""
 
+    index: int  # the camera's number in the joint solve (0: the rig's reference)
     views: CameraViews
-    candidates: list[int]  # frames whose board passed every check
-    selected: list[int]  # frames in the views given to the solver (all the candidates)
-    result: MonoResult
-    view_of: dict[int, int]
-    frames_in_view: dict[int, int]  # view name -> how many frames it averages
+    model: CameraModel
+    camera_info: CameraInfo
+    view_ids: list[int]  # its views (indices into the rig's views), in view order
+    view_of: dict[int, int]  # frame index -> the view it is in
     coverage: Coverage  # of the used views
-    statistics: Future[CameraStatistics]  # computed beside the evidence pass (solve_rig)
     order: OrderChoice | None = None  # the radial order's cross-validation, when chosen
-
-    @property
-    def uncertainty(self) -> UncertaintyMap:
-        """Projection uncertainty at the working range (waits for the statistics)."""
-        return self.statistics.result().uncertainty
-
-    @property
-    def rays_uncertainty(self) -> UncertaintyMap:
-        """Projection uncertainty of points far away (waits for the statistics)."""
-        return self.statistics.result().rays_uncertainty
-
-    @property
-    def cross_validation(self) -> CrossValidation | None:
-        """The halves' cross-validation (waits for the statistics)."""
-        return self.statistics.result().cross_validation
-
-    @property
-    def cross_validation_px(self) -> float | None:
-        """Expected worst error of the calibration (rays) from the halves' cross-validation."""
-        return None if self.cross_validation is None else self.cross_validation.worst_px
-
-    def used_corners(self) -> list[F64]:
-        """Corners ``(M, 2)`` of every used view (its first frame's), in view order."""
-        return [self.views.corners(i) for i in self.result.view_ids]
-
-    def rejected_corners(self) -> list[F64]:
-        """Corners of every distinct frame whose board was found but not used."""
-        return [f.detection.corners_px for f in self.views.distinct()
-                if f.detection is not None and self.rejection(f) is not None]
-
-    def rejection(self, frame: Frame) -> str | None:
-        """Why a frame's board is not (in) a view (None: it is)."""
-        if frame.detection is not None and not frame.detection.accepted:
-            return frame.detection.reason
-        if frame.reason:
-            return frame.reason
-        return self.result.rejected.get(self.view_of.get(frame.index, -1))
-
-    def outlier_limit_px(self) -> float | None:
-        """Views are not judged by their RMS: outliers are single corners."""
-        return None
-
-    def status(self, frame: Frame) -> tuple[str, bool]:
-        """Text drawn on an annotated frame, and whether the view was used."""
-        if frame.detection is None:
-            return "no board found", False
-        why = self.rejection(frame)
-        if why is not None:
-            return f"rejected: {why}", False
-        name = self.view_of.get(frame.index)
-        if name is not None and name in self.result.view_rms_px:
-            held = self.frames_in_view[name]
-            suffix = f", held pose of {held} frames" if held > 1 else ""
-            return f"used: RMS {self.result.view_rms_px[name]:.3f} px{suffix}", True
-        return "not used", False
-
-
-@dataclass(frozen=True)
-class StereoSolution:
-    """The rig's rectification and figures, and the joint views (left frame, right frame,
-    each named by its first frame) it used or left out."""
-
-    result: StereoResult
-    pairs: list[tuple[int, int]]
-    rejected: list[tuple[tuple[int, int], str]]
+    truth: ScenarioCamera | None = None
 
 
 @dataclass(frozen=True)
 class RigSolution:
-    """Everything the joint solve found."""
+    """Everything the joint solve found: the cameras, the joint result (the rig and every
+    board pose; per view its residuals, inliers or why it was left out) and the views it
+    solved, numbered as ``rig.views``; for two cameras the stereo rectification
+    (``stereo.pairs``: the joint views used), for a rig every pair of cameras."""
 
-    cameras: list[CameraSolution]
-    stereo: StereoSolution | None
+    cameras: list[CalibratedCamera]
     joint: JointResult
     rig: ViewsOfRig
+    stereo: StereoResult | None = None
+    pairs: list[PairSolution] = field(default_factory=list)  # a rig's pairs (not stereo)
     circles: CircleSize | None = None
     measured_again: list[str] | None = None  # per camera: what the second measurement did
-    pairs: list[PairSolution] = field(default_factory=list)  # a rig's pairs (not stereo)
+
+    def first_frame(self, view: int) -> int:
+        """The frame a view is shown at: its first (a held pose spans several)."""
+        return self.rig.frames_of[view][0]
+
+    def used_views(self, camera: CalibratedCamera) -> list[int]:
+        """A camera's views that carry weight, in view order."""
+        return self.joint.used_views(camera.index)
+
+    def used_corners(self, camera: CalibratedCamera) -> list[F64]:
+        """Detected corners ``(M, 2)`` of every used view (at its first frame), in view
+        order."""
+        return [camera.views.corners(self.first_frame(v)) for v in self.used_views(camera)]
+
+    def rejected_corners(self, camera: CalibratedCamera) -> list[F64]:
+        """Corners of every distinct frame whose board was found but not used."""
+        return [f.detection.corners_px for f in camera.views.distinct()
+                if f.detection is not None and self.rejection(camera, f) is not None]
+
+    def rejection(self, camera: CalibratedCamera, frame: DetectedFrame) -> str | None:
+        """Why a frame's board is not (in) a used view (None: it is)."""
+        if frame.detection is not None and not frame.detection.accepted:
+            return frame.detection.reason
+        if frame.reason:
+            return frame.reason
+        view = camera.view_of.get(frame.index)
+        return None if view is None else self.joint.rejected.get(view)
+
+    def status(self, camera: CalibratedCamera, frame: DetectedFrame) -> tuple[str, bool]:
+        """Text drawn on an annotated frame, and whether its view was used."""
+        if frame.detection is None:
+            return "no board found", False
+        why = self.rejection(camera, frame)
+        if why is not None:
+            return f"rejected: {why}", False
+        view = camera.view_of.get(frame.index)
+        if view is not None:
+            held = len(self.rig.frames_of[view])
+            suffix = f", held pose of {held} frames" if held > 1 else ""
+            return f"used: RMS {self.joint.view_rms_px(view):.3f} px{suffix}", True
+        return "not used", False
 
 
 def measured_again_text(before: ViewsOfRig, after: ViewsOfRig, first: JointResult,
@@ -158,26 +135,6 @@ def measured_again_text(before: ViewsOfRig, after: ViewsOfRig, first: JointResul
     return (f"on the board plane through the first solve: {len(changed)} of {len(moved)} "
             f"corners moved{median}; corner noise {first.sigma_px:.3f} → "
             f"{final.sigma_px:.3f} px per coordinate")
-
-
-def _mono_result(joint: JointResult, rig: ViewsOfRig, camera: int) -> MonoResult:
-    """One camera's share of the joint result, its views named by their first frames."""
-    mine = camera_views(rig.views, camera)
-    name = {i: rig.frames_of[i][0] for i in mine}
-    used = [i for i in mine if i not in joint.rejected]
-    camera_from_reference = joint.camera_from_reference[camera]
-    return MonoResult(
-        model=joint.models[camera], rms_px=joint.rms_px,
-        view_ids=[name[i] for i in used],
-        view_rms_px={name[i]: joint.view_rms_px(i) for i in used},
-        rejected={name[i]: joint.rejected[i] for i in mine if i in joint.rejected},
-        std=dict(joint.std[camera]),
-        camera_from_board={name[i]: camera_from_reference
-                           @ joint.reference_from_board[rig.views[i].instant] for i in used},
-        residuals_px={name[i]: joint.residuals_px[i] for i in used},
-        inliers={name[i]: joint.inliers[i] for i in used},
-        options=joint.options[camera], tangential_test=joint.tangential_tests[camera],
-        sigma_px=joint.sigma_px, joint=joint)
 
 
 def _seeds(rig: ViewsOfRig, board: Board, sizes: list[tuple[int, int]],
@@ -257,11 +214,22 @@ def guiding_models(cameras: list[CameraViews], board: Board, options: Calibratio
             for views, model in zip(cameras, joint.models, strict=True)}
 
 
+def _camera_info(model: CameraModel, frame_id: str, stereo: StereoResult | None,
+                 index: int) -> CameraInfo:
+    """A camera's calibrated camera_info: mono with camera_calibration's P; stereo with the
+    rectification (R, P) of the rig."""
+    if stereo is None:
+        return mono_camera_info(model, frame_id)
+    r, p = (stereo.r1, stereo.p1) if index == 0 else (stereo.r2, stereo.p2)
+    return CameraInfo(0, frame_id, model.width, model.height, model.distortion_model,
+                      model.d, model.k, r, p)
+
+
 def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOptions, *,
               approximate_s: float | None, diameter_m: float | None = None,
-              background: bool = False,
               remeasure: Callable[[ViewsOfRig, JointResult], ViewsOfRig] | None = None,
-              as_rig: bool = False) -> RigSolution:
+              as_rig: bool = False,
+              truth: list[ScenarioCamera | None] | None = None) -> RigSolution:
     """Calibrate every camera, and for two the stereo rig (with ``as_rig``, or for three or
     more cameras: every pair of the rig), from every view; a circle grid's
     circles are ``diameter_m`` across, or as the views measure them; with ``choose_order``
@@ -270,10 +238,7 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
     warp after the flat solve (:mod:`processors.calibration.warp_choice`; the guiding
     models of a ChArUco detection are solved flat). ``remeasure`` gives the
     views measured again through a first solution (:mod:`.remeasure`), which are then solved
-    again from it. With ``background`` the cameras' :class:`~.statistics.CameraStatistics`
-    (most of the work) of a short log are computed on a thread of their own while the caller
-    goes on (see :func:`~.statistics.camera_statistics`); reading them waits, and raises
-    their error."""
+    again from it. ``truth``: each camera's simulator record, when the log has one."""
     circles = circle_size(cameras, board, diameter_m)
     disc_diameter_m = circles.diameter_m if circles is not None else None
     rig, seeds, sizes = _prepared(cameras, board, options, approximate_s=approximate_s,
@@ -293,61 +258,22 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
         joint = calibrate_cameras(points, rig.views, sizes, chosen, seeds=joint.models,
                                   disc_diameter_m=disc_diameter_m)
         again = [measured_again_text(before, rig, first, joint, c) for c in range(len(cameras))]
-    statistics = camera_statistics(joint, rig.views, points, sizes,
-                                   disc_diameter_m=disc_diameter_m, background=background)
-    solutions = []
-    for index, views in enumerate(cameras):
-        result = _mono_result(joint, rig, index)
-        mine = camera_views(rig.views, index)
-        view_of = {f: rig.frames_of[i][0] for i in mine for f in rig.frames_of[i]}
-        used = [(rig.views[i].corners_px, rig.views[i].point_ids) for i in mine
-                if i not in joint.rejected]
-        params = np.array([view_parameters(c, board, views.size, ids) for c, ids in used])
-        solutions.append(CameraSolution(
-            views, rig.candidates[index], sorted(view_of), result, view_of,
-            {rig.frames_of[i][0]: len(rig.frames_of[i]) for i in mine},
-            coverage(params, [c for c, _ in used], views.size),
-            statistics[index], orders[index]))
     stereo, pairs = None, []
     if as_rig or len(cameras) > 2:
         pairs = rig_pairs(joint, rig, points_in_board=points, square_m=board.square_m)
     elif len(cameras) == 2:
-        rectified = stereo_result(joint, rig.pairs, points_in_board=points,
-                                  square_m=board.square_m)
-        names = [(rig.frames_of[lv][0], rig.frames_of[rv][0]) for lv, rv in rig.pairs]
-        stereo = StereoSolution(rectified, [names[i] for i in rectified.view_ids],
-                                [(names[i], why) for i, why in
-                                 sorted(rectified.rejected.items())])
-    return RigSolution(solutions, stereo, joint, rig, circles, again, pairs)
-
-
-@dataclass(frozen=True)
-class CalibratedCamera:
-    """A solved camera with the model to publish and, in simulated logs, its truth."""
-
-    solution: CameraSolution
-    camera_info: CameraInfo
-    truth: ScenarioCamera | None
-
-    @property
-    def views(self) -> CameraViews:
-        """The camera's views."""
-        return self.solution.views
-
-
-def calibrated_cameras(solutions: list[CameraSolution], stereo: StereoSolution | None,
-                       truth: list[ScenarioCamera | None]) -> list[CalibratedCamera]:
-    """Each camera's calibrated model: mono with camera_calibration's P; stereo with the
-    rectification (R, P) of the rig."""
-    out = []
-    for index, (solution, camera_truth) in enumerate(zip(solutions, truth, strict=True)):
-        m, frame_id = solution.result.model, solution.views.frame_id
-        if stereo is None:
-            info = mono_camera_info(m, frame_id)
-        else:
-            r, p = (stereo.result.r1, stereo.result.p1) if index == 0 else \
-                (stereo.result.r2, stereo.result.p2)
-            info = CameraInfo(0, frame_id, m.width, m.height, m.distortion_model, m.d, m.k,
-                              r, p)
-        out.append(CalibratedCamera(solution, info, camera_truth))
-    return out
+        stereo = stereo_result(joint, rig.pairs, points_in_board=points,
+                               square_m=board.square_m)
+    solved = []
+    for index, views in enumerate(cameras):
+        mine = camera_views(rig.views, index)
+        used = [rig.views[i] for i in joint.used_views(index)]
+        params = np.array([view_parameters(v.corners_px, board, views.size, v.point_ids)
+                           for v in used])
+        model = joint.models[index]
+        solved.append(CalibratedCamera(
+            index, views, model, _camera_info(model, views.frame_id, stereo, index), mine,
+            {f: i for i in mine for f in rig.frames_of[i]},
+            coverage(params, [v.corners_px for v in used], views.size), orders[index],
+            truth[index] if truth is not None else None))
+    return RigSolution(solved, joint, rig, stereo, pairs, circles, again)

@@ -9,13 +9,9 @@ from __future__ import annotations
 import numpy as np
 
 from processors.calibration.board import Board
-from processors.calibration.joint import JointResult, camera_views
+from processors.calibration.joint import JointResult
 from processors.calibration.model_order import OrderChoice, order_label
-from processors.calibration.mono import (
-    CalibrationOptions,
-    MonoResult,
-    max_projection_difference,
-)
+from processors.calibration.mono import CalibrationOptions, max_projection_difference
 from processors.calibration.rig import angle_deg
 from processors.calibration.rotation import rotation_vectors
 from processors.calibration.uncertainty import error_against
@@ -28,18 +24,20 @@ from replay.records import rig as rig_records
 from replay.records.scenario import Scenario
 
 from .rig_pairs import PairSolution
-from .solving import CalibratedCamera, RigSolution, StereoSolution
+from .solving import CalibratedCamera, RigSolution
+from .statistics import CameraStatistics
 from .truth import TrueRig, true_rig
 
 __all__ = ["build_summary"]
 
 
-def _parameters(camera: CalibratedCamera) -> dict[str, records.ParameterEstimate]:
-    result = camera.solution.result
+def _parameters(camera: CalibratedCamera, joint: JointResult
+                ) -> dict[str, records.ParameterEstimate]:
+    std = joint.std[camera.index]
     truth = camera.truth.parameters() if camera.truth is not None else {}
     table = {}
-    for name, value in result.parameters().items():
-        estimate = records.ParameterEstimate(float(value), float(result.std.get(name, 0.0)))
+    for name, value in joint.parameters(camera.index).items():
+        estimate = records.ParameterEstimate(float(value), float(std.get(name, 0.0)))
         if name in truth:
             estimate = records.ParameterEstimate(estimate.value, estimate.std, truth[name],
                                          float(value - truth[name]))
@@ -47,9 +45,9 @@ def _parameters(camera: CalibratedCamera) -> dict[str, records.ParameterEstimate
     return table
 
 
-def _tangential(result: MonoResult) -> records.TangentialSummary:
-    test = result.tangential_test
-    estimated = result.options.tangential == "estimate"
+def _tangential(joint: JointResult, camera: int) -> records.TangentialSummary:
+    test = joint.tangential_tests[camera]
+    estimated = joint.options[camera].tangential == "estimate"
     if test is None:
         return records.TangentialSummary(estimated)
     return records.TangentialSummary(estimated, test.chi2, test.p_value, test.describe())
@@ -78,35 +76,37 @@ def _board_warp(joint: JointResult, mode: str) -> records.BoardWarpSummary | Non
     return records.BoardWarpSummary(mode, estimate is not None, "; ".join(words), **numbers)
 
 
-def _rejected(camera: CalibratedCamera) -> list[records.RejectedView]:
+def _rejected(camera: CalibratedCamera, solved: RigSolution) -> list[records.RejectedView]:
     """Frames rejected at detection or by the speed limit (in frame order), then the views
-    the solver left out."""
-    views, result = camera.views, camera.solution.result
+    the solver left out (in the order of their first frames)."""
+    views, joint = camera.views, solved.joint
     rejected = []
     for f in views.distinct():
         if f.detection is not None and not f.detection.accepted:
             rejected.append(records.RejectedView(f.stamp_ns, f.detection.reason))
         elif f.reason:
             rejected.append(records.RejectedView(f.stamp_ns, f.reason))
-    rejected += [records.RejectedView(views.frames[index].stamp_ns, why)
-                 for index, why in sorted(result.rejected.items())]
+    left_out = sorted((solved.first_frame(v), joint.rejected[v]) for v in camera.view_ids
+                      if v in joint.rejected)
+    rejected += [records.RejectedView(views.frames[frame].stamp_ns, why)
+                 for frame, why in left_out]
     return rejected
 
 
-def _evidence(camera: CalibratedCamera, index: int, solved: RigSolution) -> records.EvidenceSummary:
-    solution, joint = camera.solution, solved.joint
-    used = solution.result.view_ids
-    mine = camera_views(solved.rig.views, index)
-    reasons = [joint.rejected[i] for i in mine if i in joint.rejected]
+def _evidence(camera: CalibratedCamera, solved: RigSolution) -> records.EvidenceSummary:
+    joint, frames_of = solved.joint, solved.rig.frames_of
+    used = solved.used_views(camera)
+    reasons = [joint.rejected[i] for i in camera.view_ids if i in joint.rejected]
     return records.EvidenceSummary(
-        frames_used=sum(solution.frames_in_view[name] for name in used),
-        views=len(used), held_views=sum(solution.frames_in_view[name] > 1 for name in used),
+        frames_used=sum(len(frames_of[v]) for v in used),
+        views=len(used), held_views=sum(len(frames_of[v]) > 1 for v in used),
         outlier_views=sum("outlier" in r for r in reasons),
         blurred_views=sum("motion blur" in r for r in reasons),
-        outlier_corners=sum(int((~solution.result.inliers[name]).sum()) for name in used),
+        outlier_corners=sum(int((~joint.inliers[v]).sum()) for v in used),
         corner_noise_px=joint.sigma_px, frame_scatter_px=solved.rig.frame_scatter_px,
         blur=joint.blur.describe() if joint.blur is not None else None,
-        measured_again=solved.measured_again[index] if solved.measured_again else None)
+        measured_again=solved.measured_again[camera.index] if solved.measured_again
+        else None)
 
 
 def _median_worst(error_px: F64) -> tuple[float, float]:
@@ -115,15 +115,15 @@ def _median_worst(error_px: F64) -> tuple[float, float]:
     return float(np.nanmedian(length)), float(np.nanmax(length))
 
 
-def _uncertainty(camera: CalibratedCamera, index: int, solved: RigSolution,
+def _uncertainty(camera: CalibratedCamera, statistics: CameraStatistics, solved: RigSolution,
                  truth: TrueRig | None) -> records.UncertaintySummary:
-    solution = camera.solution
-    u, far, validation = solution.uncertainty, solution.rays_uncertainty, \
-        solution.cross_validation
+    index = camera.index
+    u, far, validation = statistics.uncertainty, statistics.rays_uncertainty, \
+        statistics.cross_validation
     true: dict[str, float] = {}
     if camera.truth is not None:
         true_model = camera.truth.model()
-        aligned = projection_difference(solution.result.model, true_model, far.pixels)
+        aligned = projection_difference(camera.model, true_model, far.pixels)
         true["aligned_true_error_median_px"] = float(np.nanmedian(aligned))
         true["aligned_true_error_worst_px"] = float(np.nanmax(aligned))
         if truth is not None and truth.reference_from_board:
@@ -144,44 +144,47 @@ def _uncertainty(camera: CalibratedCamera, index: int, solved: RigSolution,
         **true)
 
 
-def _camera(camera: CalibratedCamera, index: int, solved: RigSolution,
+def _camera(camera: CalibratedCamera, statistics: CameraStatistics, solved: RigSolution,
             truth: TrueRig | None) -> records.CameraSummary:
-    solution, views = camera.solution, camera.views
-    result = solution.result
+    views, joint = camera.views, solved.joint
     distinct = list(views.distinct())
     differences: dict[str, float] = {}
     if camera.truth is not None:
-        seen = np.concatenate(solution.used_corners())
+        seen = np.concatenate(solved.used_corners(camera))
         true_model = camera.truth.model()
         for key, within in (("", None), ("_covered", seen)):
             differences[f"max_projection_difference_vs_truth{key}_px"] = \
-                max_projection_difference(result.model, true_model, within=within)
+                max_projection_difference(camera.model, true_model, within=within)
             differences[f"max_projection_difference_vs_truth{key}_aligned_px"] = \
-                max_projection_difference(result.model, true_model, within=within,
+                max_projection_difference(camera.model, true_model, within=within,
                                           align_rotation=True)
     return records.CameraSummary(
         namespace=views.source.namespace, image_topic=views.source.image_topic,
         width=views.size[0], height=views.size[1], frames=len(views.frames),
         distinct_frames=len(distinct),
         boards_found=sum(f.detection is not None for f in distinct),
-        candidate_views=len(solution.candidates), selected_views=len(solution.selected),
-        used_views=len(result.view_ids), rejected=_rejected(camera), rms_px=result.rms_px,
-        distortion_model=result.model.distortion_model, parameters=_parameters(camera),
-        cross_validation_px=solution.cross_validation_px, tangential=_tangential(result),
+        candidate_views=len(solved.rig.candidates[camera.index]),
+        selected_views=len(camera.view_of), used_views=len(solved.used_views(camera)),
+        rejected=_rejected(camera, solved), rms_px=joint.rms_px,
+        distortion_model=camera.model.distortion_model,
+        parameters=_parameters(camera, joint),
+        cross_validation_px=statistics.cross_validation_px,
+        tangential=_tangential(joint, camera.index),
         coverage=records.CoverageSummary(
             {name: records.RangeProgress(lo, hi, p)
-             for name, (lo, hi, p) in solution.coverage.ranges.items()},
-            solution.coverage.image_cells),
+             for name, (lo, hi, p) in camera.coverage.ranges.items()},
+            camera.coverage.image_cells),
         **differences,
-        evidence=_evidence(camera, index, solved),
-        uncertainty=_uncertainty(camera, index, solved, truth),
-        lens_order=_lens_order(solution.order),
+        evidence=_evidence(camera, solved),
+        uncertainty=_uncertainty(camera, statistics, solved, truth),
+        lens_order=_lens_order(camera.order),
     )
 
 
-def _stereo(cameras: list[CalibratedCamera], stereo: StereoSolution) -> records.StereoSummary:
-    s = stereo.result
-    left, right = cameras
+def _stereo(solved: RigSolution) -> records.StereoSummary:
+    assert solved.stereo is not None
+    s = solved.stereo
+    left, right = solved.cameras
     truth = None
     if left.truth is not None and right.truth is not None:
         right_from_left = np.linalg.inv(right.truth.world_from_camera) @ \
@@ -194,16 +197,17 @@ def _stereo(cameras: list[CalibratedCamera], stereo: StereoSolution) -> records.
         baseline_std_m=s.baseline_std_m, square_m=s.square_m, rotation_deg=s.rotation_deg,
         translation_m=s.right_from_left[:3, 3].tolist(), joint_views=len(s.view_epipolar_px),
         rotation_std_deg=s.rotation_std_deg,
-        rejected=[records.RejectedJointView(left.views.frames[li].stamp_ns,
-                                    right.views.frames[ri].stamp_ns, why)
-                  for (li, ri), why in stereo.rejected],
+        rejected=[records.RejectedJointView(
+            left.views.frames[solved.first_frame(lv)].stamp_ns,
+            right.views.frames[solved.first_frame(rv)].stamp_ns, why)
+            for (lv, rv), why in s.rejected.items()],
         truth=truth)
 
 
-def _rig_camera(camera: CalibratedCamera, index: int, solved: RigSolution,
+def _rig_camera(camera: CalibratedCamera, solved: RigSolution,
                 reference: CalibratedCamera) -> rig_records.RigCameraSummary:
-    pose = solved.joint.camera_from_reference[index]
-    std = np.sqrt(np.maximum(np.diag(solved.joint.rig_covariance[index]), 0.0))
+    pose = solved.joint.camera_from_reference[camera.index]
+    std = np.sqrt(np.maximum(np.diag(solved.joint.rig_covariance[camera.index]), 0.0))
     truth = None
     if camera.truth is not None and reference.truth is not None:
         true_pose = invert(camera.truth.world_from_camera) @ reference.truth.world_from_camera
@@ -230,18 +234,20 @@ def _rig_pair(cameras: list[CalibratedCamera], pair: PairSolution) -> rig_record
         s.right_from_left[:3, 3].tolist(), s.rms_px, s.epipolar_rms_px, truth)
 
 
-def _rig(cameras: list[CalibratedCamera], solved: RigSolution) -> rig_records.RigSummary:
+def _rig(solved: RigSolution) -> rig_records.RigSummary:
+    cameras = solved.cameras
     return rig_records.RigSummary(
         cameras[0].views.source.namespace, "camera_from_reference",
-        [_rig_camera(c, i, solved, cameras[0]) for i, c in enumerate(cameras)],
+        [_rig_camera(c, solved, cameras[0]) for c in cameras],
         [_rig_pair(cameras, pair) for pair in solved.pairs])
 
 
-def build_summary(cameras: list[CalibratedCamera], solved: RigSolution, *,
+def build_summary(solved: RigSolution, statistics: list[CameraStatistics], *,
                   board: Board, options: CalibrationOptions,
                   scenario: Scenario | None) -> records.CalibrationSummary:
-    """The summary of a run; ``scenario``: the simulator's record, when the log has one."""
-    stereo, circles = solved.stereo, solved.circles
+    """The summary of a run from its solution and each camera's ``statistics`` (in camera
+    order); ``scenario``: the simulator's record, when the log has one."""
+    cameras, stereo, circles = solved.cameras, solved.stereo, solved.circles
     truth = true_rig(solved.rig, [c.views for c in cameras], [c.truth for c in cameras],
                      board=board, scenario=scenario)
     return records.CalibrationSummary(
@@ -252,9 +258,10 @@ def build_summary(cameras: list[CalibratedCamera], solved: RigSolution, *,
         options=records.OptionsSummary(options.fix_principal_point, options.fix_aspect_ratio,
                                options.tangential, options.radial_count,
                                options.distortion_model, options.choose_order or None),
-        cameras=[_camera(c, i, solved, truth) for i, c in enumerate(cameras)],
+        cameras=[_camera(c, s, solved, truth)
+                 for c, s in zip(cameras, statistics, strict=True)],
         ground_truth=scenario is not None,
-        stereo=_stereo(cameras, stereo) if stereo is not None else None,
-        rig=_rig(cameras, solved) if stereo is None and len(cameras) > 1 else None,
+        stereo=_stereo(solved) if stereo is not None else None,
+        rig=_rig(solved) if stereo is None and len(cameras) > 1 else None,
         board_warp=_board_warp(solved.joint, options.board_warp),
     )

@@ -53,7 +53,7 @@ __all__ = [
     "THOROUGH_FRAMES",
     "CameraSource",
     "CameraViews",
-    "Frame",
+    "DetectedFrame",
     "LogViews",
     "board_speeds",
     "detect_views",
@@ -63,7 +63,7 @@ __all__ = [
 
 
 @dataclass(frozen=True, slots=True)
-class Frame:
+class DetectedFrame:
     """One image of one camera, as the detection pass saw it. ``speed_px``: how far the
     board's corners moved to the nearer neighbouring frame (px; None without a neighbour
     showing the same corners)."""
@@ -88,7 +88,7 @@ class CameraViews:
     camera_info (the first one) and a few frames kept for size hints."""
 
     source: CameraSource
-    frames: tuple[Frame, ...]
+    frames: tuple[DetectedFrame, ...]
     size: tuple[int, int]  # (width, height)
     log_info: CameraInfo | None
     samples: tuple[np.ndarray, ...] = field(default=(), repr=False)
@@ -113,7 +113,7 @@ class CameraViews:
         """Detected corners ``(M, 2)`` of frame ``index`` (which must have a detection)."""
         return self.detection(index).corners_px
 
-    def distinct(self) -> Iterator[Frame]:
+    def distinct(self) -> Iterator[DetectedFrame]:
         """The frames that do not repeat the previous one."""
         return (f for f in self.frames if not f.duplicate)
 
@@ -183,7 +183,7 @@ class _Seen:
         self.truth_poses.setdefault(target, array("d")).extend(
             [*pose.position_m.tolist(), *pose.orientation_xyzw.tolist()])
 
-    def _truth(self, frames: tuple[Frame, ...]) -> dict[str, dict[int, F64]]:
+    def _truth(self, frames: tuple[DetectedFrame, ...]) -> dict[str, dict[int, F64]]:
         """The true poses at the stamps of the distinct frames with a board found."""
         wanted = {f.stamp_ns for f in frames if not f.duplicate and f.detection is not None}
         out: dict[str, dict[int, F64]] = {}
@@ -204,7 +204,7 @@ class _Seen:
                 last = self.detections.get(index)
             detections.append(last)
         speeds = board_speeds(detections, self.duplicates)
-        frames = tuple(Frame(i, stamp, duplicate, detection, speed_px=speed)
+        frames = tuple(DetectedFrame(i, stamp, duplicate, detection, speed_px=speed)
                        for i, (stamp, duplicate, detection, speed) in enumerate(zip(
                            self.stamps, self.duplicates, detections, speeds, strict=True)))
         return CameraViews(self.source, frames, self.size, self.log_info, tuple(self.samples),
@@ -315,7 +315,7 @@ def _scenario(message: object) -> Scenario | None:
 
 def with_speed_limit(views: CameraViews, max_speed_px: float) -> CameraViews:
     """The views with boards moving faster than ``max_speed_px`` per frame rejected
-    (camera_calibration's --max-chessboard-speed; see :attr:`Frame.speed_px`)."""
+    (camera_calibration's --max-chessboard-speed; see :attr:`DetectedFrame.speed_px`)."""
     frames = tuple(
         dataclasses.replace(f, reason=f"board moving {f.speed_px:.2f} px/frame > "
                                       f"{max_speed_px:g}")

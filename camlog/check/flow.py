@@ -36,7 +36,7 @@ from .samples import samples
 from .series import NOISE_SIGMAS, CheckOptions, Series, board_series, stereo_series
 
 __all__ = ["EXIT_DRIFTED", "EXIT_NOT_JUDGED", "NOISE_SIGMAS", "CheckOptions", "LogCheck",
-           "Series", "check_log", "exit_status", "options_of"]
+           "Series", "check_drift", "exit_status", "options_of"]
 
 #: exit status of ``camlog check`` when a log drifted (errors exit with 1, usage with 2)
 EXIT_DRIFTED = 3
@@ -137,7 +137,7 @@ class _Window:
     reprojection_px: list[float] = field(default_factory=list)
 
 
-def check_log(log: Path | str, options: CheckOptions,
+def check_drift(log: Path | str, options: CheckOptions,
               on_window: Callable[[], None] | None = None) -> LogCheck:
     """Check one log (a path or an object-storage URI)."""
     with open_reader(log) as reader:

@@ -37,7 +37,7 @@ class Sample:
 
 
 @dataclass
-class _Topic:
+class _LatestImage:
     """The latest message of an image topic (decoded when it was chosen, or a video's)."""
 
     video: bool
@@ -69,7 +69,7 @@ def samples(reader: LogReader, checks: list[Checkable], *, rate_hz: float) -> It
     states = [_Check(tuple(s.image_topic for s in c.sources)) for c in checks]
     for state in states:
         state.slop_ns = round(min(MAX_SLOP_S * 1e9, _period_ns(reader, state.topics[0]) / 2))
-    topics = {t: _Topic(RECORD_KINDS.get(normalize_msgtype(reader.topics[t].msgtype))
+    topics = {t: _LatestImage(RECORD_KINDS.get(normalize_msgtype(reader.topics[t].msgtype))
                         == "CompressedVideo") for s in states for t in s.topics}
     by_topic: dict[str, list[int]] = {}
     for index, state in enumerate(states):

@@ -50,9 +50,9 @@ def run(args: argparse.Namespace) -> int:
     """Calibrate (or ``--check``) and print the key figures."""
     request = request_from_args(CalibrateRequest, args)
     if request.check:
-        from ..calibrate.check import check_log
+        from ..calibrate.check import measure_calibration
 
-        print("\n".join(check_log(request).lines()))
+        print("\n".join(measure_calibration(request).lines()))
         return 0
     from ..calibrate.flow import calibrate_log
 

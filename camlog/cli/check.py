@@ -17,14 +17,14 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Check every log, write the report and print one line per log; the exit status says
     whether any drifted (:func:`camlog.check.flow.exit_status`)."""
-    from ..check.flow import check_log, exit_status, options_of
+    from ..check.flow import check_drift, exit_status, options_of
     from ..check.report import write_report
 
     request = request_from_args(CheckRequest, args)
     options = options_of(request)
     checks = []
     for log in request.logs:
-        checked = check_log(log, options)
+        checked = check_drift(log, options)
         print(checked.summary(), flush=True)
         checks.append(checked)
     write_report(checks, request.output)

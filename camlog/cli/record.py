@@ -9,7 +9,7 @@ from typing import Any
 
 from recorder.builtin import DEFAULT_SCENARIO, MAX_FRAMES, builtin_names
 from replay.atomic import refuse_existing
-from replay.format_names import CAMERA_MODELS, WRITE_FORMATS
+from replay.format_names import WRITE_FORMATS
 from replay.lens_models import LENS_MODELS
 
 from .args import (
@@ -66,14 +66,14 @@ def _resolution(text: str) -> tuple[int, int]:
 
 def _distortion(text: str) -> tuple[str, list[float]]:
     model, _, coeffs = text.partition(":")
-    if model not in CAMERA_MODELS or not coeffs:
+    if model not in LENS_MODELS or not coeffs:
         raise argparse.ArgumentTypeError(
             f"expected {', '.join(DISTORTION_FORMS[:-1])} or {DISTORTION_FORMS[-1]}, "
             f"got {text!r}")
     values = _floats(coeffs)
-    if len(values) != CAMERA_MODELS[model]:
-        raise argparse.ArgumentTypeError(
-            f"{model} has {CAMERA_MODELS[model]} coefficients, got {len(values)}")
+    count = len(LENS_MODELS[model].coefficients)
+    if len(values) != count:
+        raise argparse.ArgumentTypeError(f"{model} has {count} coefficients, got {len(values)}")
     return model, values
 
 

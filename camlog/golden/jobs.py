@@ -31,7 +31,7 @@ from .artifacts import Artifacts, dumps_json
 
 __all__ = [
     "Calibrate",
-    "Job",
+    "GoldenJob",
     "Process",
     "Resync",
     "calibration_numbers",
@@ -40,7 +40,7 @@ __all__ = [
 ]
 
 
-class Job(Protocol):
+class GoldenJob(Protocol):
     """One step over a golden input; writes below ``folder / name`` and returns artifacts
     named relative to that folder."""
 

@@ -42,7 +42,7 @@ from .artifacts import (
     dumps_json,
     update,
 )
-from .jobs import Calibrate, Job, Process, Resync
+from .jobs import Calibrate, GoldenJob, Process, Resync
 
 __all__ = [
     "INPUTS",
@@ -88,7 +88,7 @@ class GoldenInput:
     width: int
     height: int
     frames: int
-    jobs: tuple[Job, ...] = field(default=(), compare=False)
+    jobs: tuple[GoldenJob, ...] = field(default=(), compare=False)
 
     @property
     def stem(self) -> str:

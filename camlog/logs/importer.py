@@ -41,9 +41,9 @@ __all__ = [
     "import_images",
     "import_topic",
     "natural_key",
+    "pair_image_files",
     "read_image",
     "stamps_ns",
-    "stereo_pairs",
 ]
 
 EXTENSIONS = (".png", ".jpg", ".jpeg", ".ppm", ".pgm", ".pnm")
@@ -72,11 +72,11 @@ def image_files(folder: Path) -> list[Path]:
     return sorted(files, key=lambda p: natural_key(p.name))
 
 
-def stereo_pairs(files: Sequence[Path]) -> tuple[list[tuple[Path, Path]], list[Path]]:
+def pair_image_files(files: Sequence[Path]) -> tuple[list[tuple[Path, Path]], list[Path]]:
     """``(left, right)`` pairs matched by the name after ``left``/``right`` (extension
     ignored), in natural order, and the files that found no partner.
 
-    >>> pairs, alone = stereo_pairs([Path("left1.png"), Path("right1.png"), Path("left2.png")])
+    >>> pairs, alone = pair_image_files([Path("left1.png"), Path("right1.png"), Path("left2.png")])
     >>> [(a.name, b.name) for a, b in pairs], [p.name for p in alone]
     ([('left1.png', 'right1.png')], ['left2.png'])
     """
@@ -213,7 +213,7 @@ def import_images(request: ImportRequest) -> ImportResult:
         stereo = archive.stereo
         frames = [tuple(folder / name for name in frame) for frame in archive.frames]
     elif stereo:
-        pairs, skipped = stereo_pairs(image_files(folder))
+        pairs, skipped = pair_image_files(image_files(folder))
         if not pairs:
             raise ImageFolderError(f"{folder}: no left*/right* file pairs with matching names")
         frames = list(pairs)

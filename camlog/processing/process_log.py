@@ -110,7 +110,7 @@ class _Job:
 
 
 @dataclass
-class _Topic:
+class _TopicRun:
     """One processed topic: its job, its own throttles (stateful) and its frame count."""
 
     job: _Job
@@ -129,7 +129,7 @@ class _Counts:
     read: int = 0
     processed: int = 0
     written: int = 0
-    pending: deque[tuple[_Topic, Future[list[RawMessage] | None]]] = field(default_factory=deque)
+    pending: deque[tuple[_TopicRun, Future[list[RawMessage] | None]]] = field(default_factory=deque)
 
 
 def _check_options(processors: Sequence[Configured], topics: Sequence[str],
@@ -190,7 +190,7 @@ def process_log(request: ProcessRequest) -> ProcessResult:
         workers = workers or min(4, os.cpu_count() or 1)
         with open_writer(output, fmt=fmt, overwrite=overwrite,
                          inputs=local_paths(input_path)) as writer:
-            jobs = {topic: _Topic(_Job(
+            jobs = {topic: _TopicRun(_Job(
                 tuple((proc, {name: o.topic for name, o in outs})
                       for proc, outs in zip(built, plans[topic], strict=True)),
                 compress, writer.serialization, f"{reader.path}: {topic}"),
@@ -205,7 +205,7 @@ def process_log(request: ProcessRequest) -> ProcessResult:
                          {t: s.undecodable for t, s in jobs.items() if s.undecodable})
 
 
-def _warm_up(reader: LogReader, jobs: Mapping[str, _Topic]) -> None:
+def _warm_up(reader: LogReader, jobs: Mapping[str, _TopicRun]) -> None:
     """Run the first frame of each topic: fail before writing anything, warm serializers
     (a first frame that does not decode is counted in the pass over the log)."""
     for topic, state in jobs.items():
@@ -221,7 +221,7 @@ def _warm_up(reader: LogReader, jobs: Mapping[str, _Topic]) -> None:
             break
 
 
-def _stream(reader: LogReader, writer: LogWriter, jobs: Mapping[str, _Topic], *, workers: int,
+def _stream(reader: LogReader, writer: LogWriter, jobs: Mapping[str, _TopicRun], *, workers: int,
             drop_input: bool, thin: bool, max_frames: int | None) -> _Counts:
     """The copy-and-process pass over the log."""
     counts = _Counts()

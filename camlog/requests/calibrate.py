@@ -9,7 +9,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, ClassVar
 
 from processors.calibration.patterns import DEFAULT_DICTIONARY, PATTERNS, WARP_MODES
-from replay.format_names import CAMERA_MODELS, MODEL_ALIASES
+from replay.lens_models import LENS_MODEL_NAMES
 
 from . import fields as common
 from .fields import RequestError, option, required
@@ -21,8 +21,6 @@ if TYPE_CHECKING:
 
 __all__ = ["CalibrateRequest"]
 
-#: ROS distortion_model names (and OpenCV's "fisheye" for equidistant)
-MODELS = (*CAMERA_MODELS, *MODEL_ALIASES)
 #: ``-k``'s word for a radial order chosen by cross-validation
 AUTO_ORDER = "auto"
 
@@ -98,7 +96,7 @@ class CalibrateRequest:
              "default they are estimated only when the views show them, by a likelihood-ratio "
              "test)")
     model: str | None = option(
-        None, "--model", choices=MODELS, metavar="MODEL",
+        None, "--model", choices=LENS_MODEL_NAMES, metavar="MODEL",
         help="lens model: plumb_bob (default), rational_polynomial or equidistant (OpenCV's "
              "fisheye; 'fisheye' is accepted for it)")
     marker: float | None = option(None, "--marker", type=float, metavar="M",

@@ -112,7 +112,7 @@ class Board:
         return f"{self.cols}x{self.rows} inner corners, {self.square_m:g} m squares"
 
 
-def parse_size(text: str) -> tuple[int, int]:
+def parse_board_size(text: str) -> tuple[int, int]:
     """``"7x6"`` -> (7, 6): per row x per column."""
     match = re.fullmatch(r"\s*(\d+)\s*[xX]\s*(\d+)\s*", text)
     if not match:
@@ -131,7 +131,7 @@ def make_board(size: str, square_m: float, pattern: str = "chessboard", *,
         raise ProcessorError(f"unsupported pattern {pattern!r} (supported: {', '.join(PATTERNS)})")
     if not square_m > 0:
         raise ProcessorError(f"the square size must be > 0 metres, got {square_m}")
-    cols, rows = parse_size(size)
+    cols, rows = parse_board_size(size)
     if pattern == "charuco":
         import cv2
 

@@ -31,7 +31,7 @@ from .options import TANGENTIAL_P_VALUE, CalibrationOptions, TangentialTest
 from .robust import (
     BoardView,
     BoardViews,
-    Evidence,
+    InlierSelection,
     Problem,
     camera_views,
     robust_solve,
@@ -50,8 +50,10 @@ MIN_VIEWS = 5
 class JointResult:
     """Calibrated cameras, rig and board poses, with the evidence and what uncertainty needs.
 
-    ``residuals_px[i]`` ``(M, 2)`` (observed - projected) and ``inliers[i]`` ``(M,)`` follow
-    the order of ``views[i]``'s corners; views in ``rejected`` carry no weight.
+    Cameras are numbered as the ``sizes`` given (every per-camera list follows it), views as
+    the ``views`` given: ``residuals_px[i]`` ``(M, 2)`` (observed - projected) and
+    ``inliers[i]`` ``(M,)`` follow the order of ``views[i]``'s corners; views in
+    ``rejected`` carry no weight.
     """
 
     views: list[BoardView]
@@ -92,6 +94,23 @@ class JointResult:
                                                       strict=True)]
         count = sum(int(m.sum()) for m in self.inliers)
         return math.sqrt(float(sum(squared)) / max(count, 1))
+
+    def used_views(self, camera: int) -> list[int]:
+        """The views of one camera that carry weight, in view order."""
+        return [i for i in camera_views(self.views, camera) if i not in self.rejected]
+
+    def parameters(self, camera: int) -> dict[str, float]:
+        """One camera's intrinsics by name (fx, fy, cx, cy, then the distortion
+        coefficients); their standard deviations are ``std[camera]``."""
+        m = self.models[camera]
+        names = ["fx", "fy", "cx", "cy", *INTRINSIC_NAMES[m.distortion_model][4:]]
+        return dict(zip(names, [m.fx, m.fy, m.cx, m.cy, *m.d.tolist()], strict=True))
+
+    def camera_from_board(self, view: int) -> F64:
+        """The board's pose ``(4, 4)`` in the camera of one view."""
+        board_view = self.views[view]
+        return self.camera_from_reference[board_view.camera] \
+            @ self.reference_from_board[board_view.instant]
 
     def view_rms_px(self, view: int) -> float:
         """RMS error of one view's inlier corners (px)."""
@@ -146,20 +165,26 @@ def calibrate_cameras(points_in_board: F64, views: list[BoardView],
     problem, evidence, rounds = robust_solve(data, final, seeds=seeds, reject=reject_outliers,
                                              warp=warp)
     tests: list[TangentialTest | None] = [None] * cameras
+    trials: dict[int, tuple[Problem, int]] = {}
     for camera in (c for c in range(cameras) if auto[c]):
         trial = list(final)
         trial[camera] = wanted[camera].with_tangential("zero")
-        without, _e, _r = robust_solve(data, trial,
-                                       state=_without_tangential(problem.state, camera),
-                                       evidence=evidence, warp=warp)
+        without, _e, trial_rounds = robust_solve(
+            data, trial, state=_without_tangential(problem.state, camera), evidence=evidence,
+            warp=warp)
+        trials[camera] = without, trial_rounds
         chi2 = (without.cost - problem.cost) / problem.sigma_px ** 2
         tests[camera] = TangentialTest(chi2, math.exp(-max(chi2, 0.0) / 2) < TANGENTIAL_P_VALUE)
-    if any(t is not None and not t.estimated for t in tests):
+    dropped = [c for c, t in enumerate(tests) if t is not None and not t.estimated]
+    for camera in dropped:
+        final[camera] = wanted[camera].with_tangential("zero")
+    if len(dropped) == 1:  # the trial without that camera's p1, p2 is the solve wanted
+        problem, more = trials[dropped[0]]
+        rounds += more
+    elif dropped:
         state = problem.state
-        for camera, test in enumerate(tests):
-            if test is not None and not test.estimated:
-                final[camera] = wanted[camera].with_tangential("zero")
-                state = _without_tangential(state, camera)
+        for camera in dropped:
+            state = _without_tangential(state, camera)
         problem, _e, more = robust_solve(data, final, state=state, evidence=evidence,
                                          warp=warp)
         rounds += more
@@ -181,7 +206,7 @@ def _without_tangential(state: bundle.RigState, camera: int) -> bundle.RigState:
     return out
 
 
-def _result(problem: Problem, views: list[BoardView], evidence: Evidence, *,
+def _result(problem: Problem, views: list[BoardView], evidence: InlierSelection, *,
             options: list[CalibrationOptions], tests: list[TangentialTest | None],
             rounds: int, warp_choice: WarpChoice | None) -> JointResult:
     state, layout, obs = problem.state, problem.layout, problem.observations

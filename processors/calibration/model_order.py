@@ -20,17 +20,19 @@ views' noise raises it. The bigger model is chosen when both
 * its held-out error is lower by at least :data:`MIN_GAIN` (``1 - sum e_big / sum e_small``):
   a gain too small to matter is not worth the extra coefficient's extrapolation, and
 * the paired differences lean to the bigger model: Wilcoxon's signed-rank test
-  (:func:`signed_rank_p`, exact, one-sided) gives p < :data:`MAX_P_VALUE` under "neither
-  is better". Ranks, not a t statistic: a lens term shows where the boards reach far from
+  (:func:`signed_rank_p`, one-sided) gives p < :data:`MAX_P_VALUE` under "neither is
+  better". Ranks, not a t statistic: a lens term shows where the boards reach far from
   the centre, so true gains are few and large among many differences near zero, and a t
   statistic's spread, made by those same large gains, hides them; one odd view, however
   large its difference, counts as one rank. The exact law keeps the test honest with few
-  views (a normal approximation's z = 3 is out of reach below 12 views).
+  views (a normal approximation's z = 3 is out of reach below 12 views); past
+  :data:`EXACT_RANKS` views its normal approximation is as good, and finite however many.
 
 Views far off under the smallest order (:data:`FAR_VIEW_FACTOR` times the median view's
-error: not the board, or blurred) are left out of the comparison, and each fold's fit sees
-an even sample of at most :data:`FOLD_VIEWS` training views (the cost stays that of a few
-seed calibrations however long the log). The folds are fitted on threads (OpenCV's solver
+error: not the board, or blurred) are left out of the comparison; a camera's views are an
+even sample of at most :data:`~.seed.STATISTICS_VIEWS` of them, and each fold's fit sees an
+even sample of at most :data:`FOLD_VIEWS` training views (the cost stays that of a few seed
+calibrations however long the log). The folds are fitted on threads (OpenCV's solver
 releases the GIL; each fit alone on one thread, see :func:`~.seed.one_opencv_thread`), and the
 cameras climb their ladders at the same time: the same fits, in less time on several cores.
 The folds' models share most of their views, so the views' differences are not quite
@@ -58,9 +60,9 @@ from ..errors import ProcessorError
 from .opencv_lens import opencv_lens
 from .options import CalibrationOptions
 from .robust import BoardView, camera_views
-from .seed import board_pose, opencv_calibration, spread
+from .seed import STATISTICS_VIEWS, board_pose, opencv_calibration, spread
 
-__all__ = ["MAX_P_VALUE", "MIN_GAIN", "ORDER_FOLDS", "OrderChoice", "OrderStep",
+__all__ = ["EXACT_RANKS", "MAX_P_VALUE", "MIN_GAIN", "ORDER_FOLDS", "OrderChoice", "OrderStep",
            "choose_order", "choose_orders", "order_candidates", "order_label", "signed_rank_p"]
 
 ORDER_FOLDS = 5
@@ -78,6 +80,9 @@ MIN_CORNERS = 6
 FAR_VIEW_FACTOR = 10.0
 #: fewer views than this: no choice, the smallest order is kept
 MIN_ORDER_VIEWS = 2 * ORDER_FOLDS
+#: up to this many paired differences the signed-rank law is exact (a few million additions);
+#: beyond, its normal approximation is within 1e-4 of it
+EXACT_RANKS = 200
 
 #: how the folds of one rung are fitted: a ``map`` that keeps their order (the builtin, or a
 #: thread pool's)
@@ -182,6 +187,7 @@ def choose_order(points_in_board: F64, views: list[tuple[npt.NDArray[np.int64], 
     fits a rung's folds (e.g. a thread pool's ``map``)."""
     usable = [(points_in_board[ids], np.asarray(c, dtype=np.float64)) for ids, c in views
               if len(ids) >= MIN_CORNERS]
+    usable = [usable[i] for i in spread(len(usable), STATISTICS_VIEWS)]
     if len(candidates) == 1 or len(usable) < MIN_ORDER_VIEWS:
         why = "no other order to choose" if len(candidates) == 1 else \
             f"{len(usable)} views, fewer than {MIN_ORDER_VIEWS}"
@@ -242,21 +248,34 @@ def _compare(small: F64, big: F64, smaller: int, bigger: int) -> OrderStep:
 def signed_rank_p(difference: F64) -> float:
     """One-sided p-value of Wilcoxon's signed-rank test that paired differences ``(V,)``
     lean positive: the probability, were each difference's sign a fair coin, of a sum of
-    positive ranks this large or larger (exact; zeros left out, tied sizes share their
-    mean rank)."""
+    positive ranks this large or larger (zeros left out, tied sizes share their mean rank).
+
+    Up to :data:`EXACT_RANKS` differences the law of that sum is summed exactly, as
+    probabilities (each rank halves them: no count of ``2**V`` subsets overflows); beyond, it
+    is the normal law of the same mean and variance (the ties' share taken out), with a
+    continuity correction of half a rank, as :func:`scipy.stats.wilcoxon`'s approximation.
+    """
     nonzero = difference[difference != 0]
-    if not len(nonzero):
+    count = len(nonzero)
+    if not count:
         return 1.0
     _values, group, size = np.unique(np.abs(nonzero), return_inverse=True,
                                      return_counts=True)
     first = np.cumsum(size) - size  # rank - 1 of each group's first member
     doubled = (2 * first + size + 1)[group]  # twice the mean ranks: integers >= 2
-    ways = np.zeros(int(doubled.sum()) + 1)
-    ways[0] = 1.0
-    for rank in doubled.tolist():  # the law of the sum of a random subset of the ranks
-        ways[rank:] = ways[rank:] + ways[:-rank]
     observed = int(doubled[nonzero > 0].sum())
-    return float(ways[observed:].sum() / ways.sum())
+    if count <= EXACT_RANKS:
+        law = np.zeros(int(doubled.sum()) + 1)
+        law[0] = 1.0
+        for rank in doubled.tolist():  # the law of the sum of a random subset of the ranks
+            law[rank:] = law[rank:] + law[:-rank]
+            law *= 0.5
+        return float(min(1.0, law[observed:].sum()))
+    mean = count * (count + 1) / 4
+    ties = size.astype(np.float64)
+    variance = count * (count + 1) * (2 * count + 1) / 24 - float(np.sum(ties ** 3 - ties)) / 48
+    z = (observed / 2 - mean - 0.5) / math.sqrt(variance)
+    return 0.5 * math.erfc(z / math.sqrt(2))
 
 
 def _held_out_px2(views: list[tuple[F64, F64]], blocks: list[np.ndarray],

@@ -1,15 +1,13 @@
 """Intrinsic calibration of one camera: every view in one least-squares problem.
 
-A thin layer over :func:`~.joint.calibrate_cameras` with one camera: outlier corners are
-left out one by one (views that are not the board whole), tangential distortion is
-estimated when the views show it (see :mod:`.options`), and every parameter comes with its
-standard deviation. Also the CameraInfo a mono calibration publishes and projection
+:func:`~.joint.calibrate_cameras` with one camera (its result is the joint result, camera
+0): outlier corners are left out one by one (views that are not the board whole), tangential
+distortion is estimated when the views show it (see :mod:`.options`), and every parameter
+comes with its standard deviation. Also the CameraInfo a mono calibration publishes and projection
 differences between two models.
 """
 
 from __future__ import annotations
-
-from dataclasses import dataclass, field
 
 import cv2
 import numpy as np
@@ -19,7 +17,7 @@ from replay.messages import F64, CameraInfo
 
 from .bundle import cross
 from .joint import MIN_VIEWS, BoardView, JointResult, calibrate_cameras
-from .lens import INTRINSIC_NAMES, intrinsics_of, project
+from .lens import intrinsics_of, project
 from .opencv_lens import opencv_lens
 from .options import (
     TANGENTIAL_P_VALUE,
@@ -33,7 +31,6 @@ __all__ = [
     "MIN_VIEWS",
     "TANGENTIAL_P_VALUE",
     "CalibrationOptions",
-    "MonoResult",
     "TangentialTest",
     "calibrate_mono",
     "max_projection_difference",
@@ -42,60 +39,19 @@ __all__ = [
 ]
 
 
-@dataclass
-class MonoResult:
-    """A calibrated camera and the evidence for it."""
-
-    model: CameraModel
-    rms_px: float  # over the inlier corners
-    view_ids: list[int]  # indices (into the views given) that were used
-    view_rms_px: dict[int, float]  # per used view, over its inlier corners
-    rejected: dict[int, str]  # view index -> why it was left out
-    std: dict[str, float]  # standard deviation of every parameter (0 when held)
-    camera_from_board: dict[int, F64]  # (4, 4) per used view
-    residuals_px: dict[int, F64] = field(default_factory=dict)  # (N, 2) per used view
-    inliers: dict[int, np.ndarray] = field(default_factory=dict)  # (N,) bool per used view
-    #: the options solved with: "auto" tangential distortion resolved to what was chosen
-    options: CalibrationOptions = field(default_factory=CalibrationOptions)
-    tangential_test: TangentialTest | None = None
-    sigma_px: float = 0.0  # corner noise per coordinate, from the residuals
-    joint: JointResult | None = None
-
-    def parameters(self) -> dict[str, float]:
-        """Every intrinsic by name (fx, fy, cx, cy, then the distortion coefficients)."""
-        m = self.model
-        names = ["fx", "fy", "cx", "cy", *INTRINSIC_NAMES[m.distortion_model][4:]]
-        values = [m.fx, m.fy, m.cx, m.cy, *m.d.tolist()]
-        return dict(zip(names, values, strict=True))
-
-    @property
-    def outlier_corners(self) -> int:
-        """Corners of used views left out as outliers."""
-        return sum(int((~m).sum()) for m in self.inliers.values())
-
-
 def calibrate_mono(points_in_board: F64, corners: list[F64], size: tuple[int, int],
                    options: CalibrationOptions, *, reject_outliers: bool = True,
                    point_ids: list[np.ndarray] | None = None,
-                   weights: list[float] | None = None) -> MonoResult:
-    """Calibrate from views ``corners[i]`` ``(M_i, 2)`` of the board points ``(N, 3)``
-    (all of them in order, or ``point_ids[i]``), each weighted by ``weights[i]``."""
+                   weights: list[float] | None = None) -> JointResult:
+    """Calibrate camera 0 from views ``corners[i]`` ``(M_i, 2)`` of the board points
+    ``(N, 3)`` (all of them in order, or ``point_ids[i]``), each weighted by ``weights[i]``;
+    view ``i`` is board pose ``i``."""
     ids = point_ids or [np.arange(len(points_in_board))] * len(corners)
     weight = weights or [1.0] * len(corners)
     views = [BoardView(0, i, np.asarray(ids[i], dtype=np.int64), c, weight[i])
              for i, c in enumerate(corners)]
-    joint = calibrate_cameras(points_in_board, views, [size], options,
-                              reject_outliers=reject_outliers)
-    used = [i for i in range(len(corners)) if i not in joint.rejected]
-    return MonoResult(
-        model=joint.models[0], rms_px=joint.rms_px, view_ids=used,
-        view_rms_px={i: joint.view_rms_px(i) for i in used},
-        rejected=dict(joint.rejected), std=dict(joint.std[0]),
-        camera_from_board={i: joint.reference_from_board[i] for i in used},
-        residuals_px={i: joint.residuals_px[i] for i in used},
-        inliers={i: joint.inliers[i] for i in used},
-        options=joint.options[0], tangential_test=joint.tangential_tests[0],
-        sigma_px=joint.sigma_px, joint=joint)
+    return calibrate_cameras(points_in_board, views, [size], options,
+                             reject_outliers=reject_outliers)
 
 
 def mono_camera_info(model: CameraModel, frame_id: str) -> CameraInfo:

@@ -18,8 +18,8 @@ import cv2
 import numpy as np
 import numpy.typing as npt
 
-from replay.camera import CameraModel, canonical_model
-from replay.lens_models import lens_model
+from replay.camera import CameraModel
+from replay.lens_models import canonical_name, lens_model
 from replay.messages import F64
 
 from .options import CalibrationOptions
@@ -171,4 +171,4 @@ OPENCV_LENSES: dict[str, OpenCVLens] = {
 
 def opencv_lens(distortion_model: str) -> OpenCVLens:
     """The OpenCV functions of a lens model (or one of its aliases)."""
-    return OPENCV_LENSES[canonical_model(distortion_model)]
+    return OPENCV_LENSES[canonical_name(distortion_model)]

@@ -25,17 +25,12 @@ import dataclasses
 import math
 from dataclasses import dataclass
 
-from replay.camera import canonical_model
-from replay.lens_models import LENS_MODELS, MODEL_ALIASES, lens_model
+from replay.lens_models import LENS_MODEL_NAMES, LENS_MODELS, canonical_name, lens_model
 
 from ..errors import ProcessorError
 from .patterns import WARP_MODES
 
 TANGENTIAL_MODES = ("auto", "estimate", "zero")
-MODELS = tuple(LENS_MODELS)
-#: radial coefficients estimated when -k is not given, and at most (the lens-model table)
-DEFAULT_K = {name: m.default_radial for name, m in LENS_MODELS.items()}
-MAX_K = {name: m.max_radial for name, m in LENS_MODELS.items()}
 #: "auto" keeps p1, p2 when holding them at zero raises the residual more than noise would
 #: with this probability (the residual is not quite independent noise: views share small
 #: biases, so the test is strict)
@@ -70,14 +65,14 @@ class CalibrationOptions:
                                  "rational_polynomial's: give no number of radial "
                                  "coefficients and no lens model other than plumb_bob")
         if self.model is not None:
-            model = canonical_model(self.model)
-            if model not in MODELS:
+            model = canonical_name(self.model)
+            if model not in LENS_MODELS:
                 raise ProcessorError(f"unknown lens model {self.model!r} "
-                                     f"(use {', '.join([*MODELS, *MODEL_ALIASES])})")
+                                     f"(use {', '.join(LENS_MODEL_NAMES)})")
             object.__setattr__(self, "model", model)
         k = self.k_coefficients
-        if k is not None and not 0 <= k <= MAX_K[self.distortion_model]:
-            most = MAX_K[self.distortion_model]
+        most = lens_model(self.distortion_model).max_radial
+        if k is not None and not 0 <= k <= most:
             raise ProcessorError(f"the number of radial coefficients must be 0..{most} for "
                                  f"{self.distortion_model}, got {k}")
         if self.tangential not in TANGENTIAL_MODES:
@@ -103,7 +98,7 @@ class CalibrationOptions:
         """How many radial coefficients are estimated."""
         if self.k_coefficients is not None:
             return self.k_coefficients
-        return DEFAULT_K[self.distortion_model]
+        return lens_model(self.distortion_model).default_radial
 
     @property
     def has_tangential(self) -> bool:

@@ -39,6 +39,7 @@ from __future__ import annotations
 import numpy as np
 import numpy.typing as npt
 
+from replay.lens_models import LENS_MODELS
 from replay.messages import F64
 
 #: the rational model's denominator coefficients, held near zero by the prior
@@ -49,8 +50,6 @@ DENOMINATOR_PRIOR_PX = 1.0
 RADIAL = ("k1", "k2", "k3")
 #: residual (px) per unit of each radial coefficient
 RADIAL_PRIOR_PX = 0.3
-#: the lens models whose radial coefficients the prior holds
-PINHOLE_MODELS = ("plumb_bob", "rational_polynomial")
 
 
 def weights(models: list[str], names: list[list[str]],
@@ -59,7 +58,7 @@ def weights(models: list[str], names: list[list[str]],
     camera's distortion model, the names of its free intrinsics and their columns."""
     out = np.zeros(count)
     for model, labels, where in zip(models, names, columns, strict=True):
-        if model not in PINHOLE_MODELS:
+        if LENS_MODELS[model].fisheye:  # the prior holds pinhole lenses' coefficients
             continue
         for label, column in zip(labels, where, strict=True):
             if label in RADIAL:

@@ -67,7 +67,7 @@ class BoardView:
 
 
 @dataclass
-class Evidence:
+class InlierSelection:
     """What a robust solve decided about the data: the views' rows (ordered by camera), the
     observations with their weights, the inlier corners, the views left out and why, and the
     blur law (None when the views show none)."""
@@ -82,7 +82,7 @@ class Evidence:
     outlying: set[int] = field(default_factory=set)  # views left out as not the board
 
     @classmethod
-    def of(cls, views: list[BoardView], points_in_board: F64) -> Evidence:
+    def of(cls, views: list[BoardView], points_in_board: F64) -> InlierSelection:
         """Every corner of ``views`` an inlier; views with too few corners left out."""
         order = np.argsort([v.camera for v in views], kind="stable")
         instants, instant_rows = np.unique([v.instant for v in views], return_inverse=True)
@@ -180,8 +180,8 @@ def seed_camera(points_in_board: F64, views: list[BoardView], camera: int,
 
 def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
                  seeds: list[CameraModel] | None = None, state: bundle.RigState | None = None,
-                 evidence: Evidence | None = None, reject: bool = True, warp: bool = False
-                 ) -> tuple[Problem, Evidence, int]:
+                 evidence: InlierSelection | None = None, reject: bool = True, warp: bool = False
+                 ) -> tuple[Problem, InlierSelection, int]:
     """Seed (from ``seeds`` or OpenCV, or start at a previous solve's ``state``) and refine
     one camera's ``options`` each; with ``warp`` the board's warp too (:mod:`.warp`).
 
@@ -191,7 +191,7 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
     points_in_board, views, sizes = data.points_in_board, data.views, data.sizes
     disc_diameter_m = data.disc_diameter_m
     fresh = evidence is None
-    evidence = evidence or Evidence.of(views, points_in_board)
+    evidence = evidence or InlierSelection.of(views, points_in_board)
     obs = evidence.observations
     if state is None:
         models = seeds or [seed_camera(points_in_board, views, c, sizes[c], options[c])
@@ -268,7 +268,7 @@ def _sigma(weighted_norm: F64, inliers: B8, layout: bundle.Layout) -> float:
     return math.sqrt(float(np.sum(weighted_norm[inliers] ** 2)) / dof)
 
 
-def _reject_outliers(evidence: Evidence, norm: F64, sigma: float) -> bool:
+def _reject_outliers(evidence: InlierSelection, norm: F64, sigma: float) -> bool:
     """Mark the corners beyond the threshold (and views that lose most of theirs); whether
     anything changed."""
     obs, seen = evidence.observations, evidence.observations.mask
@@ -304,11 +304,11 @@ class _Trial:
 
     @classmethod
     def before(cls, state: bundle.RigState, refinement: normal.Refinement, sigma: float,
-               shift: F64, evidence: Evidence) -> _Trial:
+               shift: F64, evidence: InlierSelection) -> _Trial:
         return cls(state, refinement, sigma, shift, evidence.inliers.copy(),
                    dict(evidence.rejected), set(evidence.outlying))
 
-    def holds(self, evidence: Evidence, state: bundle.RigState, sigma: float) -> bool:
+    def holds(self, evidence: InlierSelection, state: bundle.RigState, sigma: float) -> bool:
         """Whether the solve with the views taken back in is kept."""
         used_before = [view for view in evidence.order.tolist() if view not in self.rejected]
         return bool(self.outlying - evidence.outlying) \
@@ -316,14 +316,15 @@ class _Trial:
             and sigma <= RETRY_SIGMA_GROWTH * self.sigma \
             and all(np.isfinite(i).all() for i in state.intrinsics)
 
-    def undo(self, evidence: Evidence) -> tuple[bundle.RigState, normal.Refinement, float, F64]:
+    def undo(self, evidence: InlierSelection
+             ) -> tuple[bundle.RigState, normal.Refinement, float, F64]:
         """Back to the solve before the trial; its state, refinement, sigma and shift."""
         evidence.inliers, evidence.rejected = self.inliers, self.rejected
         evidence.outlying = self.outlying
         return self.state, self.refinement, self.sigma, self.shift
 
 
-def _retry_outlying(evidence: Evidence, state: bundle.RigState, obs: bundle.Observations,
+def _retry_outlying(evidence: InlierSelection, state: bundle.RigState, obs: bundle.Observations,
                     points_in_board: F64, lenses: list[tuple[str, tuple[int, int]]]
                     ) -> tuple[bundle.RigState, int]:
     """Take the views left out as not the board back in (see the module's text); a board
@@ -355,7 +356,7 @@ def _retry_outlying(evidence: Evidence, state: bundle.RigState, obs: bundle.Obse
     return state, restored
 
 
-def _weigh_blur(evidence: Evidence, norm: F64, speeds: F64) -> bool:
+def _weigh_blur(evidence: InlierSelection, norm: F64, speeds: F64) -> bool:
     """Fit the blur law to the views' residuals, weight them by it and leave out the views
     beyond its limit; whether there was blur to weigh."""
     inliers = evidence.inliers

@@ -29,6 +29,11 @@ from .options import CalibrationOptions
 I64 = npt.NDArray[np.int64]
 #: views OpenCV's solver sees when seeding a camera
 SEED_VIEWS = 40
+#: the cross-validations (the lens order, the board's warp, the halves) measure an even
+#: sample of at most this many views or board poses: a waved board's neighbouring frames are
+#: nearly one view, and past a few hundred views the choices and figures settle while their
+#: cost grows with the views (held boards give far fewer)
+STATISTICS_VIEWS = 240
 #: rig transforms of two views agree when their rotations differ by less than this
 RIG_AGREEMENT_RAD = math.radians(2.0)
 #: a seed view whose RMS error exceeds max(factor x the median, floor) is left out of the seed

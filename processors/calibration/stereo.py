@@ -50,8 +50,10 @@ class StereoResult:
     rotation_std_deg: float  # worst direction
     square_m: float  # square size re-estimated by triangulating the joint views
     view_epipolar_px: list[float]  # per joint view used
-    view_ids: list[int] = field(default_factory=list)  # joint views used (pair indices)
-    rejected: dict[int, str] = field(default_factory=dict)  # pair index -> why
+    #: joint views used: (left view, right view), the joint calibration's view indices
+    pairs: list[tuple[int, int]] = field(default_factory=list)
+    #: joint views left out (as numbered in ``pairs``) -> why
+    rejected: dict[tuple[int, int], str] = field(default_factory=dict)
 
     @property
     def rotation_deg(self) -> float:
@@ -155,25 +157,28 @@ def stereo_result(joint: JointResult, pairs: list[tuple[int, int]], *,
     """Rectification and figures of merit of two cameras (``cameras``: left, right; by
     default 0 and 1) of a joint calibration.
 
-    ``pairs[i]`` are the views (indices into the joint calibration's views) of the left and
-    right camera at one instant. Only corners that are inliers in both views count.
+    ``pairs`` are the joint views: the views (indices into the joint calibration's views) of
+    the left and right camera at one instant. Only corners that are inliers in both views
+    count.
     ``global_covariance``: the joint problem's, when already computed (see
     :func:`.rig.relative_pose`).
     """
     left_model, right_model = joint.models[cameras[0]], joint.models[cameras[1]]
     right_from_left, covariance = relative_pose(joint, *cameras, global_covariance)
     r1, r2, p1, p2 = rectify(left_model, right_model, right_from_left)
-    used, rejected, left, right, common = [], {}, [], [], []
-    for index, (lv, rv) in enumerate(pairs):
+    used: list[tuple[int, int]] = []
+    rejected: dict[tuple[int, int], str] = {}
+    left, right, common = [], [], []
+    for lv, rv in pairs:
         lid, rid = joint.views[lv].point_ids, joint.views[rv].point_ids
         if lv in joint.rejected or rv in joint.rejected:
-            rejected[index] = joint.rejected.get(lv) or joint.rejected[rv]
+            rejected[lv, rv] = joint.rejected.get(lv) or joint.rejected[rv]
             continue
         ids, li, ri = np.intersect1d(lid, rid, return_indices=True)
         keep = joint.inliers[lv][li] & joint.inliers[rv][ri]
         if keep.sum() < 2:
             continue
-        used.append(index)
+        used.append((lv, rv))
         left.append(joint.centres_px(lv)[li[keep]])
         right.append(joint.centres_px(rv)[ri[keep]])
         common.append(ids[keep])
@@ -186,8 +191,7 @@ def stereo_result(joint: JointResult, pairs: list[tuple[int, int]], *,
     baseline = float(np.linalg.norm(translation))
     direction = translation / baseline
     rms = math.sqrt(float(np.mean(np.square(view_errors)))) if view_errors else float("nan")
-    rms_px = math.sqrt(np.mean([joint.view_rms_px(v) ** 2 for pair in
-                                (pairs[i] for i in used) for v in pair]))
+    rms_px = math.sqrt(np.mean([joint.view_rms_px(v) ** 2 for pair in used for v in pair]))
     return StereoResult(
         right_from_left=right_from_left, rms_px=float(rms_px), r1=r1, r2=r2, p1=p1, p2=p2,
         epipolar_rms_px=rms, baseline_m=baseline,
@@ -195,7 +199,7 @@ def stereo_result(joint: JointResult, pairs: list[tuple[int, int]], *,
         rotation_std_deg=rotation_std_deg(covariance),
         square_m=square_size(left, right, common, rectified, points_in_board=points_in_board,
                              square_m=square_m),
-        view_epipolar_px=view_errors, view_ids=used, rejected=rejected)
+        view_epipolar_px=view_errors, pairs=used, rejected=rejected)
 
 
 def square_size(left: list[F64], right: list[F64], ids: list[np.ndarray],

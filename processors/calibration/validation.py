@@ -17,11 +17,15 @@ twice the variance), independently of the other. Their difference ``d_A - d_B`` 
 half of it, a factor ``sqrt(4 S / S) = 2``, is distributed as the full calibration's own error,
 without trusting the noise model's scale. It does assume the corners' errors independent: an
 error shared by a view's corners, or a lens model that fits every view alike, is the same in
-both halves and invisible here.
+both halves and invisible here. Beyond :data:`~.seed.STATISTICS_VIEWS` board poses the halves
+are those of an even sample of ``P'`` of the ``P`` poses (a waved board's neighbouring
+frames are nearly one pose): to the same first order each half's covariance is then
+``2 S P / P'``, and the figure is scaled by ``sqrt(P' / P)``.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,6 +37,7 @@ from ..errors import ProcessorError
 from .joint import MIN_VIEWS, BoardView, JointResult, calibrate_cameras, camera_views
 from .options import CalibrationOptions
 from .robust import MIN_VIEW_POINTS
+from .seed import STATISTICS_VIEWS, spread
 from .uncertainty import GRID_STEP_PX, OverImage, error_against, grid
 
 
@@ -102,7 +107,11 @@ def cross_validate(points_in_board: F64, views: list[BoardView], sizes: list[tup
     would have fewer than :data:`~.joint.MIN_VIEWS` views of some camera, or does not solve
     (its views leave an unknown free: a statistic, not the calibration, is then missing).
     ``disc_diameter_m``: as :func:`~.joint.calibrate_cameras`'s."""
-    parts = halves(views)
+    instants = sorted({v.instant for v in views})
+    sample = {instants[i] for i in spread(len(instants), STATISTICS_VIEWS)}
+    parts = halves([v for v in views if v.instant in sample])
+    # each half of a sample of P' of the P poses has P / P' times the half's covariance
+    scale = math.sqrt(len(sample) / len(instants))
     for part in parts:
         for camera in range(len(sizes)):
             if len(camera_views(part, camera)) < MIN_VIEWS:
@@ -117,5 +126,6 @@ def cross_validate(points_in_board: F64, views: list[BoardView], sizes: list[tup
         pixels = grid(size, step_px)
         squared = [_difference_px(a, b, camera, pixels, range_m) ** 2,
                    _difference_px(b, a, camera, pixels, range_m) ** 2]
-        out.append(CrossValidation(camera, pixels, np.sqrt(np.mean(squared, axis=0)) / 2))
+        out.append(CrossValidation(camera, pixels,
+                                   scale * np.sqrt(np.mean(squared, axis=0)) / 2))
     return out

@@ -1,16 +1,18 @@
 """Whether to estimate the board's warp (:mod:`.warp`), by cross-validation over whole views.
 
-As the lens order (:mod:`.model_order`): the board poses, in time order, are cut into
-:data:`WARP_FOLDS` contiguous blocks. For each block the joint problem is solved again from
-the flat solution without the block's views, once with the board held flat and once with its
-warp estimated (the project's own bundle: OpenCV cannot fit a warp); each held-out view's
+As the lens order (:mod:`.model_order`): the board poses (an even sample of at most
+:data:`~.seed.STATISTICS_VIEWS`), in time order, are cut into :data:`WARP_FOLDS` contiguous
+blocks. For each block the joint problem of the sampled poses is solved again from the flat
+solution without the block's views, once with the board held flat and once with its warp
+estimated (the project's own bundle: OpenCV cannot fit a warp); each held-out view's
 pose alone is then solved with the fitted intrinsics, rig and warp, and its mean squared
 reprojection error ``e(v)`` (px²) measured. The warp is chosen when its held-out error is
 lower by at least :data:`~.model_order.MIN_GAIN` and the board poses' paired differences
-``e_flat(p) - e_warped(p)`` (a pose's views pooled) favour it with an exact one-sided
-signed-rank p below :data:`~.model_order.MAX_P_VALUE`. Board poses are the units, so an
-error a view's corners share (blur, a pose they pull together) counts once per pose, not
-once per corner, and the views a rig's cameras take of one pose count once together.
+``e_flat(p) - e_warped(p)`` (a pose's views pooled) favour it with a one-sided signed-rank
+p (:func:`~.model_order.signed_rank_p`) below :data:`~.model_order.MAX_P_VALUE`. Board poses
+are the units, so an error a view's corners share (blur, a pose they pull together) counts
+once per pose, not once per corner, and the views a rig's cameras take of one pose count once
+together.
 
 The folds start at the flat solution with its inliers and weights: each costs two
 Levenberg-Marquardt refinements from nearby, a few solves of the whole problem in all.
@@ -29,6 +31,7 @@ from . import bundle
 from .model_order import MAX_P_VALUE, MIN_CORNERS, MIN_GAIN, MIN_ORDER_VIEWS, signed_rank_p
 from .normal import refine
 from .robust import Problem
+from .seed import STATISTICS_VIEWS, spread
 
 __all__ = ["WARP_FOLDS", "WarpChoice", "choose_warp"]
 
@@ -85,7 +88,13 @@ def choose_warp(problem: Problem, *, folds: int = WARP_FOLDS) -> WarpChoice:
     if len(usable) < MIN_ORDER_VIEWS:
         return WarpChoice(np.zeros(0), np.zeros(0), math.nan, math.nan, 0,
                           f"{len(usable)} views, fewer than {MIN_ORDER_VIEWS}")
-    seen = np.unique(obs.instant[usable])
+    every = np.unique(obs.instant[usable])
+    seen = every[spread(len(every), STATISTICS_VIEWS)]
+    if len(seen) < len(every):  # the views of the poses left out take no part
+        kept = np.flatnonzero(~np.isin(obs.instant, np.setdiff1d(every, seen)))
+        obs = bundle.Observations(obs.camera[kept], obs.instant[kept], obs.observed[kept],
+                                  obs.mask[kept], obs.weight[kept])
+        usable = np.flatnonzero(obs.mask.sum(axis=1) >= MIN_CORNERS)
     errors = np.full((2, obs.view_count), math.inf)
     for block in np.array_split(seen, folds):
         held = np.isin(obs.instant, block)

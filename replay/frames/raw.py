@@ -52,7 +52,7 @@ class RawImage(Protocol):
 class Raw:
     """One raw image encoding: ``channels`` values of ``dtype`` per pixel, decoded to a
     ``color`` frame by ``convert`` (None: the pixels as they are); ``rows`` buffer rows per
-    image row (see :class:`replay.buffer_layout.Layout`)."""
+    image row (see :class:`replay.buffer_layout.BufferLayout`)."""
 
     dtype: np.dtype[Any]
     channels: int

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from processors.errors import ConfigError, InputError
+from processors.errors import ConfigError, StampsError
 from processors.resync import (
     FALLBACK_SLOP_NS,
     Pairing,
@@ -128,9 +128,9 @@ def test_common_stamp_is_the_later_one_and_stats_report_offsets() -> None:
 
 
 def test_bad_input_is_rejected() -> None:
-    with pytest.raises(InputError, match="sorted"):
+    with pytest.raises(StampsError, match="sorted"):
         pair_stamps([3, 1], [1], slop_ns=1)
-    with pytest.raises(InputError, match="integer"):
+    with pytest.raises(StampsError, match="integer"):
         pair_stamps([0.5], [1], slop_ns=1)
     with pytest.raises(ConfigError, match="slop"):
         pair_stamps([0], [1], slop_ns=-1)

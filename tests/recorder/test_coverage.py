@@ -18,13 +18,13 @@ from recorder.coverage import ANCHORS, anchor_order, image_pose, view_angles
 from recorder.errors import ScenarioError
 from recorder.motion import Trajectory, plan_trajectory, visible_fraction
 from recorder.record import MOTION_STREAM, rng_for
-from recorder.scenario import Scenario, builtin_dir, load_scenario, parse_scenario
+from recorder.scenario import ScenarioSpec, builtin_dir, load_scenario, parse_scenario
 from recorder.targets import feature_points_in_target, outline_in_target
 from replay.geometry import invert
 from replay.messages import F64
 
 
-def planned(name: str) -> tuple[Scenario, Trajectory]:
+def planned(name: str) -> tuple[ScenarioSpec, Trajectory]:
     scenario = load_scenario(name)
     (target,) = scenario.targets
     trajectory = plan_trajectory(target, scenario.cameras, scenario.frame_count / 30,
@@ -39,7 +39,7 @@ def projected(camera: CameraSpec, world_from_target: F64, points: F64) -> F64 | 
     return None if (in_camera[:, 2] <= 0).any() else camera.model.project(in_camera)
 
 
-def ros_coverage(scenario: Scenario, trajectory: Trajectory, camera: CameraSpec) -> F64:
+def ros_coverage(scenario: ScenarioSpec, trajectory: Trajectory, camera: CameraSpec) -> F64:
     """camera_calibration's X, Y progress over the fully visible board views."""
     (target,) = scenario.targets
     board = Board(*target.inner_corners, target.square_m)
@@ -142,7 +142,7 @@ def test_image_aim_plans_held_poses_only() -> None:
         parse_scenario(raw, "test")
 
 
-def stereo_heldout_visible_in(visible_in: str, **motion_changes: object) -> Scenario:
+def stereo_heldout_visible_in(visible_in: str, **motion_changes: object) -> ScenarioSpec:
     raw = tomllib.loads((builtin_dir() / "stereo_heldout.toml").read_text())
     raw["targets"][0]["motion"].update(visible_in=visible_in, **motion_changes)
     return parse_scenario(raw, "test")

@@ -15,7 +15,7 @@ from recorder.coverage import view_angles
 from recorder.errors import ScenarioError
 from recorder.motion import Trajectory, plan_trajectory, visible_fraction
 from recorder.record import MOTION_STREAM, rng_for
-from recorder.scenario import Scenario, load_scenario
+from recorder.scenario import ScenarioSpec, load_scenario
 from recorder.target_spec import TargetSpec
 from recorder.targets import outline_in_target
 from replay.geometry import invert
@@ -25,11 +25,11 @@ HOLDS = 400
 SMALL = {"width": 320, "height": 240}
 
 
-def scenario(name: str = "mono_checkerboard") -> Scenario:
+def scenario(name: str = "mono_checkerboard") -> ScenarioSpec:
     return load_scenario(name, SMALL)
 
 
-def plan(s: Scenario, target: TargetSpec | None = None, *, seed: int = 0,
+def plan(s: ScenarioSpec, target: TargetSpec | None = None, *, seed: int = 0,
          holds: int = HOLDS) -> Trajectory:
     target = target or s.targets[0]
     duration_s = holds * target.motion.hold_s
@@ -47,7 +47,7 @@ def board_outline(target: TargetSpec) -> F64:
     return np.array([[-s, -s, 0], [cols * s, -s, 0], [cols * s, rows * s, 0], [-s, rows * s, 0]])
 
 
-def in_image(s: Scenario, world_from_target: F64, points_in_target: F64) -> bool:
+def in_image(s: ScenarioSpec, world_from_target: F64, points_in_target: F64) -> bool:
     """Every point projects inside every camera's image (and lies in front of it)."""
     for camera in s.cameras:
         camera_from_target = invert(camera.world_from_camera) @ world_from_target

@@ -8,8 +8,8 @@ import cv2
 import numpy as np
 import pytest
 
-from replay.camera import CameraModel, canonical_model, rectify_maps
-from replay.format_names import CAMERA_MODELS, DISTORTION_MODELS
+from replay.camera import CameraModel, rectify_maps
+from replay.lens_models import LENS_MODELS, canonical_name
 from replay.messages import F64, CameraInfo
 
 K = np.array([[214.7, 0.0, 322.3], [0.0, 214.9, 237.6], [0.0, 0.0, 1.0]])
@@ -27,8 +27,8 @@ def rays_at(theta_rad: F64, phi_rad: F64) -> F64:
 
 
 def test_equidistant_is_a_fisheye_model_with_four_coefficients() -> None:
-    assert CAMERA_MODELS["equidistant"] == 4
-    assert "equidistant" not in DISTORTION_MODELS  # pinhole models only
+    assert len(LENS_MODELS["equidistant"].coefficients) == 4
+    assert LENS_MODELS["equidistant"].fisheye
     model = fisheye()
     assert model.is_fisheye and not model.is_ideal
     assert not CameraModel(640, 480, K).is_fisheye
@@ -118,8 +118,8 @@ def test_fisheye_rectification_maps_sample_where_the_lens_images_the_ray(
 
 
 def test_model_names() -> None:
-    assert canonical_model("fisheye") == "equidistant"
-    assert canonical_model("") == "plumb_bob"
+    assert canonical_name("fisheye") == "equidistant"
+    assert canonical_name("") == "plumb_bob"
     info = CameraInfo(0, "", 640, 480, "fisheye", D, K)
     assert CameraModel.from_camera_info(info).distortion_model == "equidistant"
     with pytest.raises(ValueError, match="unknown distortion model"):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from camlog.calibrate.circles import circle_size
-from camlog.calibrate.views import CameraSource, CameraViews, Frame
+from camlog.calibrate.views import CameraSource, CameraViews, DetectedFrame
 from camlog.errors import CalibrationError
 from processors.calibration.board import Board
 from processors.calibration.detect import Detection
@@ -16,7 +16,7 @@ CORNERS = np.zeros((CIRCLES.corner_count, 2))
 
 
 def camera(diameters: list[float | None], *, accepted: bool = True) -> CameraViews:
-    frames = tuple(Frame(i, 1000 * i, False, Detection(CORNERS, accepted, diameter_m=d))
+    frames = tuple(DetectedFrame(i, 1000 * i, False, Detection(CORNERS, accepted, diameter_m=d))
                    for i, d in enumerate(diameters))
     return CameraViews(CameraSource("/cam", "/cam/image_raw", None), frames, (640, 480), None)
 

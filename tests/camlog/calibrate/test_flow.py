@@ -38,7 +38,7 @@ def test_corners_given_again_are_solved_again(mono_calibration_log: Path,
                                          progress=False, report=False),
                         measure_again=stretched)
     assert len(first) == 1
-    before, after = first[0].models[0], run.cameras[0].solution.result.model
+    before, after = first[0].models[0], run.cameras[0].model
     assert after.fx / before.fx == pytest.approx(1.001, abs=2e-4)
     assert after.fy / before.fy == pytest.approx(1.001, abs=2e-4)
     assert after.cx == pytest.approx(before.cx, abs=0.05)

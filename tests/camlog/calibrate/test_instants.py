@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from camlog.calibrate.instants import rig_views
-from camlog.calibrate.views import CameraSource, CameraViews, Frame, board_speeds
+from camlog.calibrate.views import CameraSource, CameraViews, DetectedFrame, board_speeds
 from camlog.errors import CalibrationError
 from processors.calibration.board import Board
 from processors.calibration.detect import Detection
@@ -20,7 +20,7 @@ def camera(corners: list[np.ndarray | None], *, duplicates: list[bool] | None = 
     dup = duplicates or [False] * len(corners)
     detections = [Detection(c, True) if c is not None else None for c in corners]
     speeds = board_speeds(detections, dup)
-    frames = tuple(Frame(i, offset_ns + period_ns * i, dup[i], detections[i],
+    frames = tuple(DetectedFrame(i, offset_ns + period_ns * i, dup[i], detections[i],
                          speed_px=speeds[i])
                    for i in range(len(corners)))
     return CameraViews(CameraSource(name, f"{name}/image_raw", None), frames, (640, 480), None)

@@ -13,7 +13,7 @@ import numpy as np
 from benchmarks.ideal_board import ideal_image, tilted_pose
 from camlog.calibrate.instants import ViewsOfRig
 from camlog.calibrate.remeasure import remeasured_rig
-from camlog.calibrate.views import CameraSource, CameraViews, Frame
+from camlog.calibrate.views import CameraSource, CameraViews, DetectedFrame
 from processors.calibration.board import Board
 from processors.calibration.corners import edge_band_m, refine_on_board
 from processors.calibration.detect import track_chessboard
@@ -61,7 +61,7 @@ def test_views_are_measured_again_from_their_own_frames(tmp_path: Path) -> None:
     views = [BoardView(0, 0, ids, detected[0]), BoardView(0, 1, ids, detected[1])]
     rig = ViewsOfRig(views, [[0, 1], [3]], [], [[0, 1, 3]], None)
     camera = CameraViews(CameraSource("/cam", TOPIC, None),
-                         tuple(Frame(i, T0 + i * 10**8, False) for i in range(4)),
+                         tuple(DetectedFrame(i, T0 + i * 10**8, False) for i in range(4)),
                          (640, 480), None)
     joint = SimpleNamespace(models=[FISHEYE], camera_from_reference=[np.eye(4)],
                             reference_from_board={0: poses[0], 1: poses[1]}, rejected={})
@@ -114,7 +114,7 @@ def test_charuco_views_are_measured_on_the_edges_between_the_markers(tmp_path: P
     ids = np.arange(board.corner_count)
     rig = ViewsOfRig([BoardView(0, 0, ids, detected.astype(np.float64))], [[0]], [], [[0]],
                      None)
-    camera = CameraViews(CameraSource("/cam", TOPIC, None), (Frame(0, T0, False),),
+    camera = CameraViews(CameraSource("/cam", TOPIC, None), (DetectedFrame(0, T0, False),),
                          (640, 480), None)
     joint = SimpleNamespace(models=[lens], camera_from_reference=[np.eye(4)],
                             reference_from_board={0: pose}, rejected={})

@@ -31,10 +31,10 @@ def test_the_order_is_chosen_and_reported(mono_calibration_log: Path, tmp_path: 
                                           flags: tuple[str, ...]) -> None:
     log = mono_calibration_log.parent.parent / "mono.mcap"  # 320x240, an ideal lens
     run = calibrate_log(request(log, tmp_path / "auto", *flags))
-    order = run.cameras[0].solution.order
+    order = run.cameras[0].order
     assert order is not None and order.folds == 5 and order.views >= 10
     assert order_label(order.options) == "plumb_bob k1 k2"  # the lens has no k3
-    assert run.cameras[0].solution.result.options.radial_count == 2
+    assert run.solved.joint.options[0].radial_count == 2
     written = json.loads((tmp_path / "auto" / "calibration.json").read_text())
     camera = written["cameras"][0]
     assert camera["lens_order"]["chosen"] == "plumb_bob k1 k2"
@@ -50,8 +50,8 @@ def test_an_order_given_is_not_chosen(mono_calibration_log: Path, tmp_path: Path
                                       flags: tuple[str, ...], radial: int) -> None:
     log = mono_calibration_log.parent.parent / "mono.mcap"
     run = calibrate_log(request(log, tmp_path / "given", *flags))
-    assert run.cameras[0].solution.order is None
-    assert run.cameras[0].solution.result.options.radial_count == radial
+    assert run.cameras[0].order is None
+    assert run.solved.joint.options[0].radial_count == radial
     written = json.loads((tmp_path / "given" / "calibration.json").read_text())
     assert "lens_order" not in written["cameras"][0]
     assert "choose_order" not in written["options"]

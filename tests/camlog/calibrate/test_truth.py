@@ -74,10 +74,11 @@ def test_true_error_is_error_against_the_logged_board_poses(run: CalibrationRun)
         assert np.abs(estimated[:3, :3] - truth[instant][:3, :3]).max() < 2e-3
     u = run.summary.cameras[0].uncertainty
     assert u is not None and u.true_error_median_px is not None
-    solution = run.cameras[0].solution
+    statistics = run.statistics[0]
     for umap, median, worst in (
-            (solution.uncertainty, u.true_error_median_px, u.true_error_worst_px),
-            (solution.rays_uncertainty, u.rays_true_error_median_px, u.rays_true_error_worst_px)):
+            (statistics.uncertainty, u.true_error_median_px, u.true_error_worst_px),
+            (statistics.rays_uncertainty, u.rays_true_error_median_px,
+             u.rays_true_error_worst_px)):
         error = np.linalg.norm(error_against(
             solved.joint.problem, 0, model, true_camera_from_reference=np.eye(4),
             true_reference_from_board=truth, range_m=umap.range_m, pixels=umap.pixels), axis=2)

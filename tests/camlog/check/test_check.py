@@ -11,7 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from camlog.check.flow import EXIT_DRIFTED, EXIT_NOT_JUDGED, CheckOptions, check_log
+from camlog.check.flow import EXIT_DRIFTED, EXIT_NOT_JUDGED, CheckOptions, check_drift
 from camlog.check.recording import TIMELINE
 from camlog.cli import main
 from processors.calibration.board import make_board
@@ -96,7 +96,7 @@ def test_one_line_per_log_and_the_report(report: tuple[Path, list[str]],
 
 
 def test_a_mono_camera_without_a_board_is_not_checkable(logs: dict[str, Path]) -> None:
-    checked = check_log(logs["mono"], CheckOptions())
+    checked = check_drift(logs["mono"], CheckOptions())
     assert checked.series == []
     assert "/simple_camera: a mono camera: no stereo partner and no board" in checked.summary()
     assert checked.summary().startswith(f"{logs['mono']}: not judged: nothing checkable")
@@ -104,7 +104,7 @@ def test_a_mono_camera_without_a_board_is_not_checkable(logs: dict[str, Path]) -
 
 def test_a_camera_that_sees_the_board_is_checked_by_its_reprojection(
         logs: dict[str, Path]) -> None:
-    checked = check_log(logs["mono"], CheckOptions(window_s=0.5,
+    checked = check_drift(logs["mono"], CheckOptions(window_s=0.5,
                                                    board=make_board("7x6", 0.01)))
     (series,) = checked.series
     assert series.metric == "reprojection_px"
@@ -114,7 +114,7 @@ def test_a_camera_that_sees_the_board_is_checked_by_its_reprojection(
 
 
 def test_a_threshold_overrides_the_limit(logs: dict[str, Path]) -> None:
-    checked = check_log(logs["clean"], CheckOptions(window_s=3.0, threshold=1e-6))
+    checked = check_drift(logs["clean"], CheckOptions(window_s=3.0, threshold=1e-6))
     assert checked.series[0].limit == 1e-6
     assert all(checked.series[0].flagged)
 
@@ -152,14 +152,14 @@ def test_a_batch_pipeline_checks_every_log(logs: dict[str, Path], tmp_path: Path
 
 
 def test_too_few_windows_to_measure_the_noise_are_not_judged(logs: dict[str, Path]) -> None:
-    checked = check_log(logs["drifted"], CheckOptions(window_s=3.0))
+    checked = check_drift(logs["drifted"], CheckOptions(window_s=3.0))
     assert checked.windows == 2
     assert not any(checked.series[0].flagged)
     assert "not judged" in checked.summary()
 
 
 def test_a_log_without_a_usable_window_is_not_judged(logs: dict[str, Path]) -> None:
-    checked = check_log(logs["mono"], CheckOptions(window_s=0.5,
+    checked = check_drift(logs["mono"], CheckOptions(window_s=0.5,
                                                    board=make_board("4x3", 0.01)))
     assert checked.verdict == "not judged"
     assert checked.summary().endswith(

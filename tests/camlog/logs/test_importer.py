@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 import pytest
 
-from camlog.logs.importer import import_images, natural_key, stereo_pairs
+from camlog.logs.importer import import_images, natural_key, pair_image_files
 from camlog.requests.logs import ImportRequest
 from replay import CameraInfo, Image, ImageFolderError, OptionError, open_reader
 from replay.calibration_yaml import save_calibration
@@ -87,7 +87,7 @@ def test_stereo_pairs_share_stamps_and_camera_info(tmp_path: Path) -> None:
 
 def test_stereo_pairing_by_suffix() -> None:
     files = [Path(n) for n in ("left_a.png", "right_a.jpg", "left_b.png", "right_c.png", "x.png")]
-    pairs, alone = stereo_pairs(files)
+    pairs, alone = pair_image_files(files)
     assert [(a.name, b.name) for a, b in pairs] == [("left_a.png", "right_a.jpg")]
     assert [p.name for p in alone] == ["left_b.png", "right_c.png", "x.png"]
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from processors.calibration.board import Board, make_board, parse_size
+from processors.calibration.board import Board, make_board, parse_board_size
 from processors.errors import ProcessorError
 
 
@@ -13,19 +13,19 @@ from processors.errors import ProcessorError
     ("7x6", (7, 6)), ("8X6", (8, 6)), (" 9 x 7 ", (9, 7)), ("2x2", (2, 2)), ("12x11", (12, 11)),
 ])
 def test_parse_size_reads_columns_by_rows(text: str, expected: tuple[int, int]) -> None:
-    assert parse_size(text) == expected
+    assert parse_board_size(text) == expected
 
 
 @pytest.mark.parametrize("text", ["7", "7x", "x6", "7x6x5", "7.5x6", "7*6", "-7x6", "", "axb"])
 def test_parse_size_rejects_what_is_not_a_size(text: str) -> None:
     with pytest.raises(ProcessorError, match="7x6"):
-        parse_size(text)
+        parse_board_size(text)
 
 
 @pytest.mark.parametrize("text", ["1x6", "7x1", "0x0"])
 def test_parse_size_needs_two_corners_each_way(text: str) -> None:
     with pytest.raises(ProcessorError, match="at least 2x2"):
-        parse_size(text)
+        parse_board_size(text)
 
 
 def test_points_in_board_are_row_by_row_with_x_fastest() -> None:

@@ -5,8 +5,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy import stats
 
 from processors.calibration.model_order import (
+    EXACT_RANKS,
     MIN_ORDER_VIEWS,
     OrderChoice,
     choose_order,
@@ -172,3 +174,58 @@ def test_signed_rank_p_is_the_exact_law() -> None:
     assert signed_rank_p(np.array([1.0, 1.0, -2.0, -2.0])) == pytest.approx(13 / 16)
     # one huge gain among small losses is one rank, not a mean
     assert signed_rank_p(np.array([-0.1] * 19 + [100.0])) > 0.5
+
+
+def differences(rng: np.random.Generator, count: int, *, ties: bool) -> F64:
+    """``count`` paired differences leaning a little positive; with ``ties``, rounded so
+    that many sizes repeat (none zero)."""
+    d = rng.normal(0.1, 1.0, count)
+    return np.round(d, 1) + 0.05 if ties else d
+
+
+@pytest.mark.parametrize("count", [5, 12, 40, EXACT_RANKS])
+def test_signed_rank_p_is_scipys_exact_law_without_ties(count: int) -> None:
+    d = differences(np.random.default_rng(count), count, ties=False)
+    expected = stats.wilcoxon(d, alternative="greater", method="exact").pvalue
+    assert signed_rank_p(d) == pytest.approx(expected, rel=1e-9, abs=1e-15)
+
+
+@pytest.mark.parametrize("count", [5, 9, 13])
+def test_signed_rank_p_with_ties_is_scipys_permutation_law(count: int) -> None:
+    """With tied sizes the law is that of the mean ranks' signs: scipy enumerates every sign
+    pattern below 2^14 of them."""
+    d = differences(np.random.default_rng(100 + count), count, ties=True)
+    d[0] = d[1] = abs(d[1]) or 0.3  # at least one tie
+    expected = stats.wilcoxon(d, alternative="greater",
+                              method=stats.PermutationMethod()).pvalue
+    assert signed_rank_p(d) == pytest.approx(expected, rel=1e-9)
+
+
+@pytest.mark.parametrize("count", [EXACT_RANKS + 1, 1_192, 50_000])
+def test_signed_rank_p_of_many_views_is_scipys_normal_approximation(count: int) -> None:
+    """Past the exact sums (whose counts of sign patterns once overflowed: p = NaN from 1 200
+    views on) the normal law with the ties' share of the variance taken out and a continuity
+    correction, finite however many views."""
+    rng = np.random.default_rng(count)
+    for ties in (False, True):
+        d = differences(rng, count, ties=ties)
+        with np.errstate(all="raise"):
+            p = signed_rank_p(d)
+        expected = stats.wilcoxon(d, alternative="greater", method="asymptotic",
+                                  correction=True).pvalue
+        assert 0.0 <= p <= 1.0
+        assert p == pytest.approx(expected, rel=1e-9, abs=1e-300)
+    # zeros are left out
+    assert signed_rank_p(np.concatenate([d, np.zeros(10)])) == signed_rank_p(d)
+    # no lean: p near one half, however many views
+    balanced = np.concatenate([np.arange(1.0, count // 2 + 1), -np.arange(1.0, count // 2 + 1)])
+    assert signed_rank_p(balanced) == pytest.approx(0.5, abs=0.05)
+
+
+def test_the_approximation_takes_over_where_it_agrees_with_the_exact_law() -> None:
+    rng = np.random.default_rng(7)
+    for _ in range(5):
+        d = rng.normal(0.15, 1.0, EXACT_RANKS)
+        exact = signed_rank_p(d)
+        approximate = stats.wilcoxon(d, alternative="greater", method="asymptotic").pvalue
+        assert abs(exact - approximate) < 1e-3

@@ -8,11 +8,10 @@ import numpy as np
 import pytest
 
 from processors.calibration import validation
-from processors.calibration.joint import BoardView
+from processors.calibration.joint import BoardView, JointResult
 from processors.calibration.mono import (
     TANGENTIAL_P_VALUE,
     CalibrationOptions,
-    MonoResult,
     calibrate_mono,
     max_projection_difference,
     tangential_mode,
@@ -35,18 +34,18 @@ def poses() -> list[np.ndarray]:
 
 
 def solve(corners: list[np.ndarray], options: CalibrationOptions | None = None,
-          **kwargs: bool) -> MonoResult:
+          **kwargs: bool) -> JointResult:
     return calibrate_mono(BOARD.points_in_board(), corners, (W, H),
                           options or CalibrationOptions(), **kwargs)
 
 
 def test_recovers_the_camera_within_its_uncertainty(poses: list[np.ndarray]) -> None:
     result = solve(views(true_model(), poses, NOISE_PX, seed=2))
-    assert result.view_ids == list(range(VIEWS)) and not result.rejected
-    params = result.parameters()
+    assert result.used_views(0) == list(range(VIEWS)) and not result.rejected
+    params = result.parameters(0)
     assert list(params) == ["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"]
     for name, value in params.items():
-        sigma = result.std[name]
+        sigma = result.std[0][name]
         if name == "k3":  # two radial coefficients by default: k3 is held at 0
             assert value == 0.0 and sigma == 0.0
             continue
@@ -57,10 +56,11 @@ def test_recovers_the_camera_within_its_uncertainty(poses: list[np.ndarray]) -> 
     fitted = 8 + 6 * VIEWS
     expected = NOISE_PX * math.sqrt(2 * (dof - fitted) / dof)
     assert result.rms_px == pytest.approx(expected, rel=0.1)
-    assert set(result.camera_from_board) == set(result.view_ids)
-    for i, residual in result.residuals_px.items():
+    for i, residual in enumerate(result.residuals_px):
         rms = math.sqrt(float(np.mean(np.sum(residual**2, axis=1))))
-        assert rms == pytest.approx(result.view_rms_px[i], rel=1e-3)
+        assert rms == pytest.approx(result.view_rms_px(i), rel=1e-3)
+        # view i is board pose i, in the one camera
+        assert np.array_equal(result.camera_from_board(i), result.reference_from_board[i])
 
 
 def test_uncertainty_matches_the_spread_over_noise_draws(poses: list[np.ndarray]) -> None:
@@ -71,22 +71,22 @@ def test_uncertainty_matches_the_spread_over_noise_draws(poses: list[np.ndarray]
     for seed in range(24):
         result = solve(views(true_model(), poses, NOISE_PX, seed=100 + seed),
                        reject_outliers=False)
-        params = result.parameters()
-        z.append([(params[n] - TRUTH[n]) / result.std[n] for n in names])
+        params = result.parameters(0)
+        z.append([(params[n] - TRUTH[n]) / result.std[0][n] for n in names])
     rms_z = float(np.sqrt(np.mean(np.square(z))))
     assert 0.7 < rms_z < 1.4, f"RMS of error/sigma {rms_z:.2f}"
     # sigma scales with the noise
     quiet = solve(views(true_model(), poses, NOISE_PX, seed=5))
     loud = solve(views(true_model(), poses, 2 * NOISE_PX, seed=5))
     for name in names:
-        assert loud.std[name] / quiet.std[name] == pytest.approx(2.0, rel=0.05)
+        assert loud.std[0][name] / quiet.std[0][name] == pytest.approx(2.0, rel=0.05)
 
 
 def test_fix_principal_point_holds_the_image_centre(poses: list[np.ndarray]) -> None:
     result = solve(views(true_model(), poses, NOISE_PX, seed=3),
                    CalibrationOptions(fix_principal_point=True))
-    assert result.model.cx == (W - 1) / 2 and result.model.cy == (H - 1) / 2
-    assert result.std["cx"] == result.std["cy"] == 0.0
+    assert result.models[0].cx == (W - 1) / 2 and result.models[0].cy == (H - 1) / 2
+    assert result.std[0]["cx"] == result.std[0]["cy"] == 0.0
 
 
 def test_fix_aspect_ratio_forces_square_pixels(poses: list[np.ndarray]) -> None:
@@ -94,35 +94,35 @@ def test_fix_aspect_ratio_forces_square_pixels(poses: list[np.ndarray]) -> None:
     square[1, 1] = square[0, 0]
     result = solve(views(true_model(k=square), poses, NOISE_PX, seed=3),
                    CalibrationOptions(fix_aspect_ratio=True))
-    assert result.model.fx == pytest.approx(result.model.fy, rel=1e-12)
-    assert abs(result.model.fy - square[1, 1]) < 4 * result.std["fy"]
+    assert result.models[0].fx == pytest.approx(result.models[0].fy, rel=1e-12)
+    assert abs(result.models[0].fy - square[1, 1]) < 4 * result.std[0]["fy"]
 
 
 def test_zero_tangent_dist_holds_p1_p2_at_zero(poses: list[np.ndarray]) -> None:
     model = true_model(d=np.array([-0.2, 0.05, 0.0, 0.0, 0.0]))
     result = solve(views(model, poses, NOISE_PX, seed=3),
                    CalibrationOptions(tangential="zero"))
-    assert result.model.d[2] == result.model.d[3] == 0.0
-    assert result.std["p1"] == result.std["p2"] == 0.0
-    assert abs(result.model.d[0] + 0.2) < 4 * result.std["k1"]
+    assert result.models[0].d[2] == result.models[0].d[3] == 0.0
+    assert result.std[0]["p1"] == result.std[0]["p2"] == 0.0
+    assert abs(result.models[0].d[0] + 0.2) < 4 * result.std[0]["k1"]
 
 
 def test_one_radial_coefficient(poses: list[np.ndarray]) -> None:
     result = solve(views(true_model(), poses, NOISE_PX, seed=3),
                    CalibrationOptions(k_coefficients=1))
-    k1, k2, _p1, _p2, k3 = result.model.d
+    k1, k2, _p1, _p2, k3 = result.models[0].d
     assert k2 == k3 == 0.0 and k1 < 0
-    assert result.model.distortion_model == "plumb_bob"
+    assert result.models[0].distortion_model == "plumb_bob"
 
 
 def test_four_coefficients_use_the_rational_model(poses: list[np.ndarray]) -> None:
     result = solve(views(true_model(), poses, NOISE_PX, seed=3),
                    CalibrationOptions(k_coefficients=4))
-    assert result.model.distortion_model == "rational_polynomial"
-    assert result.model.d.shape == (8,)
-    assert list(result.parameters())[4:] == ["k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"]
-    assert result.model.d[6] == result.model.d[7] == 0.0  # k5, k6 not estimated
-    assert result.std["k4"] > 0 and result.std["k5"] == result.std["k6"] == 0.0
+    assert result.models[0].distortion_model == "rational_polynomial"
+    assert result.models[0].d.shape == (8,)
+    assert list(result.parameters(0))[4:] == ["k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"]
+    assert result.models[0].d[6] == result.models[0].d[7] == 0.0  # k5, k6 not estimated
+    assert result.std[0]["k4"] > 0 and result.std[0]["k5"] == result.std[0]["k6"] == 0.0
 
 
 def test_k_coefficients_out_of_range() -> None:
@@ -136,9 +136,10 @@ def test_a_noisy_view_is_rejected(poses: list[np.ndarray]) -> None:
     result = solve(corners)
     assert set(result.rejected) == {7}
     assert "outlier threshold" in result.rejected[7]
-    assert 7 not in result.view_ids and len(result.view_ids) == VIEWS - 1
+    used = result.used_views(0)
+    assert 7 not in used and len(used) == VIEWS - 1
     # without the bad view the camera is as good as ever
-    assert abs(result.model.fx - K_TRUE[0, 0]) < 4 * result.std["fx"]
+    assert abs(result.models[0].fx - K_TRUE[0, 0]) < 4 * result.std[0]["fx"]
 
 
 def test_too_few_views(poses: list[np.ndarray]) -> None:
@@ -211,13 +212,14 @@ def test_auto_tangential_drops_p1_p2_when_the_lens_has_none(poses: list[np.ndarr
     corners = views(model, poses, NOISE_PX, seed=3)
     auto = solve(corners)
     free = solve(corners, CalibrationOptions(tangential="estimate"))
-    assert auto.tangential_test is not None and not auto.tangential_test.estimated
-    assert auto.tangential_test.p_value >= TANGENTIAL_P_VALUE
-    assert auto.options.tangential == "zero" and free.tangential_test is None
-    assert auto.model.d[2] == auto.model.d[3] == 0.0
+    assert auto.tangential_tests[0] is not None and not auto.tangential_tests[0].estimated
+    assert auto.tangential_tests[0].p_value >= TANGENTIAL_P_VALUE
+    assert auto.options[0].tangential == "zero" and free.tangential_tests[0] is None
+    assert auto.models[0].d[2] == auto.models[0].d[3] == 0.0
     # the principal point is better determined without p1, p2 to trade against
-    assert auto.std["cx"] < 0.95 * free.std["cx"] and auto.std["cy"] < 0.95 * free.std["cy"]
-    assert abs(auto.model.cx - K_TRUE[0, 2]) < 3 * auto.std["cx"]
+    assert auto.std[0]["cx"] < 0.95 * free.std[0]["cx"]
+    assert auto.std[0]["cy"] < 0.95 * free.std[0]["cy"]
+    assert abs(auto.models[0].cx - K_TRUE[0, 2]) < 3 * auto.std[0]["cx"]
 
 
 def test_auto_tangential_statistic_follows_chi_square_2(poses: list[np.ndarray]) -> None:
@@ -227,14 +229,14 @@ def test_auto_tangential_statistic_follows_chi_square_2(poses: list[np.ndarray])
     chi2 = []
     for seed in range(20):
         test = solve(views(model, poses, NOISE_PX, seed=200 + seed),
-                     reject_outliers=False).tangential_test
+                     reject_outliers=False).tangential_tests[0]
         assert test is not None
         chi2.append(test.chi2)
     assert 1.0 < float(np.mean(chi2)) < 3.5
     tangential = solve(views(true_model(), poses, NOISE_PX, seed=3))
-    assert tangential.tangential_test is not None and tangential.tangential_test.estimated
-    assert tangential.options.tangential == "estimate"
-    assert abs(tangential.model.d[2] - D_TRUE[2]) < 4 * tangential.std["p1"]
+    assert tangential.tangential_tests[0] is not None and tangential.tangential_tests[0].estimated
+    assert tangential.options[0].tangential == "estimate"
+    assert abs(tangential.models[0].d[2] - D_TRUE[2]) < 4 * tangential.std[0]["p1"]
 
 
 def test_tangential_mode_flags() -> None:

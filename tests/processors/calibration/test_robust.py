@@ -8,7 +8,7 @@ from processors.calibration import bundle
 from processors.calibration.joint import BoardView, calibrate_cameras
 from processors.calibration.lens import intrinsics_of
 from processors.calibration.options import CalibrationOptions
-from processors.calibration.robust import BoardViews, Evidence, Problem, robust_solve
+from processors.calibration.robust import BoardViews, InlierSelection, Problem, robust_solve
 
 from .synthetic import BOARD, K_TRUE, H, W, pose, project, true_model
 
@@ -36,7 +36,7 @@ def mono_views(seed: int, count: int) -> tuple[list[np.ndarray], list[BoardView]
     return poses, views
 
 
-def solve_from(poses: list[np.ndarray], views: list[BoardView]) -> tuple[Problem, Evidence]:
+def solve_from(poses: list[np.ndarray], views: list[BoardView]) -> tuple[Problem, InlierSelection]:
     """The robust solve started at the true lens and the board poses ``poses``."""
     state = bundle.RigState([intrinsics_of(true_model())], np.eye(3)[None], np.zeros((1, 3)),
                             np.stack([p[:3, :3] for p in poses]),

@@ -50,14 +50,18 @@ def rig() -> tuple[list[np.ndarray], list[np.ndarray]]:
 ALL = np.arange(BOARD.corner_count)
 
 
+def pairs(count: int) -> list[tuple[int, int]]:
+    """The joint views of ``count`` views per camera: (left view, right view) at each pose."""
+    return [(i, count + i) for i in range(count)]
+
+
 def solve(left: list[np.ndarray], right: list[np.ndarray]) -> tuple[JointResult, StereoResult]:
     """Both cameras and the rig jointly, then the stereo figures of the joint views."""
     views = [BoardView(0, i, ALL, c) for i, c in enumerate(left)] + \
         [BoardView(1, i, ALL, c) for i, c in enumerate(right)]
     joint = calibrate_cameras(BOARD.points_in_board(), views, [(W, H)] * 2,
                               CalibrationOptions(tangential="zero"))
-    pairs = [(i, len(left) + i) for i in range(len(left))]
-    return joint, stereo_result(joint, pairs, points_in_board=BOARD.points_in_board(),
+    return joint, stereo_result(joint, pairs(len(left)), points_in_board=BOARD.points_in_board(),
                                 square_m=BOARD.square_m)
 
 
@@ -140,11 +144,12 @@ def test_a_pair_from_two_board_poses_is_rejected(
     mixed = list(right)
     mixed[4] = right[5]
     joint, out = solve(left, mixed)
-    assert 4 in out.rejected and "one pose" in out.rejected[4]
-    assert 4 not in out.view_ids
+    mixed_pair = pairs(len(left))[4]
+    assert mixed_pair in out.rejected and "one pose" in out.rejected[mixed_pair]
+    assert mixed_pair not in out.pairs
     assert out.baseline_m == pytest.approx(result.baseline_m, abs=3 * result.baseline_std_m)
     assert out.epipolar_rms_px < 2 * result.epipolar_rms_px
-    assert not result.rejected and result.view_ids == list(range(len(left)))
+    assert not result.rejected and result.pairs == pairs(len(left))
     assert joint.rejected
 
 
