@@ -23,6 +23,7 @@ from replay.records import calibration as records
 from replay.records import rig as rig_records
 from replay.records.scenario import Scenario
 
+from .log_calibration import log_calibration, log_stereo_calibration
 from .rig_pairs import PairSolution
 from .solving import CalibratedCamera, RigSolution
 from .statistics import CameraStatistics
@@ -145,7 +146,7 @@ def _uncertainty(camera: CalibratedCamera, statistics: CameraStatistics, solved:
 
 
 def _camera(camera: CalibratedCamera, statistics: CameraStatistics, solved: RigSolution,
-            truth: TrueRig | None) -> records.CameraSummary:
+            truth: TrueRig | None, board: Board) -> records.CameraSummary:
     views, joint = camera.views, solved.joint
     distinct = list(views.distinct())
     differences: dict[str, float] = {}
@@ -178,6 +179,7 @@ def _camera(camera: CalibratedCamera, statistics: CameraStatistics, solved: RigS
         evidence=_evidence(camera, solved),
         uncertainty=_uncertainty(camera, statistics, solved, truth),
         lens_order=_lens_order(camera.order),
+        log_calibration=log_calibration(camera, solved, board),
     )
 
 
@@ -201,7 +203,7 @@ def _stereo(solved: RigSolution) -> records.StereoSummary:
             left.views.frames[solved.first_frame(lv)].stamp_ns,
             right.views.frames[solved.first_frame(rv)].stamp_ns, why)
             for (lv, rv), why in s.rejected.items()],
-        truth=truth)
+        truth=truth, log_calibration=log_stereo_calibration(solved))
 
 
 def _rig_camera(camera: CalibratedCamera, solved: RigSolution,
@@ -258,7 +260,7 @@ def build_summary(solved: RigSolution, statistics: list[CameraStatistics], *,
         options=records.OptionsSummary(options.fix_principal_point, options.fix_aspect_ratio,
                                options.tangential, options.radial_count,
                                options.distortion_model, options.choose_order or None),
-        cameras=[_camera(c, s, solved, truth)
+        cameras=[_camera(c, s, solved, truth, board)
                  for c, s in zip(cameras, statistics, strict=True)],
         ground_truth=scenario is not None,
         stereo=_stereo(solved) if stereo is not None else None,

@@ -1,16 +1,13 @@
 """camera_calibration's ``calibrationdata.tar.gz`` imported as it is, mono and stereo.
 
-The archives are made here as camera_calibration writes them: a rendered stereo rig's frames
-as ``left-NNNN.png`` / ``right-NNNN.png``, a calibration through camlog's YAML and INI writers,
-packed with ``tarfile``.
+The archives are made as camera_calibration writes them (:mod:`tests.ros_archives`): a
+rendered stereo rig's frames as ``left-NNNN.png`` / ``right-NNNN.png``, a calibration through
+camlog's YAML and INI writers, packed with ``tarfile``.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import io
-import tarfile
-from dataclasses import dataclass
 from pathlib import Path
 
 import cv2
@@ -23,62 +20,8 @@ from camlog.logs.ros_archive import read_ros_archive
 from camlog.requests.logs import ImportRequest
 from replay import CameraInfo, Image, ImageFolderError, open_reader
 from replay.calibration_ini import ost_text
-from replay.calibration_yaml import calibration_to_yaml
 from tests.outputs import temp_outputs
-from tests.recordings import cli, held_for
-
-FRAMES = 8
-
-
-@dataclass(frozen=True)
-class Rendered:
-    """A rendered rig's frames (rgb8, per camera) and camera models (left, right)."""
-
-    images: list[list[np.ndarray]]
-    infos: list[CameraInfo]
-
-
-@pytest.fixture(scope="module")
-def rendered(tmp_path_factory: pytest.TempPathFactory) -> Rendered:
-    """stereo_checkerboard at 320x240, the board at a new pose every frame (as the views
-    camera_calibration keeps)."""
-    tmp = tmp_path_factory.mktemp("rendered")
-    spec = held_for(tmp, "stereo_checkerboard", hold_s=0.03)
-    log = tmp / "stereo.mcap"
-    cli("record", str(spec), "--frames", str(FRAMES), "--resolution", "320x240", "-o",
-        str(log), "--no-progress")
-    images: list[list[np.ndarray]] = [[], []]
-    infos: list[CameraInfo] = []
-    with open_reader(log) as reader:
-        for side, camera in enumerate(("left", "right")):
-            for record in reader.messages([f"/stereo_camera/{camera}/image_raw"]):
-                assert isinstance(record.message, Image)
-                images[side].append(record.message.pixels)
-            topic = f"/stereo_camera/{camera}/camera_info"
-            info = next(r.message for r in reader.messages([topic]))
-            assert isinstance(info, CameraInfo)
-            infos.append(info)
-    return Rendered(images, infos)
-
-
-def png(pixels: np.ndarray) -> bytes:
-    """PNG bytes of an rgb8 or mono8 image."""
-    bgr = cv2.cvtColor(pixels, cv2.COLOR_RGB2BGR) if pixels.ndim == 3 else pixels
-    ok, data = cv2.imencode(".png", bgr)
-    assert ok
-    return data.tobytes()
-
-
-def pack(path: Path, members: dict[str, bytes]) -> Path:
-    """A gzip-compressed tar file of ``members`` (name -> bytes), as camera_calibration's
-    ``taradd`` writes them."""
-    with tarfile.open(path, "w:gz") as archive:
-        for name, data in members.items():
-            entry = tarfile.TarInfo(name)
-            entry.size = len(data)
-            entry.uname = "calibrator"
-            archive.addfile(entry, io.BytesIO(data))
-    return path
+from tests.ros_archives import Rendered, pack, png, views, yaml
 
 
 def shifted(info: CameraInfo, df: float) -> CameraInfo:
@@ -89,10 +32,6 @@ def shifted(info: CameraInfo, df: float) -> CameraInfo:
     d = np.resize(info.d, 5).astype(np.float64)
     d[0] -= 0.01
     return dataclasses.replace(info, k=k, d=d, distortion_model="plumb_bob")
-
-
-def yaml(info: CameraInfo, name: str) -> bytes:
-    return calibration_to_yaml(info, camera_name=name).encode()
 
 
 def imported(archive: Path, tmp_path: Path, camera: str | None = None) -> Path:
@@ -115,41 +54,40 @@ def assert_same_model(got: object, expected: CameraInfo) -> None:
 
 
 def test_a_mono_archive_is_one_camera_with_the_archives_calibration(
-        rendered: Rendered, tmp_path: Path) -> None:
-    grey = [cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) for image in rendered.images[0]]
-    theirs = shifted(rendered.infos[0], 3.5)
+        rendered_rig: Rendered, tmp_path: Path) -> None:
+    grey = [cv2.cvtColor(image, cv2.COLOR_RGB2GRAY) for image in rendered_rig.images[0]]
+    theirs = shifted(rendered_rig.infos[0], 3.5)
     # written out of order, as a tar file may hold them: numbers give the order
-    members = {f"left-{i:04d}.png": png(grey[i]) for i in reversed(range(FRAMES))}
+    members = {f"left-{i:04d}.png": png(grey[i]) for i in reversed(range(len(grey)))}
     members |= {"ost.yaml": yaml(theirs, "narrow_stereo"), "ost.txt": ost_text(theirs).encode()}
     archive = pack(tmp_path / "calibrationdata.tar.gz", members)
     log = imported(archive, tmp_path)
     got = messages(log, "/camera/image_raw")
-    assert len(got) == FRAMES
+    assert len(got) == len(grey)
     for message, expected in zip(got, grey, strict=True):
         assert isinstance(message, Image) and message.encoding == "mono8"
         np.testing.assert_array_equal(message.pixels, expected)
     stamps = [m.stamp_ns for m in got if isinstance(m, Image)]
     assert np.all(np.diff(stamps) == 100_000_000)
     infos = messages(log, "/camera/camera_info")
-    assert len(infos) == FRAMES
+    assert len(infos) == len(grey)
     assert_same_model(infos[0], theirs)
     assert archive.is_file() and not temp_outputs(tmp_path)
 
 
-def test_a_stereo_archive_is_a_pair_under_one_stamp(rendered: Rendered, tmp_path: Path) -> None:
-    left, right = (shifted(info, 2.0 * side) for side, info in enumerate(rendered.infos))
-    members = {f"{side}-{i:04d}.png": png(rendered.images[s][i])
-               for s, side in enumerate(("left", "right")) for i in range(FRAMES)}
-    members |= {"left.yaml": yaml(left, "narrow_stereo/left"),
-                "right.yaml": yaml(right, "narrow_stereo/right"),
-                "ost.txt": ost_text(left=left, right=right).encode()}
+def test_a_stereo_archive_is_a_pair_under_one_stamp(rendered_rig: Rendered,
+                                                     tmp_path: Path) -> None:
+    left, right = (shifted(info, 2.0 * side) for side, info in enumerate(rendered_rig.infos))
+    members = views(rendered_rig) | {"left.yaml": yaml(left, "narrow_stereo/left"),
+                                     "right.yaml": yaml(right, "narrow_stereo/right"),
+                                     "ost.txt": ost_text(left=left, right=right).encode()}
     log = imported(pack(tmp_path / "calibrationdata.tar.gz", members), tmp_path,
                    camera="/rig")
     for side, expected in enumerate((left, right)):
         name = ("left", "right")[side]
         got = [m for m in messages(log, f"/rig/{name}/image_raw") if isinstance(m, Image)]
-        assert [m.encoding for m in got] == ["rgb8"] * FRAMES
-        for message, pixels in zip(got, rendered.images[side], strict=True):
+        assert [m.encoding for m in got] == ["rgb8"] * len(rendered_rig.images[side])
+        for message, pixels in zip(got, rendered_rig.images[side], strict=True):
             np.testing.assert_array_equal(message.pixels, pixels)
         assert_same_model(messages(log, f"/rig/{name}/camera_info")[0], expected)
     left_stamps = [m.stamp_ns for m in messages(log, "/rig/left/image_raw")
@@ -160,17 +98,16 @@ def test_a_stereo_archive_is_a_pair_under_one_stamp(rendered: Rendered, tmp_path
 
 
 def test_an_older_archive_has_its_calibration_in_ost_txt_only(
-        rendered: Rendered, tmp_path: Path) -> None:
+        rendered_rig: Rendered, tmp_path: Path) -> None:
     # camera_calibration's stereo ost.txt repeats its header before the right camera; the
     # members sit in a folder of the archive
-    left, right = rendered.infos
+    left, right = rendered_rig.infos
     text = ost_text(left).replace("[narrow_stereo]", "[narrow_stereo/left]") + \
         ost_text(right).replace("[narrow_stereo]", "[narrow_stereo/right]")
-    members = {f"calibrationdata/{side}-{i:04d}.png": png(rendered.images[s][i])
-               for s, side in enumerate(("left", "right")) for i in range(FRAMES)}
+    members = views(rendered_rig, folder="calibrationdata/")
     members["calibrationdata/ost.txt"] = text.encode()
     found = read_ros_archive(pack(tmp_path / "old.tgz", members))
-    assert found.stereo and len(found.frames) == FRAMES
+    assert found.stereo and len(found.frames) == len(rendered_rig.images[0])
     assert found.calibration_files == ["calibrationdata/ost.txt"] * 2
     for got, expected in zip(found.calibration, (left, right), strict=True):
         # ost.txt holds 6 decimals
@@ -179,11 +116,9 @@ def test_an_older_archive_has_its_calibration_in_ost_txt_only(
 
 
 def test_a_stereo_archive_without_calibration_imports_its_images(
-        rendered: Rendered, tmp_path: Path) -> None:
-    members = {f"{side}-{i:04d}.png": png(rendered.images[s][i])
-               for s, side in enumerate(("left", "right")) for i in range(FRAMES)}
-    log = imported(pack(tmp_path / "calibrationdata.tar.gz", members), tmp_path)
-    assert len(messages(log, "/stereo/left/image_raw")) == FRAMES
+        rendered_rig: Rendered, tmp_path: Path) -> None:
+    log = imported(pack(tmp_path / "calibrationdata.tar.gz", views(rendered_rig)), tmp_path)
+    assert len(messages(log, "/stereo/left/image_raw")) == len(rendered_rig.images[0])
     assert messages(log, "/stereo/left/camera_info") == []
 
 
