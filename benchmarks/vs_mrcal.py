@@ -2,10 +2,15 @@
 
 Each case records its scenario for every seed (kept in ``--cache`` and reused), calibrates it
 with ``camlog calibrate``, then gives camlog's detections (every distinct frame whose board
-passed detection) to a plain OpenCV script (``cv2.calibrateCamera`` with default flags,
-``cv2.stereoCalibrate`` for a pair; ``cv2.fisheye.calibrate`` for the fisheye) and to mrcal 2.5
-(``mrcal-calibrate-cameras`` with its defaults: outlier rejection, regularisation and the
-board's flatness estimated; seeded with the true fx to the nearest 100 px). All three fit the
+passed detection; for a pair, the pairs camlog made) to a plain OpenCV script
+(``cv2.calibrateCamera`` with default flags, ``cv2.stereoCalibrate`` for a pair;
+``cv2.fisheye.calibrate`` for the fisheye) and to mrcal 2.5 (``mrcal-calibrate-cameras`` with
+its defaults: outlier rejection, regularisation and the board's flatness estimated). Both are
+started from the true fx to the nearest 100 px (mrcal's ``--focal``; OpenCV's fisheye with
+``CALIB_USE_INTRINSIC_GUESS``, the principal point at the image centre: without a start OpenCV
+5 takes fx = max(W, H) / 2). For a stereo pair, ``OpenCV script`` is a user's whole script on
+the log (:mod:`.opencv_stereo_log`: its own detection, pairing by stamp within the slop, the
+board still in both cameras). All of them fit the
 scenario's true lens model: plumb_bob as k1 k2 p1 p2 k3 (camlog ``-k 3 --tangent-dist``, mrcal
 LENSMODEL_OPENCV5), rational_polynomial as its eight coefficients (camlog ``--tangent-dist``,
 mrcal LENSMODEL_OPENCV8). mrcal's fisheye models are not OpenCV's, so the fisheye case
@@ -198,8 +203,7 @@ def one_seed(case: Case, seed: int, path: Path, *, mrcal_python: Path | None, tm
             progress.fail(case.name, "OpenCV script", seed, str(err).strip().splitlines()[-1])
     if mrcal_python is not None and not truths[0].is_fisheye:
         try:
-            solved = run_mrcal(mrcal_python, run, board,
-                               approximate_s=parse_flags(path, case.flags).approximate)
+            solved = run_mrcal(mrcal_python, run, board)
             got["mrcal"] = accuracy(solved.models, truths, solved.right_from_left, true_rfl)
         except MrcalError as err:
             progress.fail(case.name, "mrcal", seed, str(err))

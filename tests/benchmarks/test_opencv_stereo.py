@@ -1,4 +1,5 @@
-"""The OpenCV stereo peers recover a rendered rig of two free-running cameras.
+"""The stereo peers are given what camlog paired and recover a rendered rig of two
+free-running cameras.
 
 3 s of ``stereo_heldout`` seed 0: the right camera shoots 7 ms after the left (with jitter and
 dropped frames) and the board jumps from held pose to held pose, once between a left frame and
@@ -15,6 +16,7 @@ import pytest
 
 from benchmarks.calibrate_speed import calibrate, parse_flags
 from benchmarks.calibration_truth import opencv_models, rotation_deg, true_right_from_left
+from benchmarks.mrcal_run import request
 from benchmarks.opencv_stereo_log import calibrate_pair
 from camlog.calibrate.flow import CalibrationRun
 from recorder.record import record
@@ -73,3 +75,15 @@ def test_the_users_script_recovers_the_rig(run: CalibrationRun, log: Path) -> No
     assert truth is not None and found.pairs >= 3
     assert rotation_deg(found.rotation, truth[:3, :3]) < ROTATION_DEG
     assert found.rms_px < 0.2
+
+
+def test_mrcal_is_given_every_pair_camlog_made(run: CalibrationRun, log: Path) -> None:
+    board = parse_flags(log, FLAGS).board()
+    sent = request(run, board, lensmodel="LENSMODEL_OPENCV5", focal_px=1000.0)
+    left, right = (set(camera["frames"]) for camera in sent["cameras"])
+    rig = run.solved.rig
+    for lv, rv in rig.pairs:
+        for lf, rf in zip(rig.frames_of[lv], rig.frames_of[rv], strict=True):
+            # a pair is one mrcal frame number, seen by both cameras
+            assert str(lf) in left and str(lf) in right, (lf, rf)
+    assert len(left & right) >= len(rig.pairs)
