@@ -125,22 +125,21 @@ def read_image(path: Path, *, stamp_ns: int, frame_id: str) -> Image:
 def decode_image(data: bytes, *, where: str, stamp_ns: int, frame_id: str) -> Image:
     """An encoded image file's bytes (``where`` names it in errors) as an Image, as
     :func:`read_image`."""
-    path = where
     try:
         array = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
     except cv2.error:
         array = None
     if array is None:
-        raise ImageFolderError(f"{path}: not a readable image file")
+        raise ImageFolderError(f"{where}: not a readable image file")
     if array.dtype not in (np.uint8, np.uint16):
-        raise ImageFolderError(f"{path}: {array.dtype} pixels are not supported (8 or 16 bit)")
+        raise ImageFolderError(f"{where}: {array.dtype} pixels are not supported (8 or 16 bit)")
     if array.ndim == 3 and array.shape[2] == 1:
         array = array[:, :, 0]
     if array.ndim == 2:
         encoding = "mono16" if array.dtype == np.uint16 else "mono8"
         return Image(stamp_ns, frame_id, encoding, array)
     if array.dtype == np.uint16:
-        raise ImageFolderError(f"{path}: 16-bit colour images are not supported")
+        raise ImageFolderError(f"{where}: 16-bit colour images are not supported")
     code = cv2.COLOR_BGRA2RGB if array.shape[2] == 4 else cv2.COLOR_BGR2RGB
     return Image(stamp_ns, frame_id, "rgb8", cv2.cvtColor(array, code))
 
