@@ -122,15 +122,26 @@ def detected(camera: CalibratedCamera) -> list[DetectedFrame]:
     return [f for f in camera.views.frames if f.candidate and f.detection is not None]
 
 
+def nominal_focal_px(truth: CameraModel) -> float:
+    """The focal length a user would start a peer from: the true fx to the nearest 100 px
+    (what a lens's data sheet gives)."""
+    return float(round(float(truth.k[0, 0]), -2))
+
+
 def _calibrate_one(objects: list[F64], images: list[F64], size: tuple[int, int],
                    truth: CameraModel) -> CameraModel:
-    """``cv2.calibrateCamera`` (``cv2.fisheye.calibrate`` for a fisheye) with default flags
-    in the true lens model."""
+    """``cv2.calibrateCamera`` with default flags in the true lens model; for a fisheye
+    ``cv2.fisheye.calibrate`` started, as mrcal is, from :func:`nominal_focal_px` at the
+    image centre (without a start OpenCV 5 takes fx = max(W, H) / 2, 320 px for a 232 px
+    lens, and stops with its ``InitExtrinsics`` assertion)."""
     if truth.is_fisheye:
+        focal = nominal_focal_px(truth)
+        start = np.array([[focal, 0.0, (size[0] - 1) / 2], [0.0, focal, (size[1] - 1) / 2],
+                          [0.0, 0.0, 1.0]])
         _rms, k, d, _r, _t = cv2.fisheye.calibrate(
             [o.reshape(1, -1, 3) for o in objects], [i.reshape(1, -1, 2) for i in images],
-            size, np.zeros((3, 3)), np.zeros(4),
-            flags=cv2.CALIB_RECOMPUTE_EXTRINSIC | cv2.CALIB_FIX_SKEW)
+            size, start, np.zeros(4), flags=cv2.CALIB_RECOMPUTE_EXTRINSIC | cv2.CALIB_FIX_SKEW
+            | cv2.CALIB_USE_INTRINSIC_GUESS)
         return CameraModel(size[0], size[1], np.asarray(k, dtype=np.float64), "equidistant",
                            np.asarray(d, dtype=np.float64).reshape(-1)[:4])
     rational = truth.distortion_model == "rational_polynomial"

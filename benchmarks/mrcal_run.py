@@ -3,8 +3,8 @@ Python that has mrcal, and its answer as camlog camera models.
 
 mrcal sees what a plain OpenCV script sees (:func:`~benchmarks.calibration_truth.detected`:
 every distinct frame whose board passed detection, each corner at its board grid position);
-for a stereo pair, frames camlog paired (within a pair of held views camlog used, frames
-paired by stamp) share a frame number, so mrcal sees them as one instant.
+for a stereo pair, the frames of each pair of views camlog made (instant by instant) share a
+frame number, so mrcal sees them as one instant.
 """
 
 from __future__ import annotations
@@ -19,13 +19,12 @@ import cv2
 import numpy as np
 
 from camlog.calibrate.flow import CalibrationRun
-from camlog.calibrate.instants import stereo_pairs
 from processors.calibration.board import Board
 from processors.calibration.robust import I64, BoardView
 from replay.camera import CameraModel
 from replay.messages import F64
 
-from .calibration_truth import detected, true_models
+from .calibration_truth import detected, nominal_focal_px, true_models
 
 HELPER = Path(__file__).with_name("mrcal_solve.py")
 DEFAULT_VENV = Path.home() / ".cache" / "camlog" / "mrcal-venv"
@@ -63,16 +62,15 @@ def mrcal_available(python: Path) -> str | None:
     return None
 
 
-def _frame_numbers(run: CalibrationRun, approximate_s: float | None) -> list[dict[int, int]]:
-    """Per camera, frame index -> mrcal frame number (shared by frames camlog paired)."""
+def _frame_numbers(run: CalibrationRun) -> list[dict[int, int]]:
+    """Per camera, frame index -> mrcal frame number (shared by frames camlog paired: the
+    frames of a pair's two views, instant by instant)."""
     cameras = [{f.index: f.index for f in detected(c)} for c in run.cameras]
     if len(cameras) == 2:
-        left, right = (c.views for c in run.cameras)
         rig = run.solved.rig
-        held = {(lf, rf) for lv, rv in rig.pairs
-                for lf in rig.frames_of[lv] for rf in rig.frames_of[rv]}
-        partner = {rf: lf for lf, rf in stereo_pairs(left, right, approximate_s)
-                   if (lf, rf) in held and lf in cameras[0]}
+        partner = {rf: lf for lv, rv in rig.pairs
+                   for lf, rf in zip(rig.frames_of[lv], rig.frames_of[rv], strict=True)
+                   if lf in cameras[0]}
         cameras[1] = {i: partner.get(i, UNPAIRED + i) for i in cameras[1]}
     return cameras
 
@@ -90,12 +88,12 @@ def oriented_ids(ids: I64, corners_px: F64, view: BoardView, count: int) -> I64:
     return reversed_ids if gap(reversed_ids) < gap(ids) else ids
 
 
-def request(run: CalibrationRun, board: Board, *, approximate_s: float | None,
-            lensmodel: str, focal_px: float) -> dict[str, Any]:
+def request(run: CalibrationRun, board: Board, *, lensmodel: str,
+            focal_px: float) -> dict[str, Any]:
     """The JSON request of :mod:`benchmarks.mrcal_solve` for a run's detections; on a
     symmetric board, frames in camlog's held views numbered as those views (camlog numbers
     every camera's views from the same end of the board)."""
-    numbers = _frame_numbers(run, approximate_s)
+    numbers = _frame_numbers(run)
     rig = run.solved.rig
     view_of = {(view.camera, f): view for view, frames in zip(rig.views, rig.frames_of,
                                                               strict=True) for f in frames}
@@ -142,15 +140,13 @@ def parse_answer(answer: dict[str, Any], truths: list[CameraModel]) -> MrcalResu
     return MrcalResult(models, right_from_left, list(answer.get("report", [])))
 
 
-def run_mrcal(python: Path, run: CalibrationRun, board: Board, *,
-              approximate_s: float | None) -> MrcalResult:
+def run_mrcal(python: Path, run: CalibrationRun, board: Board) -> MrcalResult:
     """mrcal (``mrcal-calibrate-cameras`` under ``python``) on a run's detections, in the
     true lens model (:data:`LENSMODELS`), seeded with the true fx to the nearest 100 px."""
     truths = true_models(run)
     lensmodel = LENSMODELS[truths[0].distortion_model]
-    focal_px = round(float(truths[0].k[0, 0]), -2)
-    payload = request(run, board, approximate_s=approximate_s, lensmodel=lensmodel,
-                      focal_px=focal_px)
+    focal_px = nominal_focal_px(truths[0])
+    payload = request(run, board, lensmodel=lensmodel, focal_px=focal_px)
     done = subprocess.run([str(python), str(HELPER)], input=json.dumps(payload),
                           capture_output=True, text=True, check=False)
     if done.returncode != 0:

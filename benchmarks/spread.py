@@ -9,7 +9,9 @@ import numpy as np
 
 from .calibration_truth import Accuracy
 
-TOOLS = ["camlog", "camlog default", "OpenCV", "mrcal"]
+#: "OpenCV script": a user's whole script on the log, its own detection and pairing (a stereo
+#: pair of free-running cameras: :mod:`benchmarks.opencv_stereo_log`)
+TOOLS = ["camlog", "camlog default", "OpenCV", "OpenCV script", "mrcal"]
 #: case -> tool -> one accuracy per seed
 Results = dict[str, dict[str, list[Accuracy]]]
 #: figure name -> its value in an accuracy (None: not measured, e.g. a mono camera's baseline)

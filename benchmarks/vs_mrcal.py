@@ -2,10 +2,15 @@
 
 Each case records its scenario for every seed (kept in ``--cache`` and reused), calibrates it
 with ``camlog calibrate``, then gives camlog's detections (every distinct frame whose board
-passed detection) to a plain OpenCV script (``cv2.calibrateCamera`` with default flags,
-``cv2.stereoCalibrate`` for a pair; ``cv2.fisheye.calibrate`` for the fisheye) and to mrcal 2.5
-(``mrcal-calibrate-cameras`` with its defaults: outlier rejection, regularisation and the
-board's flatness estimated; seeded with the true fx to the nearest 100 px). All three fit the
+passed detection; for a pair, the pairs camlog made) to a plain OpenCV script
+(``cv2.calibrateCamera`` with default flags, ``cv2.stereoCalibrate`` for a pair;
+``cv2.fisheye.calibrate`` for the fisheye) and to mrcal 2.5 (``mrcal-calibrate-cameras`` with
+its defaults: outlier rejection, regularisation and the board's flatness estimated). Both are
+started from the true fx to the nearest 100 px (mrcal's ``--focal``; OpenCV's fisheye with
+``CALIB_USE_INTRINSIC_GUESS``, the principal point at the image centre: without a start OpenCV
+5 takes fx = max(W, H) / 2). For a stereo pair, ``OpenCV script`` is a user's whole script on
+the log (:mod:`.opencv_stereo_log`: its own detection, pairing by stamp within the slop, the
+board still in both cameras). All of them fit the
 scenario's true lens model: plumb_bob as k1 k2 p1 p2 k3 (camlog ``-k 3 --tangent-dist``, mrcal
 LENSMODEL_OPENCV5), rational_polynomial as its eight coefficients (camlog ``--tangent-dist``,
 mrcal LENSMODEL_OPENCV8). mrcal's fisheye models are not OpenCV's, so the fisheye case
@@ -42,10 +47,15 @@ from pathlib import Path
 from typing import Any
 
 import cv2
+import numpy as np
 
+from camlog.calibrate.flow import CalibrationRun
 from camlog.errors import CalibrationError
+from processors.calibration.board import Board
 from recorder.record import record
 from recorder.scenario import load_scenario
+from replay.camera import CameraModel
+from replay.messages import F64
 
 from .calibrate_speed import Case, calibrate, parse_flags, run_board
 from .calibration_truth import (
@@ -58,6 +68,7 @@ from .calibration_truth import (
 )
 from .docs import add_write_docs, markdown_row, write_rows
 from .mrcal_run import DEFAULT_VENV, MrcalError, mrcal_available, run_mrcal
+from .opencv_stereo_log import calibrate_pair
 from .spread import TOOLS, Results, markdown_rows, table
 
 #: the moving board seen through a distorted lens whose k3 is not zero (k1 k2 p1 p2 k3)
@@ -184,10 +195,15 @@ def one_seed(case: Case, seed: int, path: Path, *, mrcal_python: Path | None, tm
         got["OpenCV"] = accuracy(models, truths, rfl, true_rfl)
     except cv2.error as err:
         progress.fail(case.name, "OpenCV", seed, str(err).strip().splitlines()[-1])
+    if true_rfl is not None:
+        try:
+            models, rfl = script_models(run, board, path, case)
+            got["OpenCV script"] = accuracy(models, truths, rfl, true_rfl)
+        except cv2.error as err:
+            progress.fail(case.name, "OpenCV script", seed, str(err).strip().splitlines()[-1])
     if mrcal_python is not None and not truths[0].is_fisheye:
         try:
-            solved = run_mrcal(mrcal_python, run, board,
-                               approximate_s=parse_flags(path, case.flags).approximate)
+            solved = run_mrcal(mrcal_python, run, board)
             got["mrcal"] = accuracy(solved.models, truths, solved.right_from_left, true_rfl)
         except MrcalError as err:
             progress.fail(case.name, "mrcal", seed, str(err))
@@ -197,6 +213,24 @@ def one_seed(case: Case, seed: int, path: Path, *, mrcal_python: Path | None, tm
     print(f"  {case.name} seed {seed}: max projection difference px "
           + ", ".join(f"{t} {max(a.max_difference_px):.3f}" for t, a in got.items()),
           flush=True)
+
+
+def script_models(run: CalibrationRun, board: Board, path: Path, case: Case
+                  ) -> tuple[list[CameraModel], F64]:
+    """A user's whole OpenCV script on a stereo log (:mod:`.opencv_stereo_log`: its own
+    detection, pairing within the case's slop, still boards only): the models and
+    ``right_from_left`` (4, 4)."""
+    slop = parse_flags(path, case.flags).approximate
+    left, right = (c.views for c in run.cameras)
+    found = calibrate_pair(path, left_topic=left.source.image_topic,
+                           right_topic=right.source.image_topic, size=board.pattern_size,
+                           square_m=board.square_m, slop_s=slop if slop is not None else 0.0)
+    width, height = left.size
+    models = [CameraModel(width, height, k, "plumb_bob", d[:5])
+              for k, d in ((found.k_left, found.d_left), (found.k_right, found.d_right))]
+    right_from_left = np.eye(4)
+    right_from_left[:3, :3], right_from_left[:3, 3] = found.rotation, found.translation
+    return models, right_from_left
 
 
 def models_line(case: Case, mrcal: bool) -> str:

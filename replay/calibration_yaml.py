@@ -42,7 +42,8 @@ _MATRICES: dict[str, tuple[int, int | None]] = {
 
 
 class CalibrationFileError(ReplayError):
-    """A calibration YAML file is missing, unreadable or malformed."""
+    """A calibration file (YAML, or camera_calibration's INI) is missing, unreadable or
+    malformed."""
 
 
 @dataclass(frozen=True)

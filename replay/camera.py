@@ -174,3 +174,23 @@ def rectify_maps(info: CameraInfo, map_type: int = cv2.CV_16SC2
     """Rectification maps of a CameraInfo: ``R`` and ``P[:, :3]`` (``K`` when P is empty)."""
     new_k = info.p[:, :3] if np.any(info.p[:, :3]) else info.k
     return CameraModel.from_camera_info(info).rectify_maps(info.r, new_k, map_type)
+
+
+def stereo_right_from_left(left: CameraInfo, right: CameraInfo) -> F64 | None:
+    """``right_from_left`` (4, 4) a stereo pair's camera_infos imply, or None when the right
+    camera's projection holds no baseline.
+
+    ROS's convention: ``R`` of each camera rotates its optical frame into the pair's common
+    rectified frame (``X_rect = R X``), and the right camera's ``P = K' [I | t]`` holds
+    ``t = (P[0, 3] / P[0, 0], P[1, 3] / P[1, 1], 0)``, the left rectified frame's origin seen
+    from the right one (``P[0, 3] = -fx' B`` for a horizontal pair). Hence
+    ``right_from_left = R_right^T [I | t] R_left``.
+    """
+    p = right.p
+    if p[0, 0] == 0 or p[1, 1] == 0 or (p[0, 3] == 0 and p[1, 3] == 0):
+        return None
+    t = np.array([p[0, 3] / p[0, 0], p[1, 3] / p[1, 1], 0.0])
+    out = np.eye(4)
+    out[:3, :3] = right.r.T @ left.r
+    out[:3, 3] = right.r.T @ t
+    return out

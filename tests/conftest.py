@@ -15,6 +15,7 @@ from tests.recordings import (  # noqa: F401  (session fixtures: small logs made
     red_processed_log,
     resynced_log,
 )
+from tests.ros_archives import rendered_rig  # noqa: F401  (a session fixture)
 from tests.slow import uses_a_slow_fixture
 
 REPO_ROOT = Path(__file__).resolve().parents[1]

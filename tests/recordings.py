@@ -37,16 +37,23 @@ def red_processed_log(red_log: Path) -> Path:
     return path
 
 
+def held_for(folder: Path, scenario: str, *, hold_s: float) -> Path:
+    """A copy of a scenario in ``folder`` whose board holds each pose ``hold_s`` instead of
+    0.5 s (more poses in a few frames)."""
+    text = (SCENARIOS / f"{scenario}.toml").read_text()
+    assert text.count("hold_s = 0.5") == 1
+    spec = folder / f"{scenario}.toml"
+    spec.write_text(text.replace("hold_s = 0.5", f"hold_s = {hold_s}"))
+    return spec
+
+
 @pytest.fixture(scope="session")
 @renders
 def mono_calibration_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """``camlog calibrate``'s calibration.mcap of 120 frames of mono_checkerboard (board
     held 0.1 s per pose, so about 40 poses) at 320x240."""
     tmp = tmp_path_factory.mktemp("mono_calibration")
-    spec = tmp / "mono.toml"
-    text = (SCENARIOS / "mono_checkerboard.toml").read_text()
-    assert text.count("hold_s = 0.5") == 1
-    spec.write_text(text.replace("hold_s = 0.5", "hold_s = 0.1"))
+    spec = held_for(tmp, "mono_checkerboard", hold_s=0.1)
     log = tmp / "mono.mcap"
     cli("record", str(spec), "--frames", "120", "--resolution", "320x240", "-o", str(log),
         "--no-progress")

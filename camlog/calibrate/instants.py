@@ -117,22 +117,57 @@ def _candidates(views: CameraViews, board: Board, note: str) -> list[int]:
     return candidates
 
 
-def _still(frame: DetectedFrame) -> bool:
-    return frame.speed_px is not None and frame.speed_px <= STILL_PX
+@dataclass(frozen=True)
+class _Stillness:
+    """One camera's frames in time order, grouped into runs over which its board stood still
+    (consecutive frames repeating each other or whose corners moved at most
+    :data:`STILL_PX`): per frame, the stamps its run starts and ends at, and whether it is a
+    snapshot (no other frame within :data:`~.views.SNAPSHOT_GAP_S`: motion not observable)."""
+
+    start_ns: dict[int, int]
+    end_ns: dict[int, int]
+    snapshot: set[int]
+
+    @classmethod
+    def of(cls, views: CameraViews) -> _Stillness:
+        frames = sorted(views.frames, key=lambda f: f.stamp_ns)
+        runs: list[list[DetectedFrame]] = []
+        for before, frame in zip([None, *frames], frames, strict=False):
+            if before is not None and _same_board(before, frame):
+                runs[-1].append(frame)
+            else:
+                runs.append([frame])
+        start = {f.index: run[0].stamp_ns for run in runs for f in run}
+        end = {f.index: run[-1].stamp_ns for run in runs for f in run}
+        stamps = np.array([f.stamp_ns for f in frames], dtype=np.int64)
+        gaps = np.diff(stamps) / 1e9
+        alone = np.minimum(np.concatenate([[np.inf], gaps]),
+                           np.concatenate([gaps, [np.inf]])) >= SNAPSHOT_GAP_S
+        return cls(start, end, {frames[int(i)].index for i in np.flatnonzero(alone)})
 
 
-def _snapshots(views: CameraViews) -> set[int]:
-    """Distinct frames whose neighbouring distinct frames are both at least
-    :data:`~.views.SNAPSHOT_GAP_S` away in time: an approximately paired snapshot joins its
-    partner whatever its neighbours show, since motion between them is not observable."""
-    distinct = [f for f in views.frames if not f.duplicate]
-    stamps = np.array([f.stamp_ns for f in distinct], dtype=np.int64)
-    order = np.argsort(stamps, kind="stable")
-    gaps = np.diff(stamps[order]) / 1e9
-    before = np.concatenate([[np.inf], gaps])
-    after = np.concatenate([gaps, [np.inf]])
-    alone = np.minimum(before, after) >= SNAPSHOT_GAP_S
-    return {distinct[int(i)].index for i in order[alone]}
+def _same_board(before: DetectedFrame, after: DetectedFrame) -> bool:
+    """Whether consecutive frames of one camera show the board at one pose."""
+    if after.duplicate:
+        return True
+    a, b = before.detection, after.detection
+    return a is not None and b is not None and a.accepted and b.accepted \
+        and np.array_equal(a.ids, b.ids) \
+        and float(np.linalg.norm(a.corners_px - b.corners_px, axis=1).mean()) <= STILL_PX
+
+
+def _one_pose(stillness: list[_Stillness], cameras: list[CameraViews],
+              at: tuple[tuple[int, int], tuple[int, int]]) -> bool:
+    """Whether two approximately paired frames ((camera, frame), (camera, frame)) show one
+    pose: one camera saw its board stand still from its frame to the other's stamp (a board
+    that moved between the two stamps, e.g. to its next held pose, is at another pose in
+    each), or both are snapshots."""
+    (a, a_frame), (b, b_frame) = at
+    a_ns, b_ns = cameras[a].frames[a_frame].stamp_ns, cameras[b].frames[b_frame].stamp_ns
+    if a_ns > b_ns:
+        (a, a_frame, a_ns), (b, b_frame, b_ns) = (b, b_frame, b_ns), (a, a_frame, a_ns)
+    return (stillness[a].end_ns[a_frame] >= b_ns or stillness[b].start_ns[b_frame] <= a_ns
+            or (a_frame in stillness[a].snapshot and b_frame in stillness[b].snapshot))
 
 
 def _sources(views: CameraViews) -> list[int]:
@@ -214,12 +249,9 @@ def _instants(cameras: list[CameraViews], candidates: list[list[int]],
     0) pairs with camera 0 by time (:func:`_timed_pairs`), with no other camera by stamp."""
     usable = [set(c) for c in candidates]
     source = [_sources(c) for c in cameras]
-    snapshots = [_snapshots(c) for c in cameras] if approximate_s is not None else []
+    stillness = [_Stillness.of(c) for c in cameras] if approximate_s is not None else []
     timed = offsets_ns or [None] * len(cameras)
     interpolated: dict[tuple[int, int], Seen] = {}
-
-    def still(camera: int, frame: int) -> bool:
-        return _still(cameras[camera].frames[frame]) or frame in snapshots[camera]
 
     joined: dict[tuple[int, int], dict[int, int]] = {}  # (camera, frame) -> its instant
     for a, b in combinations(range(len(cameras)), 2):
@@ -245,7 +277,7 @@ def _instants(cameras: list[CameraViews], candidates: list[list[int]],
             if mine.keys() & theirs.keys():
                 continue
             if approximate_s is not None and offset_ns is None \
-                    and not (still(a, ai) and still(b, bi)):
+                    and not _one_pose(stillness, cameras, ((a, a_frame), (b, b_frame))):
                 continue
             merged = dict(sorted({**mine, **theirs}.items()))
             for key in merged.items():

@@ -117,6 +117,8 @@ def _camera_lines(camera: CameraSummary) -> list[str]:
             "camera frame, which intrinsic calibration cannot observe; without it "
             f"{camera.max_projection_difference_vs_truth_covered_px:.3f} px and "
             f"{camera.max_projection_difference_vs_truth_px:.3f} px.")
+    if camera.log_calibration is not None:
+        lines += ["", *_log_calibration_lines(camera), ""]
     cov = camera.coverage
     lines.append("Coverage: " + ", ".join(
         f"{k} {100 * v.progress:.0f}%" for k, v in cov.ranges.items())
@@ -130,6 +132,28 @@ def _camera_lines(camera: CameraSummary) -> list[str]:
         lines += [f"- {count}× {reason}" for reason, count in reasons.items()]
     lines.append("")
     return lines
+
+
+def _log_calibration_lines(camera: CameraSummary) -> list[str]:
+    """The log's own calibration (camera_info) beside camlog's, on the same views."""
+    theirs, p = camera.log_calibration, camera.parameters
+    assert theirs is not None
+    return [
+        f"Beside the calibration the log carries ({theirs.info_topic}, "
+        f"{theirs.distortion_model}), on the {camera.used_views} views camlog used (each "
+        "view's board pose fitted to each model):", "",
+        "| model | fx | fy | cx | cy | reprojection RMS (px) |",
+        "| --- | --- | --- | --- | --- | --- |",
+        f"| the log's camera_info | {theirs.fx:.3f} | {theirs.fy:.3f} | {theirs.cx:.3f} | "
+        f"{theirs.cy:.3f} | {theirs.rms_px:.4f} |",
+        f"| camlog | {p['fx'].value:.3f} | {p['fy'].value:.3f} | {p['cx'].value:.3f} | "
+        f"{p['cy'].value:.3f} | {theirs.camlog_rms_px:.4f} |", "",
+        "The two models image one ray up to "
+        f"{theirs.max_projection_difference_covered_px:.3f} px apart where the views put "
+        f"corners, {theirs.max_projection_difference_px:.3f} px over the whole image (after "
+        "the rotation that best aligns the camera frames, which intrinsic calibration cannot "
+        "observe).",
+    ]
 
 
 def _stereo_lines(s: StereoSummary) -> list[str]:
@@ -150,6 +174,11 @@ def _stereo_lines(s: StereoSummary) -> list[str]:
     if s.truth is not None:
         lines.append(f"True baseline {s.truth.baseline_m:.6f} m: error "
                      f"{s.truth.baseline_error_percent:+.3f} %.")
+    if s.log_calibration is not None:
+        theirs = s.log_calibration
+        lines.append(f"The log's two camera_infos imply a baseline of {theirs.baseline_m:.6f} m "
+                     f"(camlog's differs by {theirs.baseline_difference_percent:+.2f} %) and a "
+                     f"rotation {theirs.rotation_difference_deg:.4f}° from camlog's.")
     lines.append("")
     return lines
 

@@ -23,6 +23,7 @@ from replay.records import calibration as records
 from replay.records import rig as rig_records
 from replay.records.scenario import Scenario
 
+from .log_calibration import log_calibration, log_stereo_calibration
 from .offsets import offset_record, true_offset_ms
 from .rig_pairs import PairSolution
 from .solving import CalibratedCamera, RigSolution
@@ -145,8 +146,9 @@ def _uncertainty(camera: CalibratedCamera, statistics: CameraStatistics, solved:
         **true)
 
 
-def _camera(camera: CalibratedCamera, statistics: CameraStatistics, solved: RigSolution,
-            truth: TrueRig | None, scenario: Scenario | None) -> records.CameraSummary:
+def _camera(camera: CalibratedCamera, statistics: CameraStatistics, solved: RigSolution, *,
+            truth: TrueRig | None, scenario: Scenario | None, board: Board
+            ) -> records.CameraSummary:
     views, joint = camera.views, solved.joint
     distinct = list(views.distinct())
     differences: dict[str, float] = {}
@@ -180,6 +182,7 @@ def _camera(camera: CalibratedCamera, statistics: CameraStatistics, solved: RigS
         uncertainty=_uncertainty(camera, statistics, solved, truth),
         lens_order=_lens_order(camera.order),
         time_offset=_time_offset(camera, solved, scenario),
+        log_calibration=log_calibration(camera, solved, board),
     )
 
 
@@ -220,7 +223,7 @@ def _stereo(solved: RigSolution) -> records.StereoSummary:
             left.views.frames[solved.first_frame(lv)].stamp_ns,
             right.views.frames[solved.first_frame(rv)].stamp_ns, why)
             for (lv, rv), why in s.rejected.items()],
-        truth=truth)
+        truth=truth, log_calibration=log_stereo_calibration(solved))
 
 
 def _rig_camera(camera: CalibratedCamera, solved: RigSolution,
@@ -277,7 +280,7 @@ def build_summary(solved: RigSolution, statistics: list[CameraStatistics], *,
         options=records.OptionsSummary(options.fix_principal_point, options.fix_aspect_ratio,
                                options.tangential, options.radial_count,
                                options.distortion_model, options.choose_order or None),
-        cameras=[_camera(c, s, solved, truth, scenario)
+        cameras=[_camera(c, s, solved, truth=truth, scenario=scenario, board=board)
                  for c, s in zip(cameras, statistics, strict=True)],
         ground_truth=scenario is not None,
         stereo=_stereo(solved) if stereo is not None else None,

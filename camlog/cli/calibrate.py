@@ -12,7 +12,7 @@ from ..requests.calibrate import CalibrateRequest
 from .args import add_request, print_warnings
 
 if TYPE_CHECKING:
-    from replay.records import RigSummary
+    from replay.records import LogCalibration, RigSummary
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -36,6 +36,15 @@ def rig_lines(rig: RigSummary) -> list[str]:
             f"{pair.rotation_std_deg:.2g}°, {pair.joint_views} joint views, epipolar RMS "
             f"{pair.epipolar_rms_px:.4f} px")
     return lines
+
+
+def log_calibration_line(theirs: LogCalibration) -> str:
+    """The log's camera_info beside camlog's model, one line for the terminal."""
+    return (f"  vs the log's {theirs.info_topic}: fx {theirs.fx:.3f} fy {theirs.fy:.3f} "
+            f"cx {theirs.cx:.3f} cy {theirs.cy:.3f}, RMS on these views {theirs.rms_px:.4f} px "
+            f"(camlog {theirs.camlog_rms_px:.4f}), max projection difference "
+            f"{theirs.max_projection_difference_covered_px:.3f} px where corners were seen, "
+            f"{theirs.max_projection_difference_px:.3f} px over the whole image (aligned)")
 
 
 def _truth_error(camera: Any) -> str:
@@ -87,6 +96,8 @@ def run(args: argparse.Namespace) -> int:
                   "where corners were seen, "
                   f"{camera.max_projection_difference_vs_truth_aligned_px:.3f} px over the "
                   "whole image (camera frames aligned by a rotation)")
+        if camera.log_calibration is not None:
+            print(log_calibration_line(camera.log_calibration))
     if run_.summary.board_warp is not None:
         print(run_.summary.board_warp.summary)
     if run_.summary.rig is not None:
@@ -95,6 +106,10 @@ def run(args: argparse.Namespace) -> int:
         s = run_.summary.stereo
         print(f"stereo: baseline {s.baseline_m:.5f} m, epipolar RMS "
               f"{s.epipolar_rms_px:.4f} px, square {s.square_m:.5f} m")
+        if s.log_calibration is not None:
+            print(f"  vs the log's camera_infos: baseline {s.log_calibration.baseline_m:.5f} m "
+                  f"({s.log_calibration.baseline_difference_percent:+.2f} %), rotation "
+                  f"{s.log_calibration.rotation_difference_deg:.4f}° apart")
     print(f"wrote {run_.output_dir}/ ({', '.join(f.name for f in run_.files)}) "
           f"in {run_.wall_s:.1f} s")
     return 0

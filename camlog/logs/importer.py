@@ -1,10 +1,13 @@
-"""``camlog import``: a folder of image files as a camera log (like Kalibr's bag creator).
+"""``camlog import``: a folder of image files as a camera log (like Kalibr's bag creator), or
+ROS camera_calibration's archive (``calibrationdata.tar.gz``, :mod:`.ros_archive`) as it is.
 
 Files (PNG, JPEG, PPM/PGM/PNM; 8- or 16-bit; colour or grey, told by content, not by
 extension) are taken in natural sort order (``img2`` before ``img10``) and stamped
 ``start + i / rate``. Stereo folders pair ``left*`` and ``right*`` files by the rest of their
 name (``left0003.pgm`` with ``right0003.pgm``) and give both images of a pair one stamp.
-Colour images are stored ``rgb8``, grey ones ``mono8`` or ``mono16``.
+Colour images are stored ``rgb8``, grey ones ``mono8`` or ``mono16``. An archive's views are
+taken in number order (a pair's two images under one stamp) and its own calibration becomes the
+log's camera_info (unless ``--camera-info`` gives one).
 """
 
 from __future__ import annotations
@@ -26,11 +29,13 @@ from replay.messages import CameraInfo, Image
 from replay.topics import camera_of
 
 from ..requests.logs import ImportRequest
+from .ros_archive import RosArchive, is_ros_archive, read_ros_archive
 
 __all__ = [
     "EXTENSIONS",
     "RAW_IMAGE_SUFFIXES",
     "ImportResult",
+    "decode_image",
     "frame_id_for",
     "image_files",
     "import_images",
@@ -111,20 +116,30 @@ def frame_id_for(namespace: str) -> str:
 def read_image(path: Path, *, stamp_ns: int, frame_id: str) -> Image:
     """One file as an Image: ``rgb8`` (colour, alpha dropped), ``mono8`` or ``mono16``."""
     try:
-        array = cv2.imread(str(path), cv2.IMREAD_UNCHANGED)
+        data = path.read_bytes()
+    except OSError as err:
+        raise ImageFolderError(f"{path}: {err.strerror or err}") from None
+    return decode_image(data, where=str(path), stamp_ns=stamp_ns, frame_id=frame_id)
+
+
+def decode_image(data: bytes, *, where: str, stamp_ns: int, frame_id: str) -> Image:
+    """An encoded image file's bytes (``where`` names it in errors) as an Image, as
+    :func:`read_image`."""
+    try:
+        array = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_UNCHANGED)
     except cv2.error:
         array = None
     if array is None:
-        raise ImageFolderError(f"{path}: not a readable image file")
+        raise ImageFolderError(f"{where}: not a readable image file")
     if array.dtype not in (np.uint8, np.uint16):
-        raise ImageFolderError(f"{path}: {array.dtype} pixels are not supported (8 or 16 bit)")
+        raise ImageFolderError(f"{where}: {array.dtype} pixels are not supported (8 or 16 bit)")
     if array.ndim == 3 and array.shape[2] == 1:
         array = array[:, :, 0]
     if array.ndim == 2:
         encoding = "mono16" if array.dtype == np.uint16 else "mono8"
         return Image(stamp_ns, frame_id, encoding, array)
     if array.dtype == np.uint16:
-        raise ImageFolderError(f"{path}: 16-bit colour images are not supported")
+        raise ImageFolderError(f"{where}: 16-bit colour images are not supported")
     code = cv2.COLOR_BGRA2RGB if array.shape[2] == 4 else cv2.COLOR_BGR2RGB
     return Image(stamp_ns, frame_id, "rgb8", cv2.cvtColor(array, code))
 
@@ -187,24 +202,38 @@ def import_images(request: ImportRequest) -> ImportResult:
     frame_id, fmt, overwrite, progress = (request.frame_id, request.format, request.overwrite,
                                           request.progress)
     started = time.perf_counter()
-    files = image_files(folder)
+    archive = read_ros_archive(folder) if is_ros_archive(folder) else None
     skipped: list[Path] = []
-    if stereo:
-        pairs, skipped = pair_image_files(files)
+    frames: list[tuple[Path, ...]]
+    if archive is not None:
+        if stereo and not archive.stereo:
+            raise ImageFolderError(f"{folder}: --stereo, but the archive holds one camera's "
+                                   "images (left-NNNN.png, no right-NNNN.png)")
+        stereo = archive.stereo
+        frames = [tuple(folder / name for name in frame) for frame in archive.frames]
+    elif stereo:
+        pairs, skipped = pair_image_files(image_files(folder))
         if not pairs:
             raise ImageFolderError(f"{folder}: no left*/right* file pairs with matching names")
+        frames = list(pairs)
+    else:
+        frames = [(path,) for path in image_files(folder)]
+    if stereo:
         ns = "/" + (camera or "/stereo").strip("/")
         if camera_of(ns) is not None:
             raise OptionError(f"with --stereo, --camera names the rig's namespace (e.g. "
                               f"{camera_of(ns)}), not an image topic: {ns}")
         namespaces = [f"{ns}/{side}" for side in SIDES]
         image_topics = [f"{n}/image_raw" for n in namespaces]
-        frames: list[tuple[Path, ...]] = list(pairs)
     else:
         namespace, image_topic = import_topic(camera or "/camera")
         namespaces, image_topics = [namespace], [image_topic]
-        frames = [(path,) for path in files]
     infos = _camera_infos(camera_info, namespaces)
+    info_files = list(camera_info)
+    if archive is not None and not camera_info and archive.calibration:
+        # the archive's own calibration becomes the log's camera_info
+        infos = list(archive.calibration)
+        info_files = [folder / name for name in archive.calibration_files]
     if frame_id is None:
         frame_ids = [frame_id_for(n) for n in namespaces]
     else:
@@ -216,11 +245,11 @@ def import_images(request: ImportRequest) -> ImportResult:
                  disable=None if progress is None else not progress) as bar:
         for stamp, group in zip(stamps, frames, strict=True):
             for index, path in enumerate(group):
-                image = read_image(path, stamp_ns=stamp, frame_id=frame_ids[index])
+                image = _image(path, archive, stamp_ns=stamp, frame_id=frame_ids[index])
                 size = (image.width, image.height)
                 if sizes[index] is None:
                     sizes[index] = size
-                    _check_info(infos[index], size, camera_info[index] if infos[index] else None)
+                    _check_info(infos[index], size, info_files[index] if infos[index] else None)
                 elif size != sizes[index]:
                     first = sizes[index]
                     assert first is not None
@@ -236,6 +265,16 @@ def import_images(request: ImportRequest) -> ImportResult:
     topics = image_topics + [f"{n}/camera_info" for n, i in zip(namespaces, infos, strict=True)
                              if i is not None]
     return ImportResult(output, topics, len(frames), skipped, time.perf_counter() - started)
+
+
+def _image(path: Path, archive: RosArchive | None, *, stamp_ns: int, frame_id: str) -> Image:
+    """The image file ``path``, or the archive's member ``path`` stands for (the archive's
+    path joined with the member's name)."""
+    if archive is None:
+        return read_image(path, stamp_ns=stamp_ns, frame_id=frame_id)
+    name = path.relative_to(archive.path).as_posix()
+    return decode_image(archive.images[name], where=f"{archive.path}: {name}",
+                        stamp_ns=stamp_ns, frame_id=frame_id)
 
 
 def _check_info(info: CameraInfo | None, size: tuple[int, int], path: Path | None) -> None:

@@ -122,7 +122,8 @@ class ExportRequest:
 
 @dataclass(frozen=True, kw_only=True)
 class ImportRequest:
-    """Turn a folder of image files (mono or left/right stereo) into a log."""
+    """Turn a folder of image files (mono or left/right stereo), or camera_calibration's
+    archive, into a log."""
 
     epilog: ClassVar[str] = (
         "Files (.png, .jpg, .jpeg, .ppm, .pgm, .pnm; 8 or 16 bit) are taken in natural order "
@@ -130,11 +131,14 @@ class ImportRequest:
         "Images go to NS/image_raw under the --camera namespace, as every camlog command "
         "names a camera (--topic is the same option). --stereo pairs left*/right* files with "
         "the same rest of the name into NS/left/image_raw and NS/right/image_raw with "
-        "identical stamps."
+        "identical stamps. ROS camera_calibration's archive (calibrationdata.tar.gz) is read "
+        "as it is: its left-NNNN images (and right-NNNN, a pair) in number order, its own "
+        "calibration (ost.yaml, left.yaml and right.yaml, or ost.txt) as the camera_info."
     )
 
     folder: Path = option(Path(), metavar="DIR", type=Path, batch=False,
-                          help="folder of image files")
+                          help="folder of image files, or camera_calibration's archive "
+                               "(calibrationdata.tar.gz)")
     output: Path = common.output(metavar="LOG")
     camera: str | None = option(
         None, "--camera", "--topic", type=name, metavar="NS",

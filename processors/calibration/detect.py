@@ -28,6 +28,11 @@ MIN_INSIDE_CORNERS = 6
 #: fraction of corners whose four squares may fail the parity check (noise, blur)
 PARITY_TOLERANCE = 0.08
 MIN_CONTRAST = 12.0
+#: a tracked board with a corner that does not settle back within this fraction of a square
+#: (:func:`unsettled_px`) is found afresh instead: tracking through motion blur can let an
+#: outer corner slide along the board's edge, a little further each frame, while every other
+#: corner stays right and every square still alternates
+MAX_UNSETTLED = 0.1
 #: squares are sampled this far (in squares, along both grid axes) from a corner: well inside
 #: a square even where perspective or a fisheye shrinks the outer squares, or the board's
 #: edge cuts them (half a square lands on the edge there)
@@ -87,8 +92,9 @@ def track_chessboard(gray: np.ndarray, predicted_px: F64, board: Board) -> Detec
     """The board near where it is expected: ``cornerSubPix`` from ``predicted_px``
     ``(N, 2)`` (e.g. the previous frame's corners moved on by the board's velocity), kept
     only if every corner stayed within a third of a square of its prediction (so none slid
-    to a neighbouring corner) and the result passes the same checks as a detection. None
-    otherwise: detect the board afresh."""
+    to a neighbouring corner), settles back when started elsewhere (:func:`unsettled_px`: it
+    is a junction of squares, not a point of a blurred edge) and the result passes the same
+    checks as a detection. None otherwise: detect the board afresh."""
     spacing = _min_spacing(predicted_px, board)
     if not spacing > 4.0:
         return None
@@ -103,8 +109,40 @@ def track_chessboard(gray: np.ndarray, predicted_px: F64, board: Board) -> Detec
                                criteria).reshape(-1, 2).astype(np.float64)
     if float(np.linalg.norm(refined - predicted_px, axis=1).max()) > spacing / 3.0:
         return None
+    if unsettled_px(gray, refined, board, radius=radius).max(initial=0.0) \
+            > MAX_UNSETTLED * spacing:
+        return None  # a corner slid along a blurred edge of the board: detect afresh
     found = check_detection(gray, canonical_order(refined, board), board)
     return found if found.accepted and found.point_ids is None else None
+
+
+def unsettled_px(gray: np.ndarray, corners_px: F64, board: Board, *, radius: int) -> F64:
+    """Per corner of a whole board ``(N, 2)``, how far (px) ``cornerSubPix`` (window
+    ``radius``) settles from it when started elsewhere: at the straight continuation of its
+    two neighbours along a row (a column when rows are shorter than 3), from the board's
+    middle outwards. The junction of four squares draws cornerSubPix to it from anywhere in
+    the window, whatever the lens and the tilt bend the grid; a point on a blurred edge,
+    where tracking lets a corner slide, holds it wherever it starts. Zeros for a board too
+    small to continue a line."""
+    grid = corners_px.reshape(board.rows, board.cols, 2)
+    turned = board.cols < 3
+    if turned:
+        grid = grid.transpose(1, 0, 2)
+    count = grid.shape[1]
+    if count < 3:
+        return np.zeros(len(corners_px))
+    start = np.empty_like(grid)
+    for j in range(count):
+        step = 1 if j < count / 2 else -1
+        start[:, j] = 2 * grid[:, j + step] - grid[:, j + 2 * step]
+    if turned:
+        start = start.transpose(1, 0, 2)
+    criteria = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 60, 0.001)
+    h, w = gray.shape
+    start = np.clip(start.reshape(-1, 2), radius + 1, [w - 2 - radius, h - 2 - radius])
+    again = cv2.cornerSubPix(gray, start.astype(np.float32).reshape(-1, 1, 2),
+                             (radius, radius), (-1, -1), criteria).reshape(-1, 2)
+    return np.asarray(np.linalg.norm(again - corners_px, axis=1), dtype=np.float64)
 
 
 def _min_spacing(corners: np.ndarray, board: Board) -> float:

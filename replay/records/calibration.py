@@ -26,6 +26,8 @@ __all__ = [
     "CoverageSummary",
     "EvidenceSummary",
     "LensOrderSummary",
+    "LogCalibration",
+    "LogStereoCalibration",
     "OptionsSummary",
     "ParameterEstimate",
     "RangeProgress",
@@ -263,6 +265,35 @@ class TimeOffsetSummary:
     measured: TimeOffset | None = field(default=None, metadata=OMIT_NONE)
     truth_ms: float | None = field(default=None, metadata=OMIT_NONE)
     error_ms: float | None = field(default=None, metadata=OMIT_NONE)
+class LogCalibration:
+    """The calibration the log carries (its camera_info: an imported camera_calibration
+    archive's result, a driver's factory values) beside camlog's, on the views camlog used:
+    its ``fx`` ... ``cy`` (px); the reprojection RMS of its model and of camlog's on those
+    views' corners (those camlog kept), each view's board pose fitted to the model (px); and
+    the largest distance between where the two models image one ray once a rotation aligns
+    their camera frames, over the whole image and where the views put corners (px)."""
+
+    info_topic: str
+    distortion_model: str
+    fx: float
+    fy: float
+    cx: float
+    cy: float
+    rms_px: float
+    camlog_rms_px: float
+    max_projection_difference_px: float
+    max_projection_difference_covered_px: float
+
+
+@dataclass(frozen=True)
+class LogStereoCalibration:
+    """The rig the log's two camera_infos imply (their rectifications and the right
+    camera's projection) beside camlog's: its baseline (m), camlog's baseline minus it (%
+    of it), and the angle between the two rotations ``right_from_left`` (degrees)."""
+
+    baseline_m: float
+    baseline_difference_percent: float
+    rotation_difference_deg: float
 
 
 @dataclass(frozen=True)
@@ -303,6 +334,7 @@ class CameraSummary:
     uncertainty: UncertaintySummary | None = field(default=None, metadata=OMIT_NONE)
     lens_order: LensOrderSummary | None = field(default=None, metadata=OMIT_NONE)
     time_offset: TimeOffsetSummary | None = field(default=None, metadata=OMIT_NONE)
+    log_calibration: LogCalibration | None = field(default=None, metadata=OMIT_NONE)
 
     @property
     def has_truth(self) -> bool:
@@ -344,6 +376,7 @@ class StereoSummary:
     rejected: list[RejectedJointView]
     truth: StereoTruth | None = field(default=None, metadata=OMIT_NONE)
     rotation_std_deg: float | None = field(default=None, metadata=OMIT_NONE)
+    log_calibration: LogStereoCalibration | None = field(default=None, metadata=OMIT_NONE)
 
 
 @dataclass(frozen=True)

@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 import pytest
 
 from replay import CameraInfo
-from replay.calibration_ini import ost_text
+from replay.calibration_ini import cameras_from_ost, ost_text
+from replay.calibration_yaml import CalibrationFileError
 
 MATRICES = {"camera matrix": (3, 3), "rectification": (3, 3), "projection": (3, 4)}
 
@@ -75,3 +78,32 @@ def test_needs_a_camera_or_a_pair() -> None:
         ost_text()
     with pytest.raises(ValueError, match="both left and right"):
         ost_text(left=camera(1000.0))
+
+
+def test_reads_back_what_it_writes() -> None:
+    left, right = camera(1034.5), camera(1035.25, tx=-20.705)
+    for text, expected in ((ost_text(left), [("narrow_stereo", left)]),
+                           (ost_text(left=left, right=right),
+                            [("narrow_stereo/left", left), ("narrow_stereo/right", right)])):
+        got = cameras_from_ost(text)
+        assert [name for name, _ in got] == [name for name, _ in expected]
+        for (_, info), (_, truth) in zip(got, expected, strict=True):
+            assert (info.width, info.height, info.distortion_model) == (640, 480, "plumb_bob")
+            for name in ("k", "d", "r", "p"):
+                np.testing.assert_allclose(getattr(info, name), getattr(truth, name), atol=5e-7)
+
+
+@pytest.mark.parametrize(("text", "words"), [
+    ("", "no camera section"),
+    ("width\n640\n", "before the first [section]"),
+    ("[image]\n\nwidth\n640\n", "[image]: expected width and height"),
+    ("[image]\n\nwidth\n640\n\nheight\n480\n\n[cam]\n\ncamera matrix\n1 0 0\n",
+     "[cam]: missing distortion, rectification, projection"),
+    (ost_text(camera(800.0)).replace("0.001000 -0.001500", "x y"),
+     "[narrow_stereo] rectification: expected rows of numbers"),
+    (ost_text(camera(800.0)).replace("\n0.000000 0.000000 1.000000 0.000000", ""),
+     "[narrow_stereo] projection: expected 3x4 values, got 8"),
+])
+def test_a_malformed_file_says_what_is_wrong(text: str, words: str) -> None:
+    with pytest.raises(CalibrationFileError, match=re.escape(words)):
+        cameras_from_ost(text)

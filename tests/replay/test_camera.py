@@ -8,7 +8,7 @@ import cv2
 import numpy as np
 import pytest
 
-from replay.camera import CameraModel, rectify_maps
+from replay.camera import CameraModel, rectify_maps, stereo_right_from_left
 from replay.lens_models import LENS_MODELS, canonical_name
 from replay.messages import F64, CameraInfo
 
@@ -124,3 +124,22 @@ def test_model_names() -> None:
     assert CameraModel.from_camera_info(info).distortion_model == "equidistant"
     with pytest.raises(ValueError, match="unknown distortion model"):
         CameraModel(640, 480, K, "kannala_brandt_8")
+
+
+@pytest.mark.parametrize("translation", [[-0.12, 0.003, 0.002], [0.004, -0.09, -0.001]],
+                         ids=["horizontal", "vertical"])
+def test_a_pairs_camera_infos_give_back_the_rig(translation: list[float]) -> None:
+    # the rectification OpenCV computes for a known rig, written as ROS's camera_infos
+    k1 = np.array([[800.0, 0.0, 322.0], [0.0, 802.0, 241.0], [0.0, 0.0, 1.0]])
+    k2 = np.array([[810.0, 0.0, 318.0], [0.0, 809.0, 236.0], [0.0, 0.0, 1.0]])
+    d1, d2 = np.array([-0.2, 0.05, 0.001, 0.0, 0.0]), np.array([-0.18, 0.04, 0.0, 0.001, 0.0])
+    rotation = cv2.Rodrigues(np.array([0.01, -0.035, 0.02]))[0]
+    t = np.array(translation).reshape(3, 1)
+    r1, r2, p1, p2, *_ = cv2.stereoRectify(k1, d1, k2, d2, (640, 480), rotation, t)
+    left = CameraInfo(0, "l", 640, 480, "plumb_bob", d1, k1, r1, p1)
+    right = CameraInfo(0, "r", 640, 480, "plumb_bob", d2, k2, r2, p2)
+    got = stereo_right_from_left(left, right)
+    assert got is not None
+    np.testing.assert_allclose(got[:3, :3], rotation, atol=1e-9)
+    np.testing.assert_allclose(got[:3, 3], t.ravel(), atol=1e-9)
+    assert stereo_right_from_left(left, left) is None  # no baseline in P

@@ -73,6 +73,27 @@ def test_offset_video_of_a_moving_board_does_not_pair() -> None:
         rig_views([left, right], BOARD, approximate_s=0.02, stereo_note=True)
 
 
+def test_offset_frames_either_side_of_a_pose_change_do_not_pair() -> None:
+    # 30 Hz video of poses held 0.3 s (repeated frames: each pose's first frame is as far
+    # from the last pose's as a snapshot), the right camera 7 ms late; the board jumps to
+    # its next pose between a left frame and its right partner, and the right camera does
+    # not see pose 1: the last left frame of pose 1 and the first right frame of pose 2
+    # are 7 ms apart but show two poses
+    period, phase, hold = 33_333_333, 7_000_000, 9
+    left_pose = [i // hold for i in range(4 * hold)]
+    right_pose = [(i + 1) // hold for i in range(4 * hold)]
+    repeats = [[i > 0 and pose[i] == pose[i - 1] for i in range(len(pose))]
+               for pose in (left_pose, right_pose)]
+    left = camera([GRID + 40.0 * p for p in left_pose], duplicates=repeats[0], name="/l",
+                  period_ns=period)
+    right = camera([None if p == 1 else GRID - 20.0 + 40.0 * p for p in right_pose],
+                   duplicates=repeats[1], name="/r", period_ns=period, offset_ns=phase)
+    rig = rig_views([left, right], BOARD, approximate_s=0.02, stereo_note=True)
+    poses = [({left_pose[f] for f in rig.frames_of[lv]},
+              {right_pose[f] for f in rig.frames_of[rv]}) for lv, rv in rig.pairs]
+    assert poses == [({p}, {p}) for p in (0, 2, 3)]
+
+
 def test_three_cameras_share_instants_through_a_chain() -> None:
     # camera 0 and camera 2 never shoot at the same time; camera 1 shares with both
     first = camera([GRID, GRID + 40.0, None, None], name="/a")

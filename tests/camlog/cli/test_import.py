@@ -1,14 +1,18 @@
-"""``camlog import`` through the command line; the real wide-stereo images end to end."""
+"""``camlog import`` through the command line; the real wide-stereo images and real
+camera_calibration archives end to end."""
 
 from __future__ import annotations
 
 import json
+import os
+import tarfile
 from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
 from rosbags.highlevel import AnyReader
+from ruamel.yaml import YAML
 
 from camlog.cli import main
 from tests.rrd import load_rrd, rerun_cli
@@ -65,3 +69,54 @@ def test_real_wide_stereo_imports_calibrates_and_views(
         "/world/stereo/left/rectified", "/world/stereo/right/rectified"]
     verify = rerun_cli("rrd", "verify", str(rrd), cwd=tmp_path)
     assert verify.returncode == 0, verify.stderr
+
+
+#: camera_calibration archives committed to public repositories (provenance beside them):
+#: file -> calibrate's camera and board arguments
+ARCHIVES = {
+    "jetson_csi_cam-calibrationdata.tar.gz": ["--left", "/stereo/left", "--right",
+                                              "/stereo/right", "--size", "8x6", "--square",
+                                              "0.03"],
+    "tello_ros_gazebo-calibrationdata.tar.gz": ["--camera", "/camera", "--size", "7x7",
+                                                "--square", "0.025"],
+}
+
+
+@pytest.mark.realdata
+@pytest.mark.slow
+@pytest.mark.parametrize("name", list(ARCHIVES))
+def test_real_camera_calibration_archives_import_and_compare(
+        name: str, realdata_dir: Path, tmp_path: Path) -> None:
+    folder = Path(os.environ.get("CAMLOG_ROS_ARCHIVES")
+                  or realdata_dir / "ros_calibration_archives")
+    archive = folder / name
+    if not archive.is_file():
+        pytest.skip(f"real archive not found at {archive} (set CAMLOG_ROS_ARCHIVES to its "
+                    "folder)")
+    # what the archive holds, read with tarfile and a YAML parser of its own
+    calibrations = {}
+    with tarfile.open(archive) as members:
+        names = members.getnames()
+        for member in names:
+            handle = members.extractfile(member)
+            if member.endswith(".yaml") and handle is not None:
+                calibrations[member] = YAML(typ="safe").load(handle.read())
+    views = sum(n.startswith("left-") for n in names)
+    log = tmp_path / "archive.mcap"
+    assert main(["import", str(archive), "-o", str(log), "--no-progress"]) == 0
+    out = tmp_path / "cal"
+    assert main(["calibrate", str(log), *ARCHIVES[name], "-o", str(out), "--no-progress"]) == 0
+    summary = json.loads((out / "calibration.json").read_text())
+    assert len(summary["cameras"]) == len(calibrations)
+    for camera, file in zip(summary["cameras"], sorted(calibrations), strict=True):
+        theirs, k = camera["log_calibration"], calibrations[file]["camera_matrix"]["data"]
+        assert camera["frames"] == views
+        assert (theirs["fx"], theirs["cx"], theirs["fy"], theirs["cy"]) == \
+            pytest.approx((k[0], k[2], k[4], k[5]))
+        # camlog minimised over these views: the archive's model cannot fit them better
+        assert theirs["camlog_rms_px"] <= theirs["rms_px"] * 1.001
+        assert theirs["max_projection_difference_covered_px"] > 0
+    if len(calibrations) == 2:
+        right_p = calibrations["right.yaml"]["projection_matrix"]["data"]
+        implied = summary["stereo"]["log_calibration"]["baseline_m"]
+        assert implied == pytest.approx(abs(right_p[3] / right_p[0]), rel=1e-6)

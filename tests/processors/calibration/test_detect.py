@@ -2,17 +2,24 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
+from benchmarks.ideal_board import ideal_image, tilted_pose
 from processors.calibration.board import Board
 from processors.calibration.detect import (
+    MAX_UNSETTLED,
+    _min_spacing,
     canonical_order,
     check_detection,
     find_chessboard,
     track_chessboard,
+    unsettled_px,
 )
 from processors.calibration.targets import detect_segment
+from replay.camera import CameraModel
 
 from .synthetic import render_board
 
@@ -95,6 +102,42 @@ def test_tracking_a_board_leaving_the_image_hands_over_to_detection() -> None:
     assert track_chessboard(image, truth - [25.0, 0.0], BOARD) is None
     found = detect_segment([image, image], BOARD)
     assert all(d is not None and d.accepted for d in found)
+
+
+def test_true_corners_settle_back_and_a_slid_one_does_not(
+    rendered: tuple[np.ndarray, np.ndarray]
+) -> None:
+    # cornerSubPix started at the straight continuation of each corner's neighbours comes
+    # back to every junction; a corner 0.2 squares off the junction (where tracking through
+    # blur leaves one on the board's edge) is 0.2 squares from where it settles
+    image, truth = rendered
+    assert unsettled_px(image, truth, BOARD, radius=11).max() < 0.01
+    slid = truth.copy()
+    slid[BOARD.cols - 1] += [0.0, 0.2 * SQUARE_PX]
+    off = unsettled_px(image, slid, BOARD, radius=11)
+    assert off[BOARD.cols - 1] == pytest.approx(0.2 * SQUARE_PX, abs=0.05)
+    assert np.delete(off, BOARD.cols - 1).max() < 0.01
+    assert off.max() > MAX_UNSETTLED * SQUARE_PX
+
+
+def test_a_fisheye_board_at_the_edge_of_the_image_settles() -> None:
+    # a strongly distorted lens bends the grid by more than the slide tracking refuses: the
+    # corners still settle back, and tracking keeps the board
+    fisheye = CameraModel(640, 480, np.array([[231.7, 0.0, 322.3], [0.0, 231.9, 237.6],
+                                              [0.0, 0.0, 1.0]]),
+                          "equidistant", np.array([-0.040, 0.0012, -0.0008, 0.0001]))
+    board = Board(7, 6, 0.015)
+    rng = np.random.default_rng(4)
+    pose = tilted_pose(fisheye, board, np.array([130.0, 110.0]), 0.12, tilt_rad=0.4, rng=rng)
+    image = ideal_image(fisheye, pose, board)
+    truth = fisheye.project(board.points_in_board() @ pose[:3, :3].T + pose[:3, 3])
+    grid = truth.reshape(board.rows, board.cols, 2)
+    bend = np.linalg.norm(grid[:, :-2] - 2 * grid[:, 1:-1] + grid[:, 2:], axis=2).max()
+    assert bend > MAX_UNSETTLED * _min_spacing(truth, board)
+    found = track_chessboard(image, truth, board)
+    assert found is not None and found.accepted
+    radius = max(2, min(11, math.ceil(_min_spacing(truth, board) * 0.5)))
+    assert unsettled_px(image, found.corners_px, board, radius=radius).max() < 0.05
 
 
 def test_a_frame_opencv_cannot_handle_is_rejected_with_its_reason() -> None:
