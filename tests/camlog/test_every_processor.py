@@ -62,14 +62,16 @@ def cli_flags(spec: ProcessorSpec, yaml: Path) -> list[str]:
 
 
 def drawn(output: OutputSpec, entity: str, topic: str) -> tuple[str, str]:
-    """(rerun entity, column) where ``view`` draws an output of the camera ``/cam``."""
+    """(rerun entity, column) where ``view`` draws an output of the camera ``/cam``: its lens
+    is distorted, so overlays of its raw image are drawn in its raw space, ``raw/cam``
+    (``world/cam`` is its pinhole view)."""
     base = topic.removesuffix("/compressed").strip("/")
     return {
         Display.IMAGE: (f"/processed/{base}/image", "Image:buffer"),
         Display.RECTIFIED: (f"/rectified/{base}/image", "Image:buffer"),
-        Display.MASK: (f"/world/cam/{entity}", "SegmentationImage:buffer"),
-        Display.EDGES: (f"/world/cam/{entity}", "SegmentationImage:buffer"),
-        Display.POINT_2D: (f"/world/cam/{entity}", "Points2D:positions"),
+        Display.MASK: (f"/raw/cam/{entity}", "SegmentationImage:buffer"),
+        Display.EDGES: (f"/raw/cam/{entity}", "SegmentationImage:buffer"),
+        Display.POINT_2D: (f"/raw/cam/{entity}", "Points2D:positions"),
         Display.SCALAR: (f"/metrics/{entity}/cam", "Scalars:scalars"),
         Display.POINT_SERIES: (f"/metrics/points/{base}", "Scalars:scalars"),
     }[output.display]
