@@ -54,9 +54,14 @@ def test_the_tables_say_what_was_measured() -> None:
                                "joint_views": 300},
                       "estimated": {"baseline_error_percent": 0.012,
                                     "rotation_error_deg": 0.005, "joint_views": 290},
-                      "stamps": {}}])
-    assert any(line == "| true stamps | 1 of 1 | 0.010 | 0.0040 | 300 |" for line in rig)
-    assert any(line.endswith("| 0 of 1 | | | |") for line in rig)
+                      "stamps": {"why_not": "camlog calibrate: error: no joint view"},
+                      "opencv_stamps": {"baseline_error_percent": 60.0,
+                                        "rotation_error_deg": 3.5, "joint_views": 40}}])
+    assert any(line == "| camlog, true stamps | 1 of 1 | 0.010 | 0.0040 | 300 |" for line in rig)
+    assert any(line.endswith("| 0 of 1: no joint view | | | |") for line in rig)
+    assert any(line.endswith("paired by stamps | 1 of 1 | 60.000 | 3.5000 | 40 |") for line in rig)
+    assert any(line.endswith("OpenCV stereoCalibrate, true stamps | 0 of 1 | | | |")
+               for line in rig)
 
 
 def test_a_run_resumes_from_its_kept_results(tmp_path: Path) -> None:

@@ -155,6 +155,18 @@ def test_a_pair_from_two_board_poses_is_rejected(
     assert not joint.rejected and list(joint.split) == [mixed_pair[1]]
 
 
+def test_no_joint_view_left_says_the_pairs_were_not_simultaneous(
+        rig: tuple[list[np.ndarray], list[np.ndarray]]) -> None:
+    left, right = rig
+    mixed = list(right)
+    mixed[4] = right[5]
+    joint, _out = solve(left, mixed)
+    with pytest.raises(ProcessorError, match=r"no joint stereo view: every pair left the rig "
+                       r"as not simultaneous: the board moved [0-9.]+ mm .*--time-offset auto"):
+        stereo_result(joint, [pairs(len(left))[4]], points_in_board=BOARD.points_in_board(),
+                      square_m=BOARD.square_m)
+
+
 def test_right_views_numbered_from_the_other_end_are_turned_back(
     rig: tuple[list[np.ndarray], list[np.ndarray]]
 ) -> None:
