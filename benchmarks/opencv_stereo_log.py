@@ -59,15 +59,16 @@ def frames(path: Path, topic: str) -> list[tuple[int, np.ndarray]]:
     return out
 
 
-def corners(images: list[tuple[int, np.ndarray]], size: tuple[int, int]
-            ) -> list[tuple[int, np.ndarray | None]]:
-    """Per frame, its stamp and the board's corners ``(N, 2)`` (None: not found)."""
+def corners(images: list[tuple[int, np.ndarray]], size: tuple[int, int], *,
+            window: tuple[int, int] = (11, 11)) -> list[tuple[int, np.ndarray | None]]:
+    """Per frame, its stamp and the board's corners ``(N, 2)`` (None: not found), refined by
+    ``cornerSubPix`` in ``window`` (half sizes, px)."""
     criteria = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 30, 0.001)
     out: list[tuple[int, np.ndarray | None]] = []
     for stamp, gray in images:
         found, points = cv2.findChessboardCorners(gray, size)
         if found:
-            points = cv2.cornerSubPix(gray, points, (11, 11), (-1, -1), criteria).reshape(-1, 2)
+            points = cv2.cornerSubPix(gray, points, window, (-1, -1), criteria).reshape(-1, 2)
             if points[0, 1] > points[-1, 1]:  # OpenCV may start from either end of the board
                 points = points[::-1].copy()
         out.append((stamp, points if found else None))

@@ -18,7 +18,7 @@ Three cases, each over many seeds:
   their stamps (``resync``: every left frame with the right frame stamped nearest, then
   calibrated as one instant each); and, for what the stamps cost a solver that trusts them,
   ``cv2.stereoCalibrate`` of the late and the true logs' stamp pairs, intrinsics fixed at the
-  truth (:func:`opencv_rig`): the baseline's and the rotation's error against the truth,
+  truth (:func:`opencv_rigs`): the baseline's and the rotation's error against the truth,
   medians over the seeds.
 
 A latency changes nothing but stamps (the recorder draws no random number for it: the same
@@ -63,6 +63,9 @@ RIG_OFFSET_MS = 17.0
 #: pairs spread over the log that the OpenCV rig is solved from (its dense solve grows with
 #: the cube of the views)
 OPENCV_PAIRS = 40
+#: ``cornerSubPix``'s window (half sizes, px) for the OpenCV rig: a square of the board at
+#: 320x240 spans about 10 px
+OPENCV_WINDOW = (4, 4)
 #: the natural case's rig motion, as multiples of the scenario's, cycled over the seeds
 MOTION_SCALES = (0.25, 0.5, 1.0, 1.5)
 DURATION_S = {"board": 8.0, "natural": 6.0}
@@ -256,9 +259,15 @@ def calibrate_rig(seed: int, cache: Path) -> dict[str, Any]:
         out["stamps"] = _rig_errors(_calibrated(
             synced, folder / "stamps", "--left", "/stereo_sync/left", "--right",
             "/stereo_sync/right", "--time-offset", "off"))
-    out["opencv_true"] = opencv_rig(true)
-    out["opencv_stamps"] = opencv_rig(late)
     return out
+
+
+def opencv_rigs(seed: int, cache: Path) -> dict[str, Any]:
+    """The rig of one seed as ``cv2.stereoCalibrate`` finds it from the stamp pairs of the
+    log with true stamps and of the log stamped late (:func:`opencv_rig`)."""
+    return {"key": f"opencv-s{seed}",
+            "opencv_true": opencv_rig(recording(Case("board", seed, 0.0), cache)),
+            "opencv_stamps": opencv_rig(recording(Case("board", seed, RIG_OFFSET_MS), cache))}
 
 
 def opencv_rig(log: Path) -> dict[str, float]:
@@ -279,13 +288,18 @@ def opencv_rig(log: Path) -> dict[str, float]:
     (left_truth,) = [c for c in record.cameras if c.namespace == LEFT]
     (right_truth,) = [c for c in record.cameras if c.namespace == RIGHT]
     size = (7, 6)
-    left = corners(frames(log, f"{LEFT}/image_raw"), size)
-    right = corners(frames(log, f"{RIGHT}/image_raw"), size)
+    left = corners(frames(log, f"{LEFT}/image_raw"), size, window=OPENCV_WINDOW)
+    right = corners(frames(log, f"{RIGHT}/image_raw"), size, window=OPENCV_WINDOW)
     right_ns = np.array([stamp for stamp, _ in right], dtype=np.int64)
     pairs = []
     for stamp, left_px in left:
         right_px = right[int(np.argmin(np.abs(right_ns - stamp)))][1]
         if left_px is not None and right_px is not None:
+            # numbered from the end nearer the left view's first corner (a board turned
+            # across the vertical is numbered from either end)
+            flipped = right_px[::-1]
+            if np.abs(flipped - left_px).sum() < np.abs(right_px - left_px).sum():
+                right_px = flipped
             pairs.append((left_px.astype(np.float32), right_px.astype(np.float32)))
     pairs = pairs[::max(1, len(pairs) // OPENCV_PAIRS)]
     board = np.zeros((size[0] * size[1], 3), np.float32)
@@ -436,9 +450,12 @@ def run(*, seeds: int, cases: list[str], cache: Path, keep: Path, write_docs: bo
             natural_figure(results, FIGURE)
     if "rig" in cases:
         rig_seeds = range(FIRST_SEED, FIRST_SEED + seeds)
-        results = list(_results([f"rig-s{s}" for s in rig_seeds],
-                                lambda key: calibrate_rig(int(key.split("-s")[1]), cache),
-                                keep))
+        rigs = _results([f"rig-s{s}" for s in rig_seeds],
+                        lambda key: calibrate_rig(int(key.split("-s")[1]), cache), keep)
+        peers = _results([f"opencv-s{s}" for s in rig_seeds],
+                         lambda key: opencv_rigs(int(key.split("-s")[1]), cache), keep)
+        results = [{**camlog_rigs, **opencv, "key": camlog_rigs["key"]}
+                   for camlog_rigs, opencv in zip(list(rigs), list(peers), strict=True)]
         tables["time_offset_rig"] = rig_table(results)
         print("\n".join(tables["time_offset_rig"]))
     if write_docs:
