@@ -188,11 +188,12 @@ def stereo_result(joint: JointResult, pairs: list[tuple[int, int]], *,
     if not used:
         apart = [why for why in rejected.values() if why.startswith("not simultaneous")]
         if apart:
+            which = "every pair" if len(apart) == len(pairs) else \
+                f"{len(apart)} pair{'s' if len(apart) > 1 else ''}"
             raise ProcessorError(
-                f"no joint stereo view: {'every' if len(apart) == len(pairs) else len(apart)} "
-                f"pair{'s' if len(apart) > 1 else ''} left the rig as {apart[0]} (the "
-                "cameras' stamps are apart from their exposures: measure the offset, "
-                "--time-offset auto)")
+                f"no joint stereo view: {which} left the rig as {apart[0]} (the cameras' "
+                "stamps are apart from their exposures: measure the offset, --time-offset "
+                "auto)")
         raise ProcessorError("no joint stereo view: both cameras must see the board at the "
                              "same time")
     rectified = RectifiedPair(left_model, right_model, r1, p1, r2, p2)
