@@ -14,6 +14,7 @@ from benchmarks.time_offset import (
     _results,
     _spec,
     offset_table,
+    opencv_rig,
     restamped,
     rig_table,
     row_speed_px_s,
@@ -107,3 +108,21 @@ def test_a_restamped_copy_is_what_the_recorder_writes_with_a_latency(tmp_path: P
             return out
 
     assert contents(copy) == contents(late)
+
+
+@pytest.mark.slow
+def test_the_opencv_rig_is_the_truth_with_true_stamps_and_far_off_with_late_ones(
+        tmp_path: Path) -> None:
+    """The harness's plain OpenCV rig: from true stamps within a tenth of the late pairs'
+    error (corners numbered alike in both cameras, refined in a window that fits a square)."""
+    true = tmp_path / "true.mcap"
+    assert main(["record", str(_spec(Case("board", 1, 0.0), tmp_path)), "-o", str(true),
+                 "--seed", "1", "--duration", "2", "--resolution", "320x240",
+                 "--no-progress"]) == 0
+    late = tmp_path / "late.mcap"
+    restamped(true, late, camera="right", latency_ms=17.0)
+    good, bad = opencv_rig(true), opencv_rig(late)
+    assert good["joint_views"] > 20 and bad["joint_views"] > 20
+    assert good["baseline_error_percent"] < 0.5 and good["rotation_error_deg"] < 0.05
+    assert bad["baseline_error_percent"] > 10 * good["baseline_error_percent"]
+    assert bad["rotation_error_deg"] > 10 * good["rotation_error_deg"]
