@@ -94,17 +94,18 @@ def test_a_restamped_copy_is_what_the_recorder_writes_with_a_latency(tmp_path: P
 
     def contents(path: Path) -> list[tuple[str, int, object]]:
         with open_reader(path) as reader:
-            out = []
+            out: list[tuple[str, int, object]] = []
             for raw in reader.raw_messages():
                 message = reader.decode(raw)
+                seen: object
                 if raw.topic == SCENARIO:
                     record = Scenario.from_message(message)
-                    message = (record.latencies, [c.dropped_frames for c in record.cameras])
+                    seen = (record.latencies, [c.dropped_frames for c in record.cameras])
                 elif isinstance(message, Image):
-                    message = (message.stamp_ns, message.pixels.tobytes())
+                    seen = (message.stamp_ns, message.pixels.tobytes())
                 else:
-                    message = repr(message)
-                out.append((raw.topic, raw.log_time_ns, message))
+                    seen = repr(message)
+                out.append((raw.topic, raw.log_time_ns, seen))
             return out
 
     assert contents(copy) == contents(late)
