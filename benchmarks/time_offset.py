@@ -41,6 +41,7 @@ import dataclasses
 import io
 import json
 import math
+import re
 import tempfile
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -54,6 +55,7 @@ from camlog.cli import main as camlog
 from recorder.record import RIG_STREAM, rng_for
 from recorder.rig_motion import plan_rig_path
 from recorder.scenario import load_scenario
+from replay.atomic import write_bytes_atomic
 from replay.records import TimeOffset
 
 from .docs import PAGE, add_write_docs, markdown_table, write_table
@@ -193,6 +195,15 @@ def row_speed_px_s(case: Case) -> float:
         turn = a[:3, :3].T @ b[:3, :3]
         rates.append((turn[2, 1] - turn[1, 2]) / 2 / 1e-3)  # rad/s about x
     return float(focal * math.sqrt(np.mean(np.square(rates))))
+
+
+def case_of(key: str) -> Case:
+    """The case a result's key names (:attr:`Case.key`)."""
+    found = re.fullmatch(r"(?P<kind>[a-z]+)-s(?P<seed>\d+)-o(?P<offset>[-+][\d.]+)-x[\d.]+",
+                         key)
+    if found is None:
+        raise ValueError(f"not a case's key: {key!r}")
+    return Case(found["kind"], int(found["seed"]), float(found["offset"]))
 
 
 def _spec_name(case: Case) -> str:
@@ -394,11 +405,15 @@ def rig_table(results: list[dict[str, Any]]) -> list[str]:
 
 def natural_figure(results: list[dict[str, Any]], path: Path) -> None:
     """|error| of each natural-scene log against its features' speed across the rows
-    (log-log), one colour per offset."""
+    (log-log), one colour per offset (an offset's ring drawn around the next one's: one
+    seed's offsets often err alike), crossed at the floor where the log did not show it."""
     width, height, margin = 720, 420, 70
     img = np.full((height, width, 3), 255, np.uint8)
-    measured = [r for r in results if "error_ms" in r and r.get("row_speed_px_s")]
+    measured = sorted((r for r in results if "error_ms" in r and r.get("row_speed_px_s")),
+                      key=lambda r: OFFSETS_MS.index(case_of(r["key"]).offset_ms))
+    unobserved = [row_speed_px_s(case_of(r["key"])) for r in results if "why_not" in r]
     colours = [(200, 90, 40), (40, 160, 40), (40, 40, 220), (160, 40, 160), (20, 140, 200)]
+    grey = (120, 120, 120)
     xs = (1.0, 1000.0)  # px/s
     ys = (1e-4, 10.0)  # ms
 
@@ -409,29 +424,36 @@ def natural_figure(results: list[dict[str, Any]], path: Path) -> None:
         return (int(margin + u * (width - 2 * margin)),
                 int(height - margin - v * (height - 2 * margin)))
 
+    def text(words: str, at: tuple[int, int], scale: float = 0.4) -> None:
+        cv2.putText(img, words, at, cv2.FONT_HERSHEY_SIMPLEX, scale, (0, 0, 0), 1, cv2.LINE_AA)
+
+    def dot(centre: tuple[int, int], index: int) -> None:
+        cv2.circle(img, centre, 3 + 2 * (len(OFFSETS_MS) - 1 - index), colours[index], -1,
+                   cv2.LINE_AA)
+
     cv2.rectangle(img, (margin, margin), (width - margin, height - margin), (0, 0, 0), 1)
     for decade in range(4):
-        x, _ = to_px(10.0 ** decade, 1.0)
-        cv2.putText(img, f"{10 ** decade:g}", (x - 10, height - margin + 18),
-                    cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 1, cv2.LINE_AA)
+        text(f"{10 ** decade:g}", (to_px(10.0 ** decade, 1.0)[0] - 10, height - margin + 18))
     for power in range(-4, 2):
-        _, y = to_px(1.0, 10.0 ** power)
-        cv2.putText(img, f"{10.0 ** power:g}", (8, y + 4), cv2.FONT_HERSHEY_SIMPLEX, 0.4,
-                    (0, 0, 0), 1, cv2.LINE_AA)
+        text(f"{10.0 ** power:g}", (8, to_px(1.0, 10.0 ** power)[1] + 4))
     for r in measured:
-        offset = float(r["key"].split("-o")[1].split("-")[0])
-        colour = colours[OFFSETS_MS.index(offset)]
-        cv2.circle(img, to_px(r["row_speed_px_s"], abs(r["error_ms"])), 4, colour, -1,
+        dot(to_px(r["row_speed_px_s"], abs(r["error_ms"])),
+            OFFSETS_MS.index(case_of(r["key"]).offset_ms))
+    for speed in unobserved:
+        x, y = to_px(max(speed, xs[0]), ys[0])
+        cv2.drawMarker(img, (x, y - 6), grey, cv2.MARKER_TILTED_CROSS, 9, 1, cv2.LINE_AA)
+    text("natural features: |offset error| (ms) against the rig's row speed (px/s)",
+         (margin, 40), 0.5)
+    for i, offset in enumerate(OFFSETS_MS):  # the legend, in the plot's upper left
+        dot((margin + 16, margin + 18 + 22 * i), i)
+        text(f"{offset:+g} ms late", (margin + 34, margin + 22 + 22 * i))
+    legend_y = margin + 18 + 22 * len(OFFSETS_MS)
+    cv2.drawMarker(img, (margin + 16, legend_y), grey, cv2.MARKER_TILTED_CROSS, 9, 1,
                    cv2.LINE_AA)
-    cv2.putText(img, "natural features: |offset error| (ms) vs the rig's row speed (px/s)",
-                (margin, 40), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 1, cv2.LINE_AA)
-    for i, offset in enumerate(OFFSETS_MS):
-        cv2.circle(img, (width - margin + 10, margin + 14 + 18 * i), 4, colours[i], -1)
-        cv2.putText(img, f"{offset:+g} ms", (width - margin + 18, margin + 18 + 18 * i),
-                    cv2.FONT_HERSHEY_SIMPLEX, 0.4, (0, 0, 0), 1, cv2.LINE_AA)
+    text("not observable", (margin + 34, legend_y + 4))
     ok, png = cv2.imencode(".png", img)
     assert ok
-    path.write_bytes(png.tobytes())
+    write_bytes_atomic(path, png.tobytes())
     print(f"wrote {path}", flush=True)
 
 

@@ -13,6 +13,7 @@ from benchmarks.time_offset import (
     Case,
     _results,
     _spec,
+    case_of,
     offset_table,
     opencv_rig,
     restamped,
@@ -40,6 +41,8 @@ def test_the_natural_case_scales_the_rig_motion(tmp_path: Path) -> None:
     speeds = [row_speed_px_s(Case("natural", seed, 0.0)) for seed in (4, 5, 7)]
     assert speeds[0] > 0 and speeds[2] / speeds[0] == pytest.approx(1.5 / 0.25, rel=0.05)
     assert Case("board", 0, 3.0).key == "board-s0-o+3-x1"
+    for case in (Case("natural", 1004, -10.0), Case("board", 3, 17.0), fast):
+        assert case_of(case.key) == case
 
 
 def test_the_tables_say_what_was_measured() -> None:
