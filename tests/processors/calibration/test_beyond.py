@@ -3,9 +3,20 @@ and the worst uncertainty there."""
 
 from __future__ import annotations
 
-import numpy as np
+import math
 
+import numpy as np
+import pytest
+
+from processors.calibration import beyond
 from processors.calibration.beyond import beyond_boards, parts, reached
+from processors.calibration.joint import BoardView, JointResult, calibrate_cameras
+from processors.calibration.model_order import OrderChoice
+from processors.calibration.options import CalibrationOptions
+
+from . import synthetic
+
+POINTS = synthetic.BOARD.points_in_board()
 
 SIZE = (300, 200)
 
@@ -48,3 +59,43 @@ def test_the_worst_uncertainty_beyond_the_boards() -> None:
     everywhere = reached(SIZE, [np.array([[0.0, 0.0], [299.0, 0.0], [299.0, 199.0],
                                           [0.0, 199.0]])])
     assert beyond_boards(pixels, sigma, everywhere) is None
+
+
+def _k1_k2_chosen() -> tuple[list[OrderChoice | None], list[CalibrationOptions], JointResult,
+                             list[BoardView]]:
+    """A lens with k3 seen by views the cross-validation judged to need k1 k2 only."""
+    lens = synthetic.true_model(np.array([-0.25, 0.08, 0.0, 0.0, -0.05]))
+    poses = synthetic.random_poses(np.random.default_rng(3), 15, [lens])
+    views = [BoardView(0, i, np.arange(len(POINTS)), c)
+             for i, c in enumerate(synthetic.views(lens, poses, 0.05, 4))]
+    ladder = [CalibrationOptions(k_coefficients=k, tangential="zero") for k in (2, 3)]
+    order = OrderChoice(ladder, [np.ones(15), np.ones(15)], [], 0, 5)
+    joint = calibrate_cameras(POINTS, views, [(synthetic.W, synthetic.H)], ladder[:1])
+    return [order], ladder[:1], joint, views
+
+
+@pytest.mark.parametrize("ratio", [0.0, math.inf])
+def test_k3_is_kept_where_k1_k2_do_not_hold_their_figure(monkeypatch: pytest.MonkeyPatch,
+                                                          ratio: float) -> None:
+    monkeypatch.setattr(beyond, "BEYOND_RATIO", ratio)
+    orders, wanted, joint, views = _k1_k2_chosen()
+    after, options, solved = beyond.k3_beyond_the_views(
+        POINTS, views, [(synthetic.W, synthetic.H)], wanted=wanted, orders=orders, joint=joint)
+    (order,) = after
+    assert order is not None and order.beyond_ratio is not None and order.beyond_px is not None
+    assert order.beyond_ratio > 0 and order.beyond_px > 0
+    if ratio == 0.0:  # kept: the k3 fit is the solution
+        assert order.options.radial_count == 3 and options[0].radial_count == 3
+        assert solved.models[0].d[4] != 0.0 and "k3 kept" in order.describe()
+    else:  # k1 k2 kept, the k3 fit their left-out model
+        assert order.options.radial_count == 2 and solved is joint
+        (left_out,) = solved.left_out_models
+        assert left_out is not None and left_out.d[4] != 0.0
+        assert "k1 k2 kept" in order.describe()
+
+
+def test_nothing_is_set_beside_an_order_not_chosen_by_the_views() -> None:
+    _orders, wanted, joint, views = _k1_k2_chosen()
+    assert beyond.k3_beyond_the_views(POINTS, views, [(synthetic.W, synthetic.H)],
+                                      wanted=wanted, orders=[None], joint=joint) \
+        == ([None], wanted, joint)
