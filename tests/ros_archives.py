@@ -20,6 +20,7 @@ from replay import CameraInfo, Image, open_reader
 from replay.calibration_yaml import calibration_to_yaml
 from replay.records.scenario import Scenario
 from replay.topics import SCENARIO
+from tests.slow import renders
 
 from .recordings import cli, held_for
 
@@ -60,6 +61,7 @@ def render_rig(folder: Path, frames: int) -> Rendered:
 
 
 @pytest.fixture(scope="session")
+@renders
 def rendered_rig(tmp_path_factory: pytest.TempPathFactory) -> Rendered:
     """16 frames of a rendered rig (see :func:`render_rig`), once per session."""
     return render_rig(tmp_path_factory.mktemp("rendered_rig"), 16)

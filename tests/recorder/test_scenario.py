@@ -21,7 +21,8 @@ BUILTINS = sorted(p.stem for p in SCENARIO_DIR.glob("*.toml"))
 def test_builtins_are_the_shipped_specs() -> None:
     assert BUILTINS == ["mono_charuco", "mono_checkerboard", "mono_circles", "mono_fisheye",
                         "mono_heldout", "mono_moving_blur", "red_block", "stereo_checkerboard",
-                        "stereo_heldout", "stereo_unsynced"]
+                        "stereo_heldout", "stereo_moving_board", "stereo_moving_rig",
+                        "stereo_unsynced"]
     assert builtin_names() == BUILTINS
 
 
