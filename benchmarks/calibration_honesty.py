@@ -120,9 +120,8 @@ def table(figures: Sequence[SeedFigures]) -> list[str]:
         rows.append([f"`{name}`", str(len(mine)), str(len(ratios)), _share(ratios, 1.0),
                      _share(ratios, 3.0), _share(ratios, 5.0), _share(ratios[beyond], 3.0),
                      f"{statistics.median(worst):.2f}", f"{max(worst):.2f}"])
-    return markdown_table(["scenario", "seeds", "points", "within 1σ", "within 3σ",
-                           "within 5σ", "beyond the boards: within 3σ",
-                           "worst real / σ: median", "worst"], rows)
+    return markdown_table(["scenario", "seeds", "points", "≤ 1σ", "≤ 3σ", "≤ 5σ",
+                           "≤ 3σ beyond the boards", "worst real/σ: median", "worst"], rows)
 
 
 def _kept(keep: Path) -> dict[tuple[str, int], SeedFigures]:

@@ -6,7 +6,9 @@ then (when no model was named) rational_polynomial's k1..k6. The views are cut i
 views, nearly one pose, are held out together). For each block and candidate, OpenCV's
 calibration of the other views gives the intrinsics; each held-out view's board pose alone is
 then solved with them (PnP) and its mean squared reprojection error ``e(v)`` (px²) measured.
-Every view is held out once, so every candidate has one held-out error per view.
+Every view is held out once, so every candidate has one held-out error per view. Held-out
+views lie where the training views lie: when they choose k1 k2, k1 k2 k3 is also compared with
+them beyond the views (:func:`~.beyond.k3_beyond_the_views`, :data:`BEYOND_RATIO`).
 
 The ladder is climbed while each rung is taken (a bigger order is tried only when the one
 below it was needed): each rung is compared with the one below by the paired differences
