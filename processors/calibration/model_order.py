@@ -73,7 +73,9 @@ __all__ = ["BEYOND_RATIO", "EXACT_RANKS", "MAX_P_VALUE", "MIN_GAIN", "ORDER_FOLD
 ORDER_FOLDS = 5
 #: k1 k2 chosen by the views give way to k1 k2 k3 when, somewhere in the image, the two
 #: models' projections part by more than this many times k1 k2's own uncertainty: k1 k2 then
-#: do not hold their own figure beyond the views (see :func:`~.beyond.k3_beyond_the_views`)
+#: do not hold their own figure beyond the views (see :func:`~.beyond.k3_beyond_the_views`).
+#: Measured: 0.3-2.5 on a waved board through a k3 lens (7 seeds, 10 s), 1.76 at 40 s; at
+#: most 0.31 where the lens has no k3 that matters (mono_heldout, mono_moving_blur, 13 seeds)
 BEYOND_RATIO = 1.0
 #: the bigger model lowers the held-out error by at least this share ...
 MIN_GAIN = 0.01
