@@ -283,6 +283,9 @@ class TimeOffsetSummary:
     measured: TimeOffset | None = field(default=None, metadata=OMIT_NONE)
     truth_ms: float | None = field(default=None, metadata=OMIT_NONE)
     error_ms: float | None = field(default=None, metadata=OMIT_NONE)
+
+
+@dataclass(frozen=True)
 class LogCalibration:
     """The calibration the log carries (its camera_info: an imported camera_calibration
     archive's result, a driver's factory values) beside camlog's, on the views camlog used:
