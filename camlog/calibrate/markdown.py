@@ -90,7 +90,8 @@ def _camera_lines(camera: CameraSummary) -> list[str]:
         if u.left_out_worst_px is not None:
             lines.append(
                 "These figures include what the lens model leaves out: its projections differ "
-                "from those of the model fitted with the tangential terms (p1 p2) by up to "
+                "from those of the model fitted with the terms it left out (p1 p2 the "
+                "tangential test dropped, k3 beside the k1 k2 the views chose) by up to "
                 f"{u.left_out_worst_px:.3f} px, added in quadrature.")
         if u.beyond_boards_line is not None:
             lines.append(u.beyond_boards_line[0].upper() + u.beyond_boards_line[1:] + ".")

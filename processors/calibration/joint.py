@@ -80,8 +80,9 @@ class JointResult:
     warp_choice: WarpChoice | None = None  # the warp's cross-validation (board_warp "auto")
     split: dict[int, str] = field(default_factory=dict)  # view index -> why
     #: per camera, the model fitted with the terms its tangential test left out (p1 p2), when
-    #: it left them out: how far the chosen model's projections are from it is part of their
-    #: uncertainty (the covariance of a model cannot see a term it does not have)
+    #: it left them out (or the k1 k2 k3 fit, :func:`~.beyond.k3_beyond_the_views`): how far
+    #: the chosen model's projections are from it is part of their uncertainty (the covariance
+    #: of a model cannot see a term it does not have)
     left_out_models: list[CameraModel | None] = field(default_factory=list)
 
     @property

@@ -250,7 +250,8 @@ class UncertaintySummary:
     aligned_true_error_median_px: float | None = field(default=None, metadata=OMIT_NONE)
     aligned_true_error_worst_px: float | None = field(default=None, metadata=OMIT_NONE)
     #: the largest projection difference (px) from the model fitted with the terms the
-    #: calibration left out (p1 p2 its tangential test dropped), included in the figures above
+    #: calibration left out (p1 p2 its tangential test dropped, k3 beside the k1 k2 the views
+    #: chose), included in the figures above
     left_out_worst_px: float | None = field(default=None, metadata=OMIT_NONE)
     #: where no board reached (extrapolated): the largest uncertainty there (1 sigma, px, the
     #: worse of the working range and rays), the share of the image grid and its parts
