@@ -172,7 +172,9 @@ class CameraDrawing:
             return
         self._times(raw, stamp)
         content = stamp_free_view(raw.data)
-        if cam.lens is None and cam.plan.info is not None:  # before its first camera_info
+        # before its first camera_info; a pinhole camera has no lens to go through (no view,
+        # no content compared, its uncertainty map under its own Pinhole)
+        if cam.lens is None and cam.plan.info is not None and cam.shown_through_views:
             cam.lens = Lens.of(cam.plan.info, cam.plan.views)
         # a view image stays until the next one: a raw image that repeats the last (a held
         # pose without sensor noise) needs none of its own

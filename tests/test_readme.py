@@ -5,9 +5,10 @@ them), in one temporary folder, and what each command says it writes (``-o OUT``
 relative link and picture resolves.
 
 A block the suite cannot run says why in a ``<!-- docs-test: skip (reason) -->`` line right
-above it. Recordings are made shorter, and a viewer is replaced by an .rrd file, through
-SMALLER: each entry must still occur in a runnable block, so a stale entry fails instead of
-silently testing nothing.
+above it. Recordings are made shorter (the 30 s calibration recordings also 320x240: they
+feed every later block, which shows the same at a quarter of the pixels), and a viewer is
+replaced by an .rrd file, through SMALLER: each entry must still occur in a runnable block,
+so a stale entry fails instead of silently testing nothing.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ CONTRIBUTING = ROOT / "CONTRIBUTING.md"
 SKIP = re.compile(r"<!-- docs-test: skip \((?P<reason>[^)]+)\) -->")
 #: docs text -> what the suite runs instead (shorter logs; files instead of a viewer)
 SMALLER = {
-    "--duration 30": "--duration 4",
+    "--duration 30": "--duration 4 --resolution 320x240",
     "--duration 10": "--duration 0.1",
     "--duration 2": "--duration 0.5",
     "--start 10 --end 20": "--start 1 --end 3",

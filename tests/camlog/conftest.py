@@ -44,10 +44,10 @@ def record(spec: Path | str, output: Path, *options: str) -> Path:
 @pytest.fixture(scope="session")
 @renders
 def rig_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """stereo_checkerboard, 330 frames per camera: 110 poses seen by an ideal 0.02 m rig."""
+    """stereo_checkerboard, 240 frames per camera: 80 poses seen by an ideal 0.02 m rig."""
     tmp = tmp_path_factory.mktemp("rig")
     spec = spec_variant("stereo_checkerboard", tmp, {HOLD: "hold_s = 0.1"})
-    return record(spec, tmp / "rig.mcap", "--frames", "330")
+    return record(spec, tmp / "rig.mcap", "--frames", "240")
 
 
 @pytest.fixture(scope="session")

@@ -262,6 +262,9 @@ def test_jpeg_images_of_a_distorted_camera_are_remapped_and_an_ideal_camera_is_a
                          log_time_ns=stamp)
             writer.write("/pin/camera_info", ideal.camera_info(stamp_ns=stamp, frame_id="pin"),
                          log_time_ns=stamp)
+        writer.write("/pin/calibration/uncertainty", Image(
+            t0 + 400_000_000, "pin", "32FC1", np.full((48, 64), 0.05, np.float32)),
+            log_time_ns=t0 + 400_000_000)
     out = tmp_path / "two.rrd"
     result = view_logs([log], output=out, progress=False)
     assert (result.images, result.remapped) == (8, 4) and result.warnings == []
@@ -275,3 +278,5 @@ def test_jpeg_images_of_a_distorted_camera_are_remapped_and_an_ideal_camera_is_a
     assert not [e for e in rec.rows if e.startswith(("/raw/pin", "/world/pin/undistorted"))]
     assert rec.entities_with(PINHOLE) == ["/world/lens/undistorted", "/world/pin"]
     assert rec.column("/world/pin", "CameraInfo:k") == [ideal.k.reshape(-1).tolist()]
+    # its calibration's uncertainty map under its own Pinhole, as for any pinhole camera
+    assert rec.count("/world/pin/calibration/uncertainty", "Image:buffer") == 1

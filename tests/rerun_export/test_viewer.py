@@ -31,7 +31,7 @@ from tests.conftest import REPO_ROOT
 from tests.rrd import Receiver, load_rrd
 
 #: how long a camlog command may take to start and read a short log, loaded or not
-STARTUP_S = 5.0
+STARTUP_S = 15.0
 
 
 def free_port() -> int:

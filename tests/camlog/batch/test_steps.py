@@ -16,7 +16,7 @@ from replay import open_reader
 from tests.camlog.conftest import record, spec_variant
 from tests.slow import renders
 
-FRAMES = 90
+FRAMES = 60
 PIPELINE = """
 [[steps]]
 run = "calibrate"
@@ -49,7 +49,7 @@ format = "jpg"
 @pytest.fixture(scope="module")
 @renders
 def charuco_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    """mono_charuco (rational_polynomial lens), 90 frames at 640x480: 30 poses."""
+    """mono_charuco (rational_polynomial lens), 60 frames at 640x480: 20 poses."""
     tmp = tmp_path_factory.mktemp("charuco_batch")
     spec = spec_variant("mono_charuco", tmp, {"hold_s = 0.25": "hold_s = 0.1"})
     return record(spec, tmp / "charuco.mcap", "--frames", str(FRAMES))
