@@ -33,6 +33,7 @@ TABLES = {
     "peers_growth": "python -m benchmarks.peers --runs 0 --growth 4,40,400 --write-docs",
     "calibration_accuracy": "python -m benchmarks.calibrate_speed --write-docs",
     "vs_mrcal": "python -m benchmarks.vs_mrcal --write-docs",
+    "calibration_honesty": "python -m benchmarks.calibration_honesty --write-docs",
     "corpus": "python -m benchmarks.corpus.run --write-docs",
     "time_offset_board": "python -m benchmarks.time_offset --cases board --write-docs",
     "time_offset_natural": "python -m benchmarks.time_offset --cases natural --write-docs",

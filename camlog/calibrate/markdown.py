@@ -87,6 +87,14 @@ def _camera_lines(camera: CameraSummary) -> list[str]:
             "standard deviation in the worst direction, from the covariance of every "
             "parameter and board pose (mrcal's method); for points far away (rays) "
             f"{u.rays_median_px:.3f} px and {u.rays_worst_px:.3f} px.")
+        if u.left_out_worst_px is not None:
+            lines.append(
+                "These figures include what the lens model leaves out: its projections differ "
+                "from those of the model fitted with the terms it left out (p1 p2 the "
+                "tangential test dropped, k3 beside the k1 k2 the views chose) by up to "
+                f"{u.left_out_worst_px:.3f} px, added in quadrature.")
+        if u.beyond_boards_line is not None:
+            lines.append(u.beyond_boards_line[0].upper() + u.beyond_boards_line[1:] + ".")
         if u.cross_validation_worst_px is not None:
             lines.append(
                 "Cross-validation: two halves of the evidence (every other board point of "

@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from processors.calibration.beyond import k3_beyond_the_views
 from processors.calibration.board import Board
 from processors.calibration.holds import Seen
 from processors.calibration.joint import (
@@ -266,6 +267,9 @@ def solve_rig(cameras: list[CameraViews], board: Board, options: CalibrationOpti
         joint = calibrate_cameras(points, rig.views, sizes, chosen, seeds=joint.models,
                                   disc_diameter_m=disc_diameter_m)
         again = [measured_again_text(before, rig, first, joint, c) for c in range(len(cameras))]
+    orders, chosen, joint = k3_beyond_the_views(points, rig.views, sizes, wanted=chosen,
+                                                orders=orders, joint=joint,
+                                                disc_diameter_m=disc_diameter_m)
     stereo, pairs = None, []
     if as_rig or len(cameras) > 2:
         pairs = rig_pairs(joint, rig, points_in_board=points, square_m=board.square_m)

@@ -17,8 +17,16 @@ from __future__ import annotations
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
-from processors.calibration.uncertainty import UncertaintyMap, projection_uncertainty
-from processors.calibration.validation import CrossValidation, cross_validate
+from processors.calibration.uncertainty import (
+    UncertaintyMap,
+    projection_uncertainty,
+    with_left_out,
+)
+from processors.calibration.validation import (
+    CrossValidation,
+    cross_validate,
+    projection_difference,
+)
 from replay.messages import F64
 
 from .solving import RigSolution
@@ -43,6 +51,10 @@ class CameraStatistics:
     uncertainty: UncertaintyMap
     rays_uncertainty: UncertaintyMap
     cross_validation: CrossValidation | None
+    #: ``(rows, cols)`` at the maps' pixels: the projection difference of the model from the
+    #: one with the terms its tangential test left out, included in both maps (None: none left
+    #: out)
+    left_out_px: F64 | None = None
 
     @property
     def cross_validation_px(self) -> float | None:
@@ -75,5 +87,15 @@ def camera_statistics(solved: RigSolution, *, points_in_board: F64) -> list[Came
                  projection_uncertainty(joint.problem, index, range_m=FAR_M))
                 for index in range(len(sizes))]
     validation = halves.result()
-    return [CameraStatistics(*pair, validation[index] if validation is not None else None)
-            for index, pair in enumerate(maps)]
+    out = []
+    for index, (near, far) in enumerate(maps):
+        richer = joint.left_out_models[index] if joint.left_out_models else None
+        if richer is None:
+            out.append(CameraStatistics(
+                near, far, validation[index] if validation is not None else None))
+            continue
+        left_out = projection_difference(joint.models[index], richer, near.pixels)
+        out.append(CameraStatistics(
+            with_left_out(near, left_out), with_left_out(far, left_out),
+            validation[index] if validation is not None else None, left_out))
+    return out

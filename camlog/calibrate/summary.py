@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from processors.calibration.beyond import beyond_boards, reached
 from processors.calibration.board import Board
 from processors.calibration.joint import JointResult
 from processors.calibration.model_order import OrderChoice, order_label
@@ -138,12 +139,19 @@ def _uncertainty(camera: CalibratedCamera, statistics: CameraStatistics, solved:
                 median, worst = _median_worst(error)
                 true[f"{prefix}true_error_median_px"] = median
                 true[f"{prefix}true_error_worst_px"] = worst
+    beyond = beyond_boards(u.pixels, np.fmax(u.sigma_px, far.sigma_px),
+                           reached(camera.views.size, solved.used_corners(camera)))
+    left_out = statistics.left_out_px
     return records.UncertaintySummary(
         range_m=u.range_m, median_px=u.median_px, worst_px=u.worst_px,
         rays_median_px=far.median_px, rays_worst_px=far.worst_px,
         cross_validation_median_px=validation.median_px if validation is not None else None,
         cross_validation_worst_px=validation.worst_px if validation is not None else None,
-        **true)
+        **true,
+        left_out_worst_px=float(np.nanmax(left_out)) if left_out is not None else None,
+        beyond_boards_px=beyond.worst_px if beyond is not None else None,
+        beyond_boards_share=beyond.share if beyond is not None else None,
+        beyond_boards_where=beyond.where if beyond is not None else None)
 
 
 def _camera(camera: CalibratedCamera, statistics: CameraStatistics, solved: RigSolution, *,

@@ -90,6 +90,8 @@ def run(args: argparse.Namespace) -> int:
             print(f"  projection uncertainty at {u.range_m:.3f} m: median {u.median_px:.3f} px, "
                   f"worst {u.worst_px:.3f} px; rays {u.rays_median_px:.3f} / "
                   f"{u.rays_worst_px:.3f} px (1 sigma){_truth_error(camera)}")
+            if u.beyond_boards_line is not None:
+                print(f"  {u.beyond_boards_line}")
         if camera.max_projection_difference_vs_truth_px is not None:
             print(f"  vs simulator truth: max projection difference "
                   f"{camera.max_projection_difference_vs_truth_covered_aligned_px:.3f} px "

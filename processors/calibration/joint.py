@@ -79,6 +79,11 @@ class JointResult:
     rounds: int = 0
     warp_choice: WarpChoice | None = None  # the warp's cross-validation (board_warp "auto")
     split: dict[int, str] = field(default_factory=dict)  # view index -> why
+    #: per camera, the model fitted with the terms its tangential test left out (p1 p2), when
+    #: it left them out (or the k1 k2 k3 fit, :func:`~.beyond.k3_beyond_the_views`): how far
+    #: the chosen model's projections are from it is part of their uncertainty (the covariance
+    #: of a model cannot see a term it does not have)
+    left_out_models: list[CameraModel | None] = field(default_factory=list)
 
     @property
     def board_warp_m(self) -> tuple[F64, F64] | None:
@@ -180,6 +185,7 @@ def calibrate_cameras(points_in_board: F64, views: list[BoardView],
         chi2 = (without.cost - problem.cost) / problem.sigma_px ** 2
         tests[camera] = TangentialTest(chi2, math.exp(-max(chi2, 0.0) / 2) < TANGENTIAL_P_VALUE)
     dropped = [c for c, t in enumerate(tests) if t is not None and not t.estimated]
+    left_out = [_model(problem, c) if c in dropped else None for c in range(cameras)]
     for camera in dropped:
         final[camera] = wanted[camera].with_tangential("zero")
     if len(dropped) == 1:  # the trial without that camera's p1, p2 is the solve wanted
@@ -199,8 +205,16 @@ def calibrate_cameras(points_in_board: F64, views: list[BoardView],
                                          warp=True)
         rounds += more
     final = [dataclasses.replace(o, board_warp="on" if warp else "off") for o in final]
-    return _result(problem, views, evidence, options=final, tests=tests, rounds=rounds,
-                   warp_choice=choice)
+    result = _result(problem, views, evidence, options=final, tests=tests, rounds=rounds,
+                     warp_choice=choice)
+    result.left_out_models = left_out
+    return result
+
+
+def _model(problem: Problem, camera: int) -> CameraModel:
+    """One camera's model in ``problem``'s state."""
+    setup = problem.layout.setups[camera]
+    return model_of(setup.distortion_model, problem.state.intrinsics[camera], setup.size)
 
 
 def _without_tangential(state: bundle.RigState, camera: int) -> bundle.RigState:

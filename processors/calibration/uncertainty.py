@@ -157,6 +157,17 @@ def projection_uncertainty(problem: Problem, camera: int, *, range_m: float | No
     return UncertaintyMap(camera, range_m, pixels, covariance, sigma)
 
 
+def with_left_out(umap: UncertaintyMap, difference_px: F64) -> UncertaintyMap:
+    """``umap`` with a model's projection difference ``difference_px`` ``(rows, cols)`` from
+    one with the terms it left out added in quadrature, in every direction (the covariance
+    gains ``d^2 I``): the parameter covariance holds the errors of the terms a model has, not
+    of the ones it lacks, so the difference the missing terms make is stated beside it."""
+    extra = np.nan_to_num(difference_px) ** 2
+    covariance = umap.covariance + extra[..., None, None] * np.eye(2)
+    return UncertaintyMap(umap.camera, umap.range_m, umap.pixels, covariance,
+                          np.sqrt(umap.sigma_px ** 2 + extra))
+
+
 def error_against(problem: Problem, camera: int, true_model: CameraModel, *,
                   true_camera_from_reference: F64, true_reference_from_board: dict[int, F64],
                   range_m: float, pixels: F64) -> F64:

@@ -249,6 +249,25 @@ class UncertaintySummary:
     rays_true_error_worst_px: float | None = field(default=None, metadata=OMIT_NONE)
     aligned_true_error_median_px: float | None = field(default=None, metadata=OMIT_NONE)
     aligned_true_error_worst_px: float | None = field(default=None, metadata=OMIT_NONE)
+    #: the largest projection difference (px) from the model fitted with the terms the
+    #: calibration left out (p1 p2 its tangential test dropped, k3 beside the k1 k2 the views
+    #: chose), included in the figures above
+    left_out_worst_px: float | None = field(default=None, metadata=OMIT_NONE)
+    #: where no board reached (extrapolated): the largest uncertainty there (1 sigma, px, the
+    #: worse of the working range and rays), the share of the image grid and its parts
+    beyond_boards_px: float | None = field(default=None, metadata=OMIT_NONE)
+    beyond_boards_share: float | None = field(default=None, metadata=OMIT_NONE)
+    beyond_boards_where: str | None = field(default=None, metadata=OMIT_NONE)
+
+    @property
+    def beyond_boards_line(self) -> str | None:
+        """``beyond the boards (corners of the image, 12 % of the image): ±0.020 px (1 sigma)
+        — hold the board there to pin it`` (None: the boards reached the whole image)."""
+        if self.beyond_boards_px is None or self.beyond_boards_share is None:
+            return None
+        return (f"beyond the boards ({self.beyond_boards_where}, "
+                f"{100 * self.beyond_boards_share:.0f} % of the image): "
+                f"±{self.beyond_boards_px:.3f} px (1 sigma) — hold the board there to pin it")
 
 
 @dataclass(frozen=True)
@@ -265,6 +284,9 @@ class TimeOffsetSummary:
     measured: TimeOffset | None = field(default=None, metadata=OMIT_NONE)
     truth_ms: float | None = field(default=None, metadata=OMIT_NONE)
     error_ms: float | None = field(default=None, metadata=OMIT_NONE)
+
+
+@dataclass(frozen=True)
 class LogCalibration:
     """The calibration the log carries (its camera_info: an imported camera_calibration
     archive's result, a driver's factory values) beside camlog's, on the views camlog used:

@@ -122,6 +122,12 @@ def test_default_drops_tangential_distortion_the_lens_does_not_have(
     assert "held at zero" in test.summary
     assert "held at zero" in (rig_left.folder / "report.md").read_text()
     assert mono_tangent.camera(LEFT).tangential.chi2 is None
+    # what the terms left out (p1 p2, and k3 beside the k1 k2 the views chose) would change
+    # is stated in the uncertainty
+    u = camera.uncertainty
+    assert u is not None and u.left_out_worst_px is not None
+    assert 0 < u.left_out_worst_px <= u.rays_worst_px
+    assert "leaves out" in (rig_left.folder / "report.md").read_text()
     # without p1, p2 to trade against, the principal point is pinned down better
     free = mono_tangent.camera(LEFT).parameters
     for name, centre in (("cx", 319.5), ("cy", 239.5)):
@@ -348,6 +354,14 @@ def test_report_and_figures(rig_left: Calibrated) -> None:
     camera = rig_left.camera(LEFT)
     report = (rig_left.folder / "report.md").read_text()
     assert "truth" in report
+    # the image corners the held boards never reached: where, and the figure there
+    u = camera.uncertainty
+    assert u is not None and u.beyond_boards_line is not None
+    assert u.beyond_boards_px is not None and u.beyond_boards_share is not None
+    assert 0 < u.beyond_boards_share < 1 and u.beyond_boards_px <= max(u.worst_px,
+                                                                      u.rays_worst_px)
+    assert "corners" in (u.beyond_boards_where or "")
+    assert u.beyond_boards_line[1:] in report
     assert camera.max_projection_difference_vs_truth_covered_px is not None
     assert f"{camera.max_projection_difference_vs_truth_covered_px:.3f} px" in report
     for name in ("fx", "cx", "k1"):

@@ -35,6 +35,12 @@ def test_the_order_is_chosen_and_reported(mono_calibration_log: Path, tmp_path: 
     assert order is not None and order.folds == 5 and order.views >= 10
     assert order_label(order.options) == "plumb_bob k1 k2"  # the lens has no k3
     assert run.solved.joint.options[0].radial_count == 2
+    # nor beyond the views: k1 k2 hold their figure there, and k3's fit is what they leave out
+    assert order.beyond_ratio is not None and order.beyond_ratio <= 1.0
+    (left_out,) = run.solved.joint.left_out_models
+    assert left_out is not None and left_out.d[4] != 0.0
+    u = run.summary.cameras[0].uncertainty
+    assert u is not None and u.left_out_worst_px is not None
     written = json.loads((tmp_path / "auto" / "calibration.json").read_text())
     camera = written["cameras"][0]
     assert camera["lens_order"]["chosen"] == "plumb_bob k1 k2"

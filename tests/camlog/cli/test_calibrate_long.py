@@ -96,6 +96,8 @@ def write_log(path: Path) -> None:
 #: what camlog itself prints for a mono calibration
 OWN_LINES = [r"/cam: \d+ views \(.*\), RMS [\d.]+ px", r"  fx [\d.]+ ± [\d.]+  fy .*",
              r"  lens model .*", r"  tangential distortion .*", r"  projection uncertainty .*",
+             r"  beyond the boards \(.*\): ±[\d.]+ px \(1 sigma\) — hold the board there to pin it",
+             r"  vs the log's /cam/camera_info: .*",
              r"board (held flat|estimated|warp) .*", r"wrote .* in [\d.]+ s"]
 
 

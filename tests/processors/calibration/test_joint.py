@@ -188,3 +188,20 @@ def test_threshold_grows_slowly_with_the_data() -> None:
     # one false rejection expected in two data sets of pure noise
     n = 10_000
     assert n * math.exp(-threshold_sigma(n) ** 2 / 2) == pytest.approx(0.5)
+
+
+def test_the_model_with_the_tangential_terms_left_out_is_kept_beside() -> None:
+    """A lens with a little tangential distortion the test leaves out: the fit with p1 p2 is
+    kept beside the result (its difference is stated as uncertainty); with p1 p2 estimated
+    nothing is left out."""
+    lens = true_model(np.array([-0.2, 0.05, 0.0002, -0.0001, 0.0]))
+    observed, _poses = board_views([lens], 12, noise_px=0.2)
+    result = calibrate_cameras(POINTS, observed, [(W, H)], CalibrationOptions())
+    test = result.tangential_tests[0]
+    assert test is not None and not test.estimated
+    (richer,) = result.left_out_models
+    assert richer is not None and result.models[0].d[2] == 0.0 and richer.d[2] != 0.0
+    assert abs(richer.fx - result.models[0].fx) < 5.0
+    given = calibrate_cameras(POINTS, observed, [(W, H)],
+                              CalibrationOptions(tangential="estimate"))
+    assert given.left_out_models == [None]

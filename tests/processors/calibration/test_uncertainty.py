@@ -86,3 +86,16 @@ def test_working_range_is_where_the_boards_were() -> None:
     distances = [np.linalg.norm(p[:3, :3] @ centre + p[:3, 3]) for p in POSES]
     assert uncertainty.working_range_m(result.problem) == pytest.approx(np.median(distances),
                                                                        rel=1e-3)
+
+
+def test_what_the_model_leaves_out_is_added_in_every_direction() -> None:
+    result, umap, _e = solve(0.05, 2)
+    assert result is not None
+    difference = np.full(umap.sigma_px.shape, 0.1)
+    difference[0, 0] = np.nan  # no figure there: nothing added
+    wider = uncertainty.with_left_out(umap, difference)
+    np.testing.assert_allclose(wider.sigma_px[1:], np.hypot(umap.sigma_px[1:], 0.1))
+    assert wider.sigma_px[0, 0] == umap.sigma_px[0, 0]
+    # the smaller direction gains as much as the larger one
+    smallest = np.linalg.eigvalsh(wider.covariance[1:])[..., 0]
+    np.testing.assert_allclose(smallest, np.linalg.eigvalsh(umap.covariance[1:])[..., 0] + 0.01)
