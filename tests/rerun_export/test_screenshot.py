@@ -54,6 +54,7 @@ def test_the_viewer_draws_the_camera_image(tmp_path: Path) -> None:
     assert block.sum() > 0.05 * view.shape[0] * view.shape[1], block.sum()
 
 
+@pytest.mark.slow
 def test_the_board_lands_on_the_undistorted_image_in_the_viewer(tmp_path: Path) -> None:
     """A strongly distorted camera (plumb_bob k1 = -0.35) sees white discs at 3D points;
     the calibration record puts those points in 3D. The viewer's own projection of them

@@ -217,6 +217,7 @@ def test_wide_stereo_rig(wide_stereo: Path, tmp_path: Path) -> None:
     assert s["baseline_m"] == pytest.approx(0.09, abs=0.003)  # a ~9 cm PR2-era stereo head
 
 
+@pytest.mark.slow
 def test_wide_stereo_wrong_board(wide_stereo: Path, tmp_path: Path) -> None:
     line = bad_run(tmp_path, wide_stereo, "--size", "8x7", "--square", "0.108", "--left",
                    "/wide_stereo/left", "--right", "/wide_stereo/right")
