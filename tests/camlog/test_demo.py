@@ -16,6 +16,10 @@ def test_demo_runs_every_step_and_says_where_outputs_went(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     out = tmp_path / "demo"
+    # an earlier run's outputs, stale: the demo owns its folder and replaces them
+    (out / "calibration").mkdir(parents=True)
+    for stale in ("stereo_unsynced.mcap", "demo.rrd", "calibration/left.yaml"):
+        (out / stale).write_bytes(b"an earlier run")
     assert main(["demo", "-o", str(out), "--duration", "4", "--no-progress"]) == 0
     printed = capsys.readouterr().out
     steps = [line.split()[0] for line in printed.splitlines()[:-1]]
@@ -34,8 +38,9 @@ def test_demo_runs_every_step_and_says_where_outputs_went(
         assert reader.topics["/stereo_camera/left/red_centroid"].count > 0
         assert reader.topics["/stereo_camera/left/edges"].count > 0
     assert (out / "demo.rrd").stat().st_size > 100_000
-    # a second run replaces the demo's own outputs
-    assert main(["demo", "-o", str(out), "--duration", "4", "--no-progress"]) == 0
+    with open_reader(out / "stereo_unsynced.mcap") as reader:  # replaced, not appended to
+        assert reader.message_count > 0
+    assert "camera_matrix" in (out / "calibration" / "left.yaml").read_text()
 
 
 @pytest.mark.slow
