@@ -20,7 +20,7 @@ from replay.formats import LogReader
 from replay.messages import CameraInfo
 
 from ..errors import InputError, UsageError
-from ..processing.cameras import CameraSource, cameras_in, find_camera
+from ..processing.cameras import CameraSource, cameras_in, find_camera, first_camera_info
 
 __all__ = ["Checkable", "Unchecked", "checkable"]
 
@@ -50,14 +50,6 @@ class Unchecked:
     namespace: str
     reason: str
 
-
-def _first_info(reader: LogReader, source: CameraSource) -> CameraInfo | None:
-    if source.info_topic is None:
-        return None
-    for raw in reader.raw_messages([source.info_topic]):
-        message = reader.decode(raw)
-        return message if isinstance(message, CameraInfo) else None
-    return None
 
 
 def _given(calibration: Path) -> tuple[list[CameraInfo], float]:
@@ -94,7 +86,7 @@ def checkable(reader: LogReader, *, cameras: list[str], board: Board | None,
     """The checks of a log's cameras (``cameras``: those named, default every one)."""
     sources = [find_camera(reader, c) for c in cameras] if cameras else \
         [find_camera(reader, topic) for _, topic in cameras_in(reader)]
-    infos = {s.namespace: _first_info(reader, s) for s in sources}
+    infos = {s.namespace: first_camera_info(reader, s) for s in sources}
     std = 0.0
     if calibration is not None:
         given, std = _given(calibration)

@@ -11,13 +11,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from replay.formats import LogReader
+from replay.messages import CameraInfo
 from replay.msgtypes import RECORD_KINDS, normalize_msgtype
 from replay.topics import IMAGE_SUFFIXES, camera_of
 
 from ..errors import InputError
 from .checks import IMAGE_TYPES, camera_info_topic
 
-__all__ = ["CameraSource", "cameras_in", "find_camera", "image_suffix"]
+__all__ = ["CameraSource", "cameras_in", "find_camera", "first_camera_info", "image_suffix"]
 
 #: an image topic's suffix by its message type, for an image topic named without one
 _SUFFIX_BY_KIND = {"CompressedImage": "image_raw/compressed", "CompressedVideo": "image_raw/video"}
@@ -84,3 +85,14 @@ def cameras_in(reader: LogReader) -> list[tuple[str, str]]:
 def _is_images(reader: LogReader, topic: str) -> bool:
     info = reader.topics.get(topic)
     return info is not None and info.count > 0 and info.msgtype in IMAGE_TYPES
+
+
+def first_camera_info(reader: LogReader, source: CameraSource) -> CameraInfo | None:
+    """The first camera_info of a camera (None: it has no camera_info topic, or its first
+    message is not one)."""
+    if source.info_topic is None:
+        return None
+    for raw in reader.raw_messages([source.info_topic]):
+        message = reader.decode(raw)
+        return message if isinstance(message, CameraInfo) else None
+    return None

@@ -41,7 +41,7 @@ from ..calibrate.offsets import board_track, first_calibrations, offset_record
 from ..calibrate.pixels import TopicFrames
 from ..calibrate.views import CameraViews, detect_views
 from ..errors import InputError
-from .cameras import CameraSource
+from .cameras import CameraSource, first_camera_info
 
 __all__ = ["measure_offset"]
 
@@ -92,7 +92,7 @@ def _calibration(reader: LogReader, left: CameraSource, right: CameraSource,
                              "right.yaml")
         left_info, right_info = (load_calibration(f).camera_info for f in files)
     else:
-        found = [_first_info(reader, s) for s in (left, right)]
+        found = [first_camera_info(reader, s) for s in (left, right)]
         if found[0] is None or found[1] is None:
             raise InputError(f"{reader.path}: natural features need the pair's calibration: "
                              "no camera_info for "
@@ -105,14 +105,6 @@ def _calibration(reader: LogReader, left: CameraSource, right: CameraSource,
                          "--calibration, or a board with --size and --square")
     return left_info, right_info
 
-
-def _first_info(reader: LogReader, source: CameraSource) -> CameraInfo | None:
-    if source.info_topic is None:
-        return None
-    for raw in reader.raw_messages([source.info_topic]):
-        message = reader.decode(raw)
-        return message if isinstance(message, CameraInfo) else None
-    return None
 
 
 @dataclass
