@@ -20,6 +20,7 @@ import io
 import os
 import re
 import select
+import signal
 import sys
 import threading
 
@@ -111,6 +112,17 @@ class _Filter:
 def filter_decoder_messages() -> None:
     """Leave decoders' message lines out of this process's fd 2 from now on (see the module
     docstring); does nothing where fd 2 is not open."""
+    # Ctrl-C waits until the switch is whole: landing half way (fd 2 the pipe, no thread
+    # reading it yet), its one line would be written into a pipe nobody reads
+    blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        _switch()
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
+
+
+def _switch() -> None:
+    """fd 2 to a pipe, its thread and its drain at exit (see :func:`filter_decoder_messages`)."""
     try:
         terminal = os.dup(2)
     except OSError:
