@@ -251,6 +251,21 @@ class CameraDrawing:
                 * VIEW_PLANE_DEPTHS.get(view.name, 1.0)))
             self._emit(entity, pinhole_view_archetype(view), count=False)
 
+    def _board_plane(self, cam: CameraState, in_camera_m: Any) -> None:
+        """The image plane of each of the camera's views at the depth of a board it shows in
+        3D (median over its points), from this time on: the board's points then lie on the
+        view's image where it shows them, seen from any eye and not only from the camera's
+        centre."""
+        depths = np.asarray(in_camera_m, dtype=np.float64).reshape(-1, 3)[:, 2]
+        depths = depths[np.isfinite(depths) & (depths > 0)]
+        if cam.lens is None or not len(depths):
+            return
+        depth = float(np.median(depths))
+        for view in cam.lens.views:
+            self._emit(f"{cam.plan.entity}/{view.name}", rr.Pinhole.from_fields(
+                image_plane_distance=depth * VIEW_PLANE_DEPTHS.get(view.name, 1.0)),
+                count=False)
+
     def _ground_truth(self, raw: RawMessage, route: Route) -> None:
         points = self.plan.targets.get(route.detail)
         cam = self.cameras[route.namespace]
@@ -281,6 +296,8 @@ class CameraDrawing:
             entity = f"{cam.plan.entity}/ground_truth/{route.detail}"
             self._overlay(raw, cam, entity, stamp, self._points(entity, in_camera, YELLOW,
                                                                 TRUTH_RADIUS, dimension=3))
+            if cam.plan.calibrated_info_topic is None:  # else the solved board sets it
+                self._board_plane(cam, in_camera)
 
     def _points(self, entity: str, positions: Any, color: tuple[int, int, int], radius: Any,
                 label: str | None = None, *, dimension: int = 2) -> Any:

@@ -181,6 +181,7 @@ class SceneLogger(CameraDrawing):
             board = f"{cam.plan.entity}/calibration/board"
             self._overlay(raw, cam, board, view.stamp_ns, self._points(
                 board, view.corners_in_camera_m, GREEN, CORNER_RADIUS, dimension=3))
+            self._board_plane(cam, view.corners_in_camera_m)
         if view.until_ns is not None:  # a held pose: the overlays stay on all its frames
             cam.frames.hold(view.stamp_ns, view.until_ns)
 

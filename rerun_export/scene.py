@@ -179,8 +179,8 @@ def _targets(scenario: Scenario | None) -> dict[str, F64]:
 
 def _plane_distance_m(rig: Rig, summary: CalibrationSummary | None) -> float:
     """Frustum depth: 2.5 baselines of the closest camera pair, else 0.1 m; in a
-    calibration's recording at least twice its working range, so that the boards it solved
-    show in 3D in front of each camera's image, over their place in it."""
+    calibration's recording at least its working range (a view's image then moves to the
+    depth of each board it shows: :meth:`~.cameras.CameraDrawing._board_plane`)."""
     positions = [pose[:3, 3] for pose in rig.world_from_camera.values()]
     gaps = [float(((a - b) ** 2).sum() ** 0.5) for i, a in enumerate(positions)
             for b in positions[i + 1:]]
@@ -188,7 +188,7 @@ def _plane_distance_m(rig: Rig, summary: CalibrationSummary | None) -> float:
     depth = min(max(2.5 * min(gaps), 0.02), 1.0) if gaps else 0.1
     ranges = [c.uncertainty.range_m for c in summary.cameras
               if c.uncertainty is not None] if summary is not None else []
-    return max([depth, *(2.0 * r for r in ranges)])
+    return max([depth, *ranges])
 
 
 def _views(info: CameraInfo, scale: float) -> list[PinholeView]:

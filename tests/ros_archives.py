@@ -21,6 +21,7 @@ from replay.calibration_yaml import calibration_to_yaml
 from replay.records.scenario import Scenario
 from replay.topics import SCENARIO
 from tests.slow import renders
+from tests.workers import made_once
 
 from .recordings import cli, held_for
 
@@ -62,6 +63,7 @@ def render_rig(folder: Path, frames: int) -> Rendered:
 
 @pytest.fixture(scope="session")
 @renders
+@made_once
 def rendered_rig(tmp_path_factory: pytest.TempPathFactory) -> Rendered:
     """16 frames of a rendered rig (see :func:`render_rig`), once per session."""
     return render_rig(tmp_path_factory.mktemp("rendered_rig"), 16)

@@ -13,7 +13,6 @@ simulator's scenario record and its true target poses are read in the same pass.
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 from array import array
 from collections import deque
 from collections.abc import Iterator
@@ -144,7 +143,7 @@ class _Seen:
     #: in m, quaternion xyzw): a few dozen bytes each, where a (4, 4) array takes 240
     truth_stamps: dict[str, list[int]] = field(default_factory=dict)
     truth_poses: dict[str, array[float]] = field(default_factory=dict)
-    last: bytes = b""
+    last: np.ndarray | None = None  # the previous frame's pixels
     last_distinct_ns: int | None = None
     #: frames to detect: index, pixels, whether a snapshot
     run: list[tuple[int, np.ndarray, bool]] = field(default_factory=list)
@@ -166,9 +165,8 @@ class _Seen:
             raise InputError(
                 f"{where} changes image size from {self.size[0]}x{self.size[1]} to "
                 f"{size[0]}x{size[1]}")
-        digest = hashlib.blake2b(np.ascontiguousarray(gray).data, digest_size=16).digest()
-        duplicate = digest == self.last
-        self.last = digest
+        duplicate = self.last is not None and np.array_equal(gray, self.last)
+        self.last = gray
         index = len(self.stamps)
         self.stamps.append(stamp_ns)
         self.duplicates.append(duplicate)

@@ -104,15 +104,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     Called as the program (no ``argv``), the process exits once the command is over: Ctrl-C
     is then ignored, so that one arriving during the interpreter's exit (libraries' exit
     handlers, e.g. tqdm's monitor) prints no traceback."""
-    as_program = argv is None
-    if as_program:
-        sys.unraisablehook = _interrupt_where_it_can_be_handled(sys.unraisablehook)
-        signal.signal(signal.SIGINT, _note_interrupt)
-    argv = sys.argv[1:] if argv is None else list(argv)
-    command = _command_in(argv)
-    where = f"camlog {command}" if command else "camlog"
-    try:
+    as_program, where = argv is None, "camlog"
+    try:  # a Ctrl-C before the handlers are in is one line too
+        argv = sys.argv[1:] if argv is None else list(argv)
+        command = _command_in(argv)
+        where = f"camlog {command}" if command else "camlog"
+        if as_program:
+            sys.unraisablehook = _interrupt_where_it_can_be_handled(sys.unraisablehook)
+            signal.signal(signal.SIGINT, _note_interrupt)
         return _run(argv, command, where, as_program=as_program)
+    except KeyboardInterrupt:
+        return _interrupted(where)
     finally:
         if as_program:
             signal.signal(signal.SIGINT, signal.SIG_IGN)

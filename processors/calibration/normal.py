@@ -56,10 +56,12 @@ class NormalEquations:
     def solve(self, rhs_global: F64, rhs_pose: F64) -> tuple[F64, F64]:
         """``(J^T J)^-1 rhs`` for right-hand sides ``(G, R)`` and ``(P, 6, R)`` (the pose
         blocks' inverses and the Schur complement are computed at the first call)."""
-        return _schur_solve(self._factors, self.c, rhs_global, rhs_pose)
+        return _schur_solve(self.factors, self.c, rhs_global, rhs_pose)
 
     @cached_property
-    def _factors(self) -> tuple[F64, F64, F64]:
+    def factors(self) -> tuple[F64, F64, F64]:
+        """The pose blocks' inverses ``(P, 6, 6)``, the coupling times them ``(P, G, 6)`` and
+        the Schur complement ``(G, G)`` (computed at the first use)."""
         return _schur_factors(self.a, self.c, self.b)
 
     def global_covariance(self) -> F64:

@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import numpy.typing as npt
 
 from replay.camera import CameraModel
 from replay.messages import F64
@@ -26,16 +27,10 @@ from replay.messages import F64
 from .bundle import cross, times
 from .joint import Problem
 from .lens import model_of, project
+from .normal import NormalEquations
 
 #: pixels per grid cell of the uncertainty map
 GRID_STEP_PX = 16
-#: pixels solved at once, at most
-CHUNK = 64
-#: board poses times pixels solved at once: the right-hand sides and solutions (100 bytes
-#: per pose and pixel) stay a few tens of MB however many poses a long log holds, in chunks
-#: large enough that a waved board's thousand poses do not make the work per chunk's
-#: overhead (at most :data:`CHUNK` pixels below 1 024 poses)
-POSE_PIXELS = 65536
 
 
 class OverImage:
@@ -109,25 +104,29 @@ def _points_in_reference(problem: Problem, camera: int, pixels: F64, range_m: fl
 def projection_uncertainty(problem: Problem, camera: int, *, range_m: float | None = None,
                            step_px: int = GRID_STEP_PX) -> UncertaintyMap:
     """The projection uncertainty map of one camera at ``range_m`` (default: the working
-    range, :func:`working_range_m`)."""
+    range, :func:`working_range_m`).
+
+    A grid pixel's reprojection moves by ``g_global`` per global unknown and, per seen board
+    pose ``p``, by ``[lever_p x e; e]`` per pose unknown, where ``lever_p = X - t_p`` (the
+    point in the reference frame less the pose's translation). That is linear in
+    ``a_p = (1, t_p)``: ``g_p = sum_j a_pj H_j`` with four ``(6, 2)`` blocks ``H_j`` per pixel.
+    With the pose blocks eliminated (Schur complement ``S``, pose inverses ``B_p^-1``, coupling
+    ``C_p B_p^-1``), ``g^T (J^T J)^-1 g = r^T S^-1 r + sum_p g_p^T B_p^-1 g_p`` and
+    ``r = g_global - sum_p C_p B_p^-1 g_p``; both sums over the poses reduce to moments of
+    ``a_p`` taken once per camera, so a waved board's thousand poses cost no more per pixel
+    than ten."""
     range_m = working_range_m(problem) if range_m is None else range_m
     size = problem.layout.setups[camera].size
     pixels = grid(size, step_px)
     flat = pixels.reshape(-1, 2)
     covariance = np.full((len(flat), 2, 2), np.nan)
     state, layout, normal = problem.state, problem.layout, problem.normal
-    seen = np.flatnonzero(normal.seen)
-    pose_count = len(state.board_rotation)
     setup = layout.setups[camera]
-    step = max(1, min(CHUNK, POSE_PIXELS // max(pose_count, 1)))
-    for start in range(0, len(flat), step):
-        chunk = flat[start:start + step]
-        in_camera, in_reference, r_c = _points_in_reference(problem, camera, chunk, range_m)
-        valid = np.isfinite(in_camera).all(axis=1)
-        if not valid.any():
-            continue
-        in_camera, in_reference, chunk_index = in_camera[valid], in_reference[valid], \
-            np.flatnonzero(valid) + start
+    seen = np.flatnonzero(normal.seen)
+    in_camera, in_reference, r_c = _points_in_reference(problem, camera, flat, range_m)
+    valid = np.flatnonzero(np.isfinite(in_camera).all(axis=1))
+    if len(valid) and len(seen):
+        in_camera, in_reference = in_camera[valid], in_reference[valid]
         _uv, d_point, d_intrinsics = project(setup.distortion_model, state.intrinsics[camera],
                                              in_camera)
         m = len(in_camera)
@@ -140,21 +139,36 @@ def projection_uncertainty(problem: Problem, camera: int, *, range_m: float | No
             g_global[layout.rig_columns[camera]] = np.transpose(rig, (2, 0, 1))
         # each seen board pose moves the mean point by 1/P of its own displacement
         e = times(d_point, r_c) / len(seen)  # (m, 2, 3)
-        lever = in_reference[None, :, :] - state.board_translation[seen][:, None, :]
-        g_pose = np.zeros((pose_count, 6, m, 2))
-        g_pose[seen, :3] = np.transpose(cross(lever[:, :, None, :], e[None]), (0, 3, 1, 2))
-        g_pose[seen, 3:] = np.transpose(e, (2, 0, 1))[None]
-        rhs_global = g_global.reshape(layout.global_count, 2 * m)
-        rhs_pose = g_pose.reshape(pose_count, 6, 2 * m)
-        x_global, x_pose = normal.solve(rhs_global, rhs_pose)
-        # only the 2 x 2 block of each pixel with itself
-        blocks = np.einsum("gmk,gml->mkl", g_global, x_global.reshape(-1, m, 2)) \
-            + np.einsum("pimk,piml->mkl", g_pose, x_pose.reshape(pose_count, 6, m, 2))
-        covariance[chunk_index] = problem.sigma_px ** 2 * blocks
+        h = np.zeros((4, 6, m, 2))
+        h[0, :3] = np.transpose(cross(in_reference[:, None, :], e), (2, 0, 1))
+        h[0, 3:] = np.transpose(e, (2, 0, 1))
+        for axis in range(3):  # minus t_p's axis: the lever's part from the pose
+            unit = np.zeros(3)
+            unit[axis] = -1.0
+            h[1 + axis, :3] = np.transpose(cross(unit, e), (2, 0, 1))
+        flat_h = h.reshape(24, 2 * m)
+        reduce, quadratic, schur = _pose_moments(normal, state.board_translation, seen)
+        r = g_global.reshape(layout.global_count, 2 * m) - reduce @ flat_h
+        x = np.linalg.solve(schur, r) if len(schur) else r
+        blocks = np.einsum("gmk,gml->mkl", r.reshape(-1, m, 2), x.reshape(-1, m, 2)) \
+            + np.einsum("imk,iml->mkl", h.reshape(24, m, 2),
+                        (quadratic @ flat_h).reshape(24, m, 2))
+        covariance[valid] = problem.sigma_px ** 2 * blocks
     covariance = covariance.reshape(*pixels.shape[:2], 2, 2)
     sigma = np.sqrt(np.linalg.eigvalsh(np.nan_to_num(covariance))[..., 1])
     sigma[~np.isfinite(covariance).all(axis=(2, 3))] = np.nan
     return UncertaintyMap(camera, range_m, pixels, covariance, sigma)
+
+
+def _pose_moments(normal: NormalEquations, translation_m: F64, seen: npt.NDArray[np.intp]
+                  ) -> tuple[F64, F64, F64]:
+    """Over the seen poses, with ``a_p = (1, t_p)``: ``sum_p a_pj C_p B_p^-1`` as ``(G, 24)``,
+    ``sum_p a_pj a_pk B_p^-1`` as ``(24, 24)`` (index ``6 j + i``) and the Schur complement."""
+    b_inverse, c_b_inverse, schur = normal.factors
+    a = np.concatenate([np.ones((len(seen), 1)), translation_m[seen]], axis=1)
+    reduce = np.einsum("pj,pgi->gji", a, c_b_inverse[seen]).reshape(len(schur), 24)
+    quadratic = np.einsum("pj,pk,pil->jikl", a, a, b_inverse[seen]).reshape(24, 24)
+    return reduce, quadratic, schur
 
 
 def with_left_out(umap: UncertaintyMap, difference_px: F64) -> UncertaintyMap:

@@ -18,6 +18,7 @@ import pytest
 from replay.records import CalibrationSummary, CameraSummary
 from tests.cli import cli
 from tests.slow import renders
+from tests.workers import made_once
 
 SCENARIOS = Path(__file__).resolve().parents[2] / "datasets" / "scenarios"
 HOLD = "hold_s = 0.5"
@@ -43,6 +44,7 @@ def record(spec: Path | str, output: Path, *options: str) -> Path:
 
 @pytest.fixture(scope="session")
 @renders
+@made_once
 def rig_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """stereo_checkerboard, 240 frames per camera: 80 poses seen by an ideal 0.02 m rig."""
     tmp = tmp_path_factory.mktemp("rig")
@@ -52,6 +54,7 @@ def rig_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="session")
 @renders
+@made_once
 def plumb_bob_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """mono_checkerboard through a k1 = -0.2, k2 = 0.05 lens, 330 frames (110 poses)."""
     tmp = tmp_path_factory.mktemp("plumb_bob")
@@ -62,6 +65,7 @@ def plumb_bob_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="session")
 @renders
+@made_once
 def unsynced_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """stereo_unsynced (own stamps, 7 ms phase, jitter, drops), 120 frames (40 poses), and
     the board cut by the image border in 30 % of the poses."""
@@ -73,6 +77,7 @@ def unsynced_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest.fixture(scope="session")
 @renders
+@made_once
 def few_poses_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """mono_checkerboard as built in (0.5 s per pose), 30 frames: two board poses."""
     tmp = tmp_path_factory.mktemp("few_poses")
@@ -136,6 +141,7 @@ def rig_stereo(rig_log: Path, tmp_path_factory: pytest.TempPathFactory) -> Calib
 
 @pytest.fixture(scope="session")
 @renders
+@made_once
 def late_board_log(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """stereo_moving_board for 20 s at 320x240 without motion blur (to render fast), the
     right camera stamping 17 ms late (``--latency right:17``)."""

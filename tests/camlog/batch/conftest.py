@@ -15,6 +15,7 @@ from pathlib import Path
 import pytest
 
 from tests.slow import renders
+from tests.workers import made_once
 
 from .faults import record_logs
 from .test_run import PIPELINE
@@ -33,6 +34,7 @@ def temporary_home() -> Iterator[Path]:
 
 @pytest.fixture(scope="session")
 @renders
+@made_once
 def short_logs(tmp_path_factory: pytest.TempPathFactory) -> list[Path]:
     """Six short stereo_unsynced logs (40 frames per camera, 160x120), ``pipe.toml`` (the
     resync, process, info pipeline) next to them."""

@@ -6,11 +6,15 @@ import numpy as np
 import pytest
 
 from processors.calibration import uncertainty
-from processors.calibration.joint import BoardView, calibrate_cameras
+from processors.calibration.joint import BoardView, Problem, calibrate_cameras
+from processors.calibration.lens import project
 from processors.calibration.options import CalibrationOptions
 from processors.calibration.validation import cross_validate
 
 from .synthetic import BOARD, H, W, random_poses, true_model, views
+from .test_joint import POINTS as RIG_POINTS
+from .test_joint import RIGHT_FROM_LEFT, board_views
+from .test_rig import FAR
 
 POINTS = BOARD.points_in_board()
 ALL = np.arange(BOARD.corner_count)
@@ -99,3 +103,50 @@ def test_what_the_model_leaves_out_is_added_in_every_direction() -> None:
     # the smaller direction gains as much as the larger one
     smallest = np.linalg.eigvalsh(wider.covariance[1:])[..., 0]
     np.testing.assert_allclose(smallest, np.linalg.eigvalsh(umap.covariance[1:])[..., 0] + 0.01)
+
+
+def _covariance_pose_by_pose(problem: Problem, camera: int, pixels: np.ndarray,
+                             range_m: float) -> np.ndarray:
+    """``sigma^2 g (J^T J)^-1 g^T`` with every pose's derivative ``[lever_p x e; e]`` written
+    out and solved through the normal equations: the definition the map shortens."""
+    state, layout, normal = problem.state, problem.layout, problem.normal
+    setup = layout.setups[camera]
+    flat = pixels.reshape(-1, 2)
+    in_camera, in_reference, r_c = uncertainty._points_in_reference(problem, camera, flat,
+                                                                     range_m)
+    _uv, d_point, d_intrinsics = project(setup.distortion_model, state.intrinsics[camera],
+                                         in_camera)
+    m, seen = len(flat), np.flatnonzero(normal.seen)
+    g_global = np.zeros((layout.global_count, m, 2))
+    g_global[layout.intrinsic_columns[camera]] = np.transpose(
+        np.einsum("mki,ic->mkc", d_intrinsics, layout.bases[camera]), (2, 0, 1))
+    if camera:
+        rig = np.concatenate([np.cross((in_reference @ r_c.T)[:, None, :], d_point), d_point],
+                             axis=2)
+        g_global[layout.rig_columns[camera]] = np.transpose(rig, (2, 0, 1))
+    e = d_point @ r_c / len(seen)
+    g_pose = np.zeros((len(state.board_rotation), 6, m, 2))
+    for p in seen:
+        lever = in_reference - state.board_translation[p]
+        g_pose[p, :3] = np.transpose(np.cross(lever[:, None, :], e), (2, 0, 1))
+        g_pose[p, 3:] = np.transpose(e, (2, 0, 1))
+    x_global, x_pose = normal.solve(g_global.reshape(-1, 2 * m),
+                                    g_pose.reshape(len(g_pose), 6, 2 * m))
+    blocks = np.einsum("gmk,gml->mkl", g_global, x_global.reshape(-1, m, 2)) \
+        + np.einsum("pimk,piml->mkl", g_pose, x_pose.reshape(len(g_pose), 6, m, 2))
+    return np.asarray(problem.sigma_px ** 2 * blocks.reshape(*pixels.shape[:2], 2, 2))
+
+
+@pytest.mark.parametrize("camera", [0, 1, 2])
+def test_map_is_the_covariance_written_out_pose_by_pose(camera: int) -> None:
+    """The per-pixel covariance, poses summed through their moments, equals the one from
+    every pose's own derivative, for the reference camera and for cameras placed in a rig
+    (with a warped board among the global unknowns)."""
+    observed, _ = board_views([true_model()] * 3, 12, seed=8,
+                              placements=[np.eye(4), RIGHT_FROM_LEFT, FAR])
+    result = calibrate_cameras(RIG_POINTS, observed, [(W, H)] * 3,
+                               CalibrationOptions(board_warp="on"))
+    umap = uncertainty.projection_uncertainty(result.problem, camera, step_px=80)
+    expected = _covariance_pose_by_pose(result.problem, camera, umap.pixels, umap.range_m)
+    np.testing.assert_allclose(umap.covariance, expected, rtol=1e-9,
+                               atol=1e-12 * np.abs(expected).max())
