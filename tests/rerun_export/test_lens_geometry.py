@@ -242,6 +242,37 @@ def test_true_corners_land_on_the_detected_ones(recorded: Recorded) -> None:
         assert worst <= 0.3, f"{where}: max {worst:.3f} px"
 
 
+def _by_stamp(store: ChunkStore, entity: str, component: str) -> dict[int, object]:
+    """Header stamp -> the values (a list) of ``component`` logged at ``entity`` then."""
+    table = store.reader(index="header_stamp", contents=entity).to_arrow_table()
+    name = f"{entity}:{component}"
+    if name not in table.column_names:
+        return {}
+    stamps = table.column("header_stamp").cast(pa.int64()).to_pylist()
+    return {stamp: value for stamp, value in zip(stamps, table.column(name).to_pylist(),
+                                                  strict=True) if value is not None}
+
+
+@pytest.mark.slow
+def test_each_view_s_image_plane_is_at_the_board_it_shows(recorded: Recorded) -> None:
+    """Wherever the simulator's board is drawn in 3D, every view's image plane is at its
+    median depth (a wider view's at its own multiple of it), so that the board's points lie
+    on the view's image in 3D."""
+    from rerun_export.lens import VIEW_PLANE_DEPTHS
+
+    case = CASES[recorded.scenario]
+    store = _store(recorded.rrd)
+    camera = f"/world/{case.camera.strip('/')}"
+    boards = _by_stamp(store, f"{camera}/ground_truth/{case.target}", "Points3D:positions")
+    assert len(boards) >= 3
+    for view in case.views:
+        planes = _by_stamp(store, f"{camera}/{view}", "Pinhole:image_plane_distance")
+        for stamp, positions in boards.items():
+            depth = float(np.median(np.asarray(positions, dtype=np.float64)[:, 2]))
+            assert planes[stamp][0] == pytest.approx(depth * VIEW_PLANE_DEPTHS.get(view, 1.0),
+                                                  rel=1e-5), (view, stamp)
+
+
 @pytest.mark.slow
 def test_the_raw_image_under_a_pinhole_of_k_misses_by_pixels(recorded: Recorded) -> None:
     """What rerun shows without the views: the raw image under a Pinhole of its K, whose
