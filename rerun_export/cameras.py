@@ -66,6 +66,7 @@ class CameraState:
     frames: CameraFrames = field(default_factory=CameraFrames)
     lens: Lens | None = None  # the pinhole views of a camera shown through them
     remapped: Lens | None = None  # the lens the last view images were made with
+    plane_depth_m: float | None = None  # where the views' image planes were put last
 
     @property
     def shown_through_views(self) -> bool:
@@ -240,6 +241,7 @@ class CameraDrawing:
             cam.lens = Lens.of(info, cam.plan.views if planned
                                else views_of(info, self.plan.undistorted or 1.0))
         views = cam.lens.views
+        cam.plane_depth_m = None  # the views' Pinholes below put the planes back
         for gone in sorted(before - {view.name for view in views}):
             self._emit(f"{cam.plan.entity}/{gone}", rr.Clear(recursive=True), count=False)
         for view in views:
@@ -261,6 +263,9 @@ class CameraDrawing:
         if cam.lens is None or not len(depths):
             return
         depth = float(np.median(depths))
+        if depth == cam.plane_depth_m:  # a board held still: the planes stay where they are
+            return
+        cam.plane_depth_m = depth
         for view in cam.lens.views:
             self._emit(f"{cam.plan.entity}/{view.name}", rr.Pinhole.from_fields(
                 image_plane_distance=depth * VIEW_PLANE_DEPTHS.get(view.name, 1.0)),

@@ -22,6 +22,7 @@ both halves and invisible here.
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -107,9 +108,15 @@ def cross_validate(points_in_board: F64, views: list[BoardView], sizes: list[tup
         for camera in range(len(sizes)):
             if len(camera_views(part, camera)) < MIN_VIEWS:
                 return None
+    def solve(part: list[BoardView]) -> JointResult:
+        return calibrate_cameras(points_in_board, part, sizes, options,
+                                 disc_diameter_m=disc_diameter_m)
+
     try:
-        a, b = (calibrate_cameras(points_in_board, part, sizes, options,
-                                  disc_diameter_m=disc_diameter_m) for part in parts)
+        # the halves side by side: their solves are mostly numpy on long arrays, which lets
+        # go of the GIL (each half's result is the same either way)
+        with ThreadPoolExecutor(max_workers=2, thread_name_prefix="camlog-half") as pool:
+            a, b = pool.map(solve, parts)
     except (ProcessorError, np.linalg.LinAlgError):  # a half that does not solve: no figure
         return None
     out = []
