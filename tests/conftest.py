@@ -17,7 +17,7 @@ from tests.recordings import (  # noqa: F401  (session fixtures: small logs made
 )
 from tests.ros_archives import rendered_rig  # noqa: F401  (a session fixture)
 from tests.slow import uses_a_slow_fixture
-from tests.workers import group_by_worker, heaviest_first
+from tests.workers import group_by_worker
 
 REPO_ROOT = Path(__file__).resolve().parents[1]
 
@@ -46,9 +46,8 @@ def update_goldens(request: pytest.FixtureRequest) -> bool:
 @pytest.hookimpl(tryfirst=True)  # before xdist reads the groups
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
     """Mark ``slow`` every test that uses a fixture tagged with :func:`tests.slow.renders`,
-    give every test the worker group of :func:`tests.workers.group_by_worker` and hand out
-    the heaviest groups first (:func:`tests.workers.heaviest_first`)."""
+    and give every test the worker group of :func:`tests.workers.group_by_worker`."""
     for item in items:
         if uses_a_slow_fixture(item):
             item.add_marker(pytest.mark.slow)
-    heaviest_first(items, group_by_worker(items))
+    group_by_worker(items)

@@ -16,7 +16,7 @@ from typing import Any, TypeVar
 
 import pytest
 
-__all__ = ["SERVERS", "group_by_worker", "heaviest_first", "made_once"]
+__all__ = ["SERVERS", "group_by_worker", "made_once"]
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -77,17 +77,3 @@ def group_by_worker(items: list[pytest.Item]) -> dict[str, str]:
         item.add_marker(pytest.mark.xdist_group(group), append=False)
     return groups
 
-
-def heaviest_first(items: list[pytest.Item], groups: dict[str, str]) -> None:
-    """Reorder ``items`` so that the groups with the most slow tests come first, each group's
-    tests together and in their order: xdist hands out groups in this order, and a long one
-    handed out last would leave the other worker idle while it runs."""
-    slow: dict[str, int] = {}
-    first: dict[str, int] = {}
-    for index, item in enumerate(items):
-        group = groups[_module(item)]
-        first.setdefault(group, index)
-        slow[group] = slow.get(group, 0) + (item.get_closest_marker("slow") is not None)
-    order = {id(item): index for index, item in enumerate(items)}
-    items.sort(key=lambda item: (-slow[groups[_module(item)]], first[groups[_module(item)]],
-                                 order[id(item)]))
