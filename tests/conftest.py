@@ -22,6 +22,16 @@ from tests.workers import group_by_worker
 REPO_ROOT = Path(__file__).resolve().parents[1]
 
 
+#: workers ``-n auto`` starts at most: each renders scenes and starts processes of its own
+MAX_WORKERS = 4
+
+
+def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
+    """``-n auto``: a worker per core this process may run on, at most :data:`MAX_WORKERS`
+    (a large machine's count would only start more of them to share the same work)."""
+    return max(1, min(len(os.sched_getaffinity(0)), MAX_WORKERS))
+
+
 @pytest.fixture(scope="session")
 def realdata_dir() -> Path:
     """Third-party data folder: ``$CAMLOG_REALDATA`` or ``../shared/realdata`` beside the repo.
