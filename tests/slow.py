@@ -9,7 +9,7 @@ from typing import Any, TypeVar
 
 import pytest
 
-__all__ = ["renders", "uses_a_slow_fixture"]
+__all__ = ["renders", "tagged_fixtures", "uses_a_slow_fixture"]
 
 F = TypeVar("F", bound=Callable[..., Any])
 
@@ -21,13 +21,19 @@ def renders(fixture: F) -> F:
     return fixture
 
 
-def uses_a_slow_fixture(item: pytest.Item) -> bool:
-    """Whether a tagged fixture is among those ``item`` uses, directly or through others."""
+def tagged_fixtures(item: pytest.Item, tag: str) -> list[str]:
+    """The fixtures ``item`` uses, directly or through others, whose function carries the
+    attribute ``tag`` (set by a decorator such as :func:`renders`)."""
     info = getattr(item, "_fixtureinfo", None)
     if info is None:
-        return False
+        return []
     # the last definition of a name is the one the test gets (a module's overrides a
     # conftest's)
-    return any(getattr(definitions[-1].func, "slow", False)
-               for name in getattr(item, "fixturenames", ())
-               if (definitions := info.name2fixturedefs.get(name)))
+    return [name for name in getattr(item, "fixturenames", ())
+            if (definitions := info.name2fixturedefs.get(name))
+            and getattr(definitions[-1].func, tag, False)]
+
+
+def uses_a_slow_fixture(item: pytest.Item) -> bool:
+    """Whether a tagged fixture is among those ``item`` uses, directly or through others."""
+    return bool(tagged_fixtures(item, "slow"))

@@ -16,6 +16,8 @@ from typing import Any, TypeVar
 
 import pytest
 
+from tests.slow import tagged_fixtures
+
 __all__ = ["SERVERS", "group_by_worker", "made_once"]
 
 F = TypeVar("F", bound=Callable[..., Any])
@@ -40,18 +42,9 @@ def _module(item: pytest.Item) -> str:
     return item.nodeid.split("::", 1)[0]
 
 
-def _made_once_fixtures(item: pytest.Item) -> list[str]:
-    info = getattr(item, "_fixtureinfo", None)
-    if info is None:
-        return []
-    return [name for name in getattr(item, "fixturenames", ())
-            if (definitions := info.name2fixturedefs.get(name))
-            and getattr(definitions[-1].func, "made_once", False)]
-
-
-def group_by_worker(items: list[pytest.Item]) -> dict[str, str]:
+def group_by_worker(items: list[pytest.Item]) -> None:
     """Mark every item with the ``xdist_group`` of its module, modules joined when they use
-    one :func:`made_once` fixture or start one kind of server; the group of each module."""
+    one :func:`made_once` fixture or start one kind of server."""
     parent: dict[str, str] = {}
 
     def root(key: str) -> str:
@@ -68,12 +61,11 @@ def group_by_worker(items: list[pytest.Item]) -> dict[str, str]:
         for module in modules:
             join(module, f"servers:{kind}")
     for item in items:
-        for name in _made_once_fixtures(item):
+        for name in tagged_fixtures(item, "made_once"):
             join(_module(item), f"fixture:{name}")
     groups: dict[str, str] = {}
     for item in items:
         module = _module(item)
         group = groups.setdefault(module, root(module))
         item.add_marker(pytest.mark.xdist_group(group), append=False)
-    return groups
 

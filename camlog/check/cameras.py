@@ -51,7 +51,6 @@ class Unchecked:
     reason: str
 
 
-
 def _given(calibration: Path) -> tuple[list[CameraInfo], float]:
     """The camera models of ``--calibration`` (one or a pair) and its rotation std (deg)."""
     if calibration.is_dir():

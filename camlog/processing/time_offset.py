@@ -106,7 +106,6 @@ def _calibration(reader: LogReader, left: CameraSource, right: CameraSource,
     return left_info, right_info
 
 
-
 @dataclass
 class _Frame:
     stamp_ns: int

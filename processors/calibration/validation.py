@@ -108,6 +108,7 @@ def cross_validate(points_in_board: F64, views: list[BoardView], sizes: list[tup
         for camera in range(len(sizes)):
             if len(camera_views(part, camera)) < MIN_VIEWS:
                 return None
+
     def solve(part: list[BoardView]) -> JointResult:
         return calibrate_cameras(points_in_board, part, sizes, options,
                                  disc_diameter_m=disc_diameter_m)
