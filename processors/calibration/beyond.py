@@ -11,13 +11,15 @@ say in one line where it is extrapolated and how far it can be trusted there.
 **k3 beyond the views.** Cross-validation over views chooses the radial order
 (:mod:`.model_order`), but held-out views lie where the training views lie: a k3 the image's
 corners need and the views do not show never wins it. :func:`k3_beyond_the_views` fits k1 k2 k3
-(k3 held by the prior, :mod:`.prior`) beside the k1 k2 the views chose and compares their
-projections over the whole image with k1 k2's own uncertainty (rays): where they part by more
-than :data:`~.model_order.BEYOND_RATIO` times it, k1 k2 do not hold their own figure there and
-k1 k2 k3 is kept; otherwise k1 k2 stay, and the k3 fit is their left-out model (its difference
-is added to their uncertainty, :func:`~.uncertainty.with_left_out`). On a waved board through a
-k3 lens the ratio grows with the log: k1 k2's uncertainty shrinks with the views, the difference
-k3 makes beyond them does not.
+(k3 held by the prior at its stated width, :func:`.prior.stated_weights`: the lens as it could
+be, not the solve's pull towards the low orders) beside the k1 k2 the views chose and compares
+their projections over the whole image with k1 k2's own uncertainty (rays): where they part by
+more than :data:`~.model_order.BEYOND_RATIO` times it, k1 k2 do not hold their own figure there
+and k1 k2 k3 is kept (solved again with the prior's own weight); otherwise k1 k2 stay, and the
+k3 fit is their left-out model (its difference is added to their uncertainty,
+:func:`~.uncertainty.with_left_out`). On a waved board through a k3 lens the ratio grows with
+the log: k1 k2's uncertainty shrinks with the views, the difference k3 makes beyond them does
+not.
 """
 
 from __future__ import annotations
@@ -147,8 +149,10 @@ def k3_beyond_the_views(points_in_board: F64, views: list[BoardView],
         return [dataclasses.replace(o, k_coefficients=3 if c in cameras else o.k_coefficients,
                                     board_warp=warp) for c, o in enumerate(wanted)]
 
+    # the lens as it could be: k3 held only as far as real lenses hold it (.prior)
     with_k3 = calibrate_cameras(points_in_board, views, sizes, radial3(asked),
-                                seeds=joint.models, disc_diameter_m=disc_diameter_m)
+                                seeds=joint.models, disc_diameter_m=disc_diameter_m,
+                                stated_prior=True)
     out = list(orders)
     kept: list[int] = []
     for camera in asked:
@@ -173,9 +177,9 @@ def k3_beyond_the_views(points_in_board: F64, views: list[BoardView],
         return out, wanted, joint
     chosen = [dataclasses.replace(o, k_coefficients=3) if c in kept else o
               for c, o in enumerate(wanted)]
-    if kept != asked:
-        seeds = [with_k3.models[c] if c in kept else joint.models[c] for c in range(len(sizes))]
-        with_k3 = calibrate_cameras(points_in_board, views, sizes, radial3(kept), seeds=seeds,
-                                    disc_diameter_m=disc_diameter_m)
+    # k3 kept: solved again with the prior's own weight
+    seeds = [with_k3.models[c] if c in kept else joint.models[c] for c in range(len(sizes))]
+    with_k3 = calibrate_cameras(points_in_board, views, sizes, radial3(kept), seeds=seeds,
+                                disc_diameter_m=disc_diameter_m)
     with_k3.warp_choice = joint.warp_choice  # the warp as the views decided it
     return out, chosen, with_k3

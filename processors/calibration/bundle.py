@@ -21,6 +21,7 @@ A light prior on some intrinsics (:mod:`.prior`) adds one residual per parameter
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -145,6 +146,11 @@ class Observations:
         return Observations(self.camera[rows], self.instant[rows], self.observed[rows],
                             self.mask[rows], self.weight[rows])
 
+    def corners(self, cameras: int) -> list[int]:
+        """The corners seen by each of ``cameras`` cameras (its views' masks)."""
+        seen = np.bincount(self.camera, weights=self.mask.sum(axis=1), minlength=cameras)
+        return [int(n) for n in seen]
+
     def with_mask(self, mask: B8) -> Observations:
         """The same observations with another mask ``(V, N)`` of the corners that count."""
         return Observations(self.camera, self.instant, self.observed, mask, self.weight)
@@ -164,6 +170,8 @@ class Layout:
     global_count: int
     prior_px: F64 = field(default_factory=lambda: np.zeros(0))  # (G,) see .prior
     warp_columns: I64 = field(default_factory=lambda: np.zeros(0, np.int64))  # (2,) or none
+    corners: tuple[int, ...] = ()  # per camera, the corners its views show (weigh the prior)
+    stated_prior_px: F64 = field(default_factory=lambda: np.zeros(0))  # (G,) the covariance's
 
     def prior_residual(self, state: RigState) -> F64:
         """``(G,)`` the prior's residuals (px): ``prior_px`` times the parameter's value."""
@@ -178,9 +186,12 @@ class Layout:
         return out
 
     @classmethod
-    def of(cls, setups: list[CameraSetup], seed: RigState, *, warp: bool = False) -> Layout:
-        """The layout of cameras ``setups`` around ``seed`` (its fx / fy ratios); with
-        ``warp`` the board's warp is estimated (else held at ``seed``'s)."""
+    def of(cls, setups: list[CameraSetup], seed: RigState, *, corners: Sequence[int],
+           warp: bool = False, stated_prior: bool = False) -> Layout:
+        """The layout of cameras ``setups`` around ``seed`` (its fx / fy ratios), whose views
+        show ``corners`` corners per camera (they weigh the prior, :mod:`.prior`; with
+        ``stated_prior`` at no more than its stated width); with ``warp`` the board's warp is
+        estimated (else held at ``seed``'s)."""
         bases, names, intrinsic_columns, rig_columns = [], [], [], []
         at = 0
         for setup, intrinsics in zip(setups, seed.intrinsics, strict=True):
@@ -194,10 +205,12 @@ class Layout:
             at += 6 if camera else 0
         warp_columns = np.arange(at, at + 2) if warp else np.zeros(0, np.int64)
         at += len(warp_columns)
-        weights = prior.weights([s.distortion_model for s in setups], names,
-                                intrinsic_columns, at)
+        models = [s.distortion_model for s in setups]
+        stated = prior.stated_weights(models, names, intrinsic_columns, at, corners)
+        weights = stated if stated_prior else \
+            prior.weights(models, names, intrinsic_columns, at, corners)
         return cls(setups, bases, names, intrinsic_columns, rig_columns, at, weights,
-                   warp_columns)
+                   warp_columns, tuple(corners), stated)
 
     def global_columns(self, camera: int) -> I64:
         """Columns of one camera's intrinsics, rig transform and the board's warp in the

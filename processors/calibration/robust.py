@@ -28,6 +28,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 import numpy.typing as npt
@@ -172,10 +173,16 @@ class Problem:
     instants: I64  # original instant number of each pose row
     order: I64  # view index of each row
 
+    @cached_property
+    def stated_normal(self) -> normal.NormalEquations:
+        """The normal equations the stated uncertainty is propagated through: the prior at the
+        width it states (:func:`.prior.stated_weights`), not the solve's pull."""
+        return self.normal.with_prior(self.layout.prior_px, self.layout.stated_prior_px)
+
     def global_covariance(self) -> F64:
         """Covariance ``(G, G)`` of the global unknowns (intrinsics, rig), board poses
         eliminated: their coupling is included."""
-        return self.sigma_px ** 2 * self.normal.global_covariance()
+        return self.sigma_px ** 2 * self.stated_normal.global_covariance()
 
     @property
     def cost(self) -> float:
@@ -219,10 +226,11 @@ def seed_camera(points_in_board: F64, views: list[BoardView], camera: int,
 
 def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
                  seeds: list[CameraModel] | None = None, state: bundle.RigState | None = None,
-                 evidence: InlierSelection | None = None, reject: bool = True, warp: bool = False
-                 ) -> tuple[Problem, InlierSelection, int]:
+                 evidence: InlierSelection | None = None, reject: bool = True, warp: bool = False,
+                 stated_prior: bool = False) -> tuple[Problem, InlierSelection, int]:
     """Seed (from ``seeds`` or OpenCV, or start at a previous solve's ``state``) and refine
-    one camera's ``options`` each; with ``warp`` the board's warp too (:mod:`.warp`).
+    one camera's ``options`` each; with ``warp`` the board's warp too (:mod:`.warp`); with
+    ``stated_prior`` the distortion prior at its stated width (:func:`.prior.stated_weights`).
 
     Without ``evidence`` outliers and blur are decided here (unless ``reject`` is off); with
     a previous solve's ``evidence`` its inliers and weights are kept.
@@ -239,7 +247,8 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
                            min_points=MIN_VIEW_POINTS)
     setups = [bundle.CameraSetup(o.distortion_model, s, o.free, o.fix_aspect_ratio)
               for o, s in zip(options, sizes, strict=True)]
-    layout = bundle.Layout.of(setups, state, warp=warp)
+    layout = bundle.Layout.of(setups, state, corners=obs.corners(len(setups)), warp=warp,
+                              stated_prior=stated_prior)
 
     def shift_at(at: bundle.RigState) -> F64:
         """What moves the observations onto the points' projections at ``at``."""

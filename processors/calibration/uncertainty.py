@@ -120,7 +120,7 @@ def projection_uncertainty(problem: Problem, camera: int, *, range_m: float | No
     pixels = grid(size, step_px)
     flat = pixels.reshape(-1, 2)
     covariance = np.full((len(flat), 2, 2), np.nan)
-    state, layout, normal = problem.state, problem.layout, problem.normal
+    state, layout, normal = problem.state, problem.layout, problem.stated_normal
     setup = layout.setups[camera]
     seen = np.flatnonzero(normal.seen)
     in_camera, in_reference, r_c = _points_in_reference(problem, camera, flat, range_m)

@@ -105,7 +105,8 @@ def choose_warp(problem: Problem, *, folds: int = WARP_FOLDS) -> WarpChoice:
         training = obs.with_mask(obs.mask & ~held[:, None])
         rows = usable[held[usable]]
         for warp in (False, True):
-            layout = bundle.Layout.of(problem.layout.setups, problem.state, warp=warp)
+            layout = bundle.Layout.of(problem.layout.setups, problem.state,
+                                      corners=problem.layout.corners, warp=warp)
             fit = refine(problem.state, layout, training, problem.points_in_board).state
             errors[int(warp), rows] = _held_out_px2(fit, layout, obs, rows,
                                                     problem.points_in_board)
@@ -145,7 +146,7 @@ def _held_out_px2(fit: bundle.RigState, layout: bundle.Layout, obs: bundle.Obser
             fit.board_translation[obs.instant[picked]] @ fit.rig_rotation[camera].T
             + fit.rig_translation[camera], fit.board_warp_m)
         alone = bundle.Layout.of([bundle.CameraSetup(setup.distortion_model, setup.size, ())],
-                                 start)
+                                 start, corners=[0])
         views = bundle.Observations(np.zeros(len(picked), np.int64), np.arange(len(picked)),
                                     obs.observed[picked], obs.mask[picked],
                                     np.ones(len(picked)))

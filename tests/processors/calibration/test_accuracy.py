@@ -141,9 +141,8 @@ def test_rational_denominator_held_by_its_prior(monkeypatch: pytest.MonkeyPatch)
     options = CalibrationOptions(model="rational_polynomial")
     held = calibrate_cameras(board.points_in_board(), observed, [(W, H)], options).models[0]
     assert np.abs(held.d[5:]).max() < 0.05  # k4, k5, k6 (truth 0.02, 0.01, -0.004)
-    assert max_difference_px(held, RATIONAL) < 0.3
-    monkeypatch.setattr(prior, "DENOMINATOR_PRIOR_PX", 0.0)
-    monkeypatch.setattr(prior, "RADIAL_PRIOR_PX", 0.0)
+    assert max_difference_px(held, RATIONAL) < 0.35  # 0.30: the prior pulls k1..k3 too
+    monkeypatch.setattr(prior, "PRIOR_SHARE", 0.0)
     free = calibrate_cameras(board.points_in_board(), observed, [(W, H)], options).models[0]
     assert np.abs(free.d[5:]).max() > 1.0
     assert max_difference_px(free, RATIONAL) > 1.0

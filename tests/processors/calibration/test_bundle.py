@@ -41,7 +41,7 @@ def rig_problem(models: list[CameraModel], count: int, noise_px: float, seed: in
         mask=np.ones((2 * count, BOARD.corner_count), bool), weight=np.full(2 * count, 1.5))
     if warp:
         state.board_warp_m = np.array([0.002, -0.0015])
-    return state, bundle.Layout.of(setups, state, warp=warp), obs
+    return state, bundle.Layout.of(setups, state, corners=obs.corners(len(setups)), warp=warp), obs
 
 
 @pytest.mark.parametrize(("second", "warp"), [("plumb_bob", False), ("equidistant", False),
@@ -82,7 +82,7 @@ def test_jacobian_matches_finite_differences(second: str, warp: bool) -> None:
 
 
 def test_refine_converges_to_the_truth_without_noise(monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(prior, "RADIAL_PRIOR_PX", 0.0)  # its pull moves the optimum by 1e-6
+    monkeypatch.setattr(prior, "PRIOR_SHARE", 0.0)  # its pull moves the optimum by 1e-6
     truth, layout, obs = rig_problem([true_model(), true_model()], 12, 0.0, seed=4)
     seed = truth.copy()
     seed.intrinsics[0] = seed.intrinsics[0] * np.array([1.01, 1.01, 1, 1, 0.9, 1.1, 1, 1, 1]) \

@@ -69,7 +69,8 @@ def test_shifts_are_the_centroids_of_each_seen_circle() -> None:
     mask = np.array([[True, True, False], [True, True, True], [False, True, True]])
     obs = bundle.Observations(np.zeros(3, np.int64), np.arange(3), np.zeros((3, 3, 2)), mask,
                               np.ones(3))
-    shifts = centroid_shifts(state, bundle.Layout.of(setups, state), obs, points, RADIUS_M)
+    layout = bundle.Layout.of(setups, state, corners=obs.corners(len(setups)))
+    shifts = centroid_shifts(state, layout, obs, points, RADIUS_M)
     assert np.all(shifts[~mask] == 0.0)
     for view in range(3):
         in_camera = points @ rotations[view].T + centres[view]

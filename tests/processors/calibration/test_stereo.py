@@ -191,7 +191,7 @@ def test_a_circle_grid_is_measured_at_the_circles_centres(
     the two cameras see differently: taken for the circles' centres, rows of a rectified pair
     disagree and the triangulated spacing shrinks; moved by the disc shift at the solution,
     both figures are exact (without the distortion prior, whose pull is 1e-4 px)."""
-    monkeypatch.setattr(prior, "RADIAL_PRIOR_PX", 0.0)
+    monkeypatch.setattr(prior, "PRIOR_SHARE", 0.0)
     board, diameter_m = Board(5, 4, 0.05, "circles"), 0.04
     points = board.points_in_board()
     left_from_board = random_poses(np.random.default_rng(3), 12, [LEFT, RIGHT], board=board,

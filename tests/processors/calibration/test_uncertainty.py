@@ -109,7 +109,7 @@ def _covariance_pose_by_pose(problem: Problem, camera: int, pixels: np.ndarray,
                              range_m: float) -> np.ndarray:
     """``sigma^2 g (J^T J)^-1 g^T`` with every pose's derivative ``[lever_p x e; e]`` written
     out and solved through the normal equations: the definition the map shortens."""
-    state, layout, normal = problem.state, problem.layout, problem.normal
+    state, layout, normal = problem.state, problem.layout, problem.stated_normal
     setup = layout.setups[camera]
     flat = pixels.reshape(-1, 2)
     in_camera, in_reference, r_c = uncertainty._points_in_reference(problem, camera, flat,
