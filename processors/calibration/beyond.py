@@ -15,8 +15,9 @@ corners need and the views do not show never wins it. :func:`k3_beyond_the_views
 be, not the solve's pull towards the low orders) beside the k1 k2 the views chose and compares
 their projections over the whole image with k1 k2's own uncertainty (rays): where they part by
 more than :data:`~.model_order.BEYOND_RATIO` times it, k1 k2 do not hold their own figure there
-and k1 k2 k3 is kept (solved again with the prior's own weight); otherwise k1 k2 stay, and the
-k3 fit is their left-out model (its difference is added to their uncertainty,
+and k1 k2 k3 is kept (as solved with the prior's own weight, of which the lens as it could be
+is one Gauss-Newton step away, :meth:`.robust.Problem.at_stated_prior`); otherwise k1 k2 stay,
+and the k3 fit at the stated width is their left-out model (its difference is added to their uncertainty,
 :func:`~.uncertainty.with_left_out`). On a waved board through a k3 lens the ratio grows with
 the log: k1 k2's uncertainty shrinks with the views, the difference k3 makes beyond them does
 not.
@@ -35,6 +36,7 @@ import numpy.typing as npt
 from replay.messages import F64
 
 from .joint import BoardView, JointResult, calibrate_cameras
+from .lens import model_of
 from .model_order import BEYOND_RATIO, OrderChoice
 from .options import CalibrationOptions
 from .uncertainty import projection_uncertainty
@@ -149,18 +151,19 @@ def k3_beyond_the_views(points_in_board: F64, views: list[BoardView],
         return [dataclasses.replace(o, k_coefficients=3 if c in cameras else o.k_coefficients,
                                     board_warp=warp) for c, o in enumerate(wanted)]
 
-    # the lens as it could be: k3 held only as far as real lenses hold it (.prior)
     with_k3 = calibrate_cameras(points_in_board, views, sizes, radial3(asked),
-                                seeds=joint.models, disc_diameter_m=disc_diameter_m,
-                                stated_prior=True)
+                                seeds=joint.models, disc_diameter_m=disc_diameter_m)
+    # the lens as it could be: k3 held only as far as real lenses hold it (.prior)
+    stated = with_k3.problem.at_stated_prior()
+    could_be = [model_of(s.distortion_model, stated.intrinsics[c], s.size)
+                for c, s in enumerate(with_k3.problem.layout.setups)]
     out = list(orders)
     kept: list[int] = []
     for camera in asked:
         order = orders[camera]
         assert order is not None
         own = projection_uncertainty(joint.problem, camera, range_m=FAR_M)
-        difference = projection_difference(joint.models[camera], with_k3.models[camera],
-                                           own.pixels)
+        difference = projection_difference(joint.models[camera], could_be[camera], own.pixels)
         with np.errstate(divide="ignore", invalid="ignore"):
             ratio = float(np.nanmax(difference / own.sigma_px))
         taken = ratio > BEYOND_RATIO
@@ -172,14 +175,14 @@ def k3_beyond_the_views(points_in_board: F64, views: list[BoardView],
         left = list(joint.left_out_models or [None] * len(sizes))
         for camera in asked:
             richest = with_k3.left_out_models[camera] if with_k3.left_out_models else None
-            left[camera] = richest if richest is not None else with_k3.models[camera]
+            left[camera] = richest if richest is not None else could_be[camera]
         joint.left_out_models = left
         return out, wanted, joint
     chosen = [dataclasses.replace(o, k_coefficients=3) if c in kept else o
               for c, o in enumerate(wanted)]
-    # k3 kept: solved again with the prior's own weight
-    seeds = [with_k3.models[c] if c in kept else joint.models[c] for c in range(len(sizes))]
-    with_k3 = calibrate_cameras(points_in_board, views, sizes, radial3(kept), seeds=seeds,
-                                disc_diameter_m=disc_diameter_m)
+    if kept != asked:
+        seeds = [with_k3.models[c] if c in kept else joint.models[c] for c in range(len(sizes))]
+        with_k3 = calibrate_cameras(points_in_board, views, sizes, radial3(kept), seeds=seeds,
+                                    disc_diameter_m=disc_diameter_m)
     with_k3.warp_choice = joint.warp_choice  # the warp as the views decided it
     return out, chosen, with_k3

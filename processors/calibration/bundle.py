@@ -187,11 +187,10 @@ class Layout:
 
     @classmethod
     def of(cls, setups: list[CameraSetup], seed: RigState, *, corners: Sequence[int],
-           warp: bool = False, stated_prior: bool = False) -> Layout:
+           warp: bool = False) -> Layout:
         """The layout of cameras ``setups`` around ``seed`` (its fx / fy ratios), whose views
-        show ``corners`` corners per camera (they weigh the prior, :mod:`.prior`; with
-        ``stated_prior`` at no more than its stated width); with ``warp`` the board's warp is
-        estimated (else held at ``seed``'s)."""
+        show ``corners`` corners per camera (they weigh the prior, :mod:`.prior`); with
+        ``warp`` the board's warp is estimated (else held at ``seed``'s)."""
         bases, names, intrinsic_columns, rig_columns = [], [], [], []
         at = 0
         for setup, intrinsics in zip(setups, seed.intrinsics, strict=True):
@@ -206,9 +205,8 @@ class Layout:
         warp_columns = np.arange(at, at + 2) if warp else np.zeros(0, np.int64)
         at += len(warp_columns)
         models = [s.distortion_model for s in setups]
+        weights = prior.weights(models, names, intrinsic_columns, at, corners)
         stated = prior.stated_weights(models, names, intrinsic_columns, at, corners)
-        weights = stated if stated_prior else \
-            prior.weights(models, names, intrinsic_columns, at, corners)
         return cls(setups, bases, names, intrinsic_columns, rig_columns, at, weights,
                    warp_columns, tuple(corners), stated)
 

@@ -156,17 +156,14 @@ def calibrate_cameras(points_in_board: F64, views: list[BoardView],
                       options: CalibrationOptions | list[CalibrationOptions], *,
                       seeds: list[CameraModel] | None = None,
                       reject_outliers: bool = True,
-                      disc_diameter_m: float | None = None,
-                      stated_prior: bool = False) -> JointResult:
+                      disc_diameter_m: float | None = None) -> JointResult:
     """Calibrate cameras ``0 .. len(sizes) - 1`` from ``views`` of the board points
     ``points_in_board`` ``(N, 3)``; camera 0 is the rig's reference. ``options`` apply to
     every camera, or one each; ``seeds`` (one model per camera) replace OpenCV's seed
     calibration; without ``reject_outliers`` every corner counts. With ``disc_diameter_m``
     the points are the centres of circles that diameter across, seen as the centroids of
     their images (see :mod:`.discs`). The first camera's ``board_warp`` says whether the
-    board's warp is estimated (the board is shared). With ``stated_prior`` the distortion
-    prior weighs what the stated uncertainty assumes (:func:`.prior.stated_weights`: a lens
-    as real lenses are), not the solve's pull towards the low orders."""
+    board's warp is estimated (the board is shared)."""
     cameras = len(sizes)
     wanted = options if isinstance(options, list) else [options] * cameras
     check_view_counts(views, cameras)
@@ -175,7 +172,7 @@ def calibrate_cameras(points_in_board: F64, views: list[BoardView],
     final = [o.with_tangential("estimate") if a else o for o, a in zip(wanted, auto, strict=True)]
     warp = wanted[0].board_warp == "on"
     problem, evidence, rounds = robust_solve(data, final, seeds=seeds, reject=reject_outliers,
-                                             warp=warp, stated_prior=stated_prior)
+                                             warp=warp)
     tests: list[TangentialTest | None] = [None] * cameras
     trials: dict[int, tuple[Problem, int]] = {}
     for camera in (c for c in range(cameras) if auto[c]):
@@ -183,7 +180,7 @@ def calibrate_cameras(points_in_board: F64, views: list[BoardView],
         trial[camera] = wanted[camera].with_tangential("zero")
         without, _e, trial_rounds = robust_solve(
             data, trial, state=_without_tangential(problem.state, camera), evidence=evidence,
-            warp=warp, stated_prior=stated_prior)
+            warp=warp)
         trials[camera] = without, trial_rounds
         chi2 = (without.cost - problem.cost) / problem.sigma_px ** 2
         tests[camera] = TangentialTest(chi2, math.exp(-max(chi2, 0.0) / 2) < TANGENTIAL_P_VALUE)
@@ -199,13 +196,13 @@ def calibrate_cameras(points_in_board: F64, views: list[BoardView],
         for camera in dropped:
             state = _without_tangential(state, camera)
         problem, _e, more = robust_solve(data, final, state=state, evidence=evidence,
-                                         warp=warp, stated_prior=stated_prior)
+                                         warp=warp)
         rounds += more
     choice = choose_warp(problem) if wanted[0].board_warp == "auto" else None
     if choice is not None and choice.chosen:
         warp = True
         problem, _e, more = robust_solve(data, final, state=problem.state, evidence=evidence,
-                                         warp=True, stated_prior=stated_prior)
+                                         warp=True)
         rounds += more
     final = [dataclasses.replace(o, board_warp="on" if warp else "off") for o in final]
     result = _result(problem, views, evidence, options=final, tests=tests, rounds=rounds,

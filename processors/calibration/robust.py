@@ -179,6 +179,19 @@ class Problem:
         width it states (:func:`.prior.stated_weights`), not the solve's pull."""
         return self.normal.with_prior(self.layout.prior_px, self.layout.stated_prior_px)
 
+    def at_stated_prior(self) -> bundle.RigState:
+        """The solution with the prior at its stated width instead of the solve's weight
+        (:func:`.prior.stated_weights`): one Gauss-Newton step from this one, which the
+        problem, near linear over so small a change, takes to within a hundredth of its
+        size."""
+        layout, solved, stated = self.layout, self.layout.prior_px, self.layout.stated_prior_px
+        values = np.divide(layout.prior_residual(self.state), solved,
+                           out=np.zeros_like(solved), where=solved > 0)
+        gradient = self.normal.g_global + (stated ** 2 - solved ** 2) * values
+        d_global, d_pose = self.stated_normal.solve(-gradient[:, None],
+                                                    -self.normal.g_pose[:, :, None])
+        return layout.step(self.state, d_global[:, 0], d_pose[:, :, 0])
+
     def global_covariance(self) -> F64:
         """Covariance ``(G, G)`` of the global unknowns (intrinsics, rig), board poses
         eliminated: their coupling is included."""
@@ -226,11 +239,10 @@ def seed_camera(points_in_board: F64, views: list[BoardView], camera: int,
 
 def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
                  seeds: list[CameraModel] | None = None, state: bundle.RigState | None = None,
-                 evidence: InlierSelection | None = None, reject: bool = True, warp: bool = False,
-                 stated_prior: bool = False) -> tuple[Problem, InlierSelection, int]:
+                 evidence: InlierSelection | None = None, reject: bool = True, warp: bool = False
+                 ) -> tuple[Problem, InlierSelection, int]:
     """Seed (from ``seeds`` or OpenCV, or start at a previous solve's ``state``) and refine
-    one camera's ``options`` each; with ``warp`` the board's warp too (:mod:`.warp`); with
-    ``stated_prior`` the distortion prior at its stated width (:func:`.prior.stated_weights`).
+    one camera's ``options`` each; with ``warp`` the board's warp too (:mod:`.warp`).
 
     Without ``evidence`` outliers and blur are decided here (unless ``reject`` is off); with
     a previous solve's ``evidence`` its inliers and weights are kept.
@@ -247,8 +259,7 @@ def robust_solve(data: BoardViews, options: list[CalibrationOptions], *,
                            min_points=MIN_VIEW_POINTS)
     setups = [bundle.CameraSetup(o.distortion_model, s, o.free, o.fix_aspect_ratio)
               for o, s in zip(options, sizes, strict=True)]
-    layout = bundle.Layout.of(setups, state, corners=obs.corners(len(setups)), warp=warp,
-                              stated_prior=stated_prior)
+    layout = bundle.Layout.of(setups, state, corners=obs.corners(len(setups)), warp=warp)
 
     def shift_at(at: bundle.RigState) -> F64:
         """What moves the observations onto the points' projections at ``at``."""
