@@ -15,12 +15,12 @@ corners need and the views do not show never wins it. :func:`k3_beyond_the_views
 be, not the solve's pull towards the low orders) beside the k1 k2 the views chose and compares
 their projections over the whole image with k1 k2's own uncertainty (rays): where they part by
 more than :data:`~.model_order.BEYOND_RATIO` times it, k1 k2 do not hold their own figure there
-and k1 k2 k3 is kept (as solved with the prior's own weight, of which the lens as it could be
-is one Gauss-Newton step away, :meth:`.robust.Problem.at_stated_prior`); otherwise k1 k2 stay,
-and the k3 fit at the stated width is their left-out model (its difference is added to their uncertainty,
-:func:`~.uncertainty.with_left_out`). On a waved board through a k3 lens the ratio grows with
-the log: k1 k2's uncertainty shrinks with the views, the difference k3 makes beyond them does
-not.
+and k1 k2 k3 is kept (as solved with the prior's own weight, of which the lens as it could be is
+one Gauss-Newton step away, :meth:`.robust.Problem.at_stated_prior`); otherwise k1 k2 stay, and
+the k3 fit at the stated width is their left-out model (its difference is added to their
+uncertainty, :func:`~.uncertainty.with_left_out`). On a waved board through a k3 lens the ratio
+grows with the log: k1 k2's uncertainty shrinks with the views, the difference k3 makes beyond
+them does not.
 """
 
 from __future__ import annotations

@@ -64,12 +64,16 @@ class NormalEquations:
         the Schur complement ``(G, G)`` (computed at the first use)."""
         return _schur_factors(self.a, self.c, self.b)
 
-    def with_prior(self, solved_px: F64, stated_px: F64) -> NormalEquations:
-        """The same equations with the prior's weights ``solved_px`` ``(G,)`` on the diagonal
-        replaced by ``stated_px`` (a copy; the gradient is left as it is)."""
+    def with_prior(self, solved_px: F64, stated_px: F64, prior_residual: F64) -> NormalEquations:
+        """The same equations with the prior's weights ``solved_px`` ``(G,)`` replaced by
+        ``stated_px``, at the point where the prior's residuals are ``prior_residual`` (a
+        copy)."""
         a = self.a.copy()
         a[np.diag_indices(len(a))] += stated_px ** 2 - solved_px ** 2
-        return NormalEquations(a, self.c, self.b, self.g_global, self.g_pose, self.seen)
+        values = np.divide(prior_residual, solved_px, out=np.zeros_like(solved_px),
+                           where=solved_px > 0)
+        gradient = self.g_global + (stated_px ** 2 - solved_px ** 2) * values
+        return NormalEquations(a, self.c, self.b, gradient, self.g_pose, self.seen)
 
     def global_covariance(self) -> F64:
         """``[(J^T J)^-1]`` of the global unknowns ``(G, G)`` (times sigma^2: covariance)."""

@@ -15,23 +15,22 @@ explained, and of the solutions the corners cannot tell apart the prior picks th
 explains the distortion with the low orders, using a high order only as far as the corners
 demand it.
 
-**Its weight.** As mrcal 2.5 weighs its regularisation: the prior's cost, were every
-coefficient of the model :data:`NOMINAL_COEFFICIENT`, is :data:`PRIOR_SHARE` of the corners'
-cost were each 1 px off (:func:`coefficient_px`), so it grows with the square root of the
-corners seen: 0.56 px per unit for 30 views of a 7x6 board, 1.8 px for 300 frames of a waved
-one. The corners' information on the combinations they hold grows with their count too, so the
-prior keeps the same small share of every solve (views that span a wide lens's image hold its
-k3 to 1e-4, and the prior moves it by well under a tenth of its sigma), and decides only what
-the corners leave free. On vs_mrcal's moving board through a k3 lens (k1 k2 p1 p2 k3 fitted, 11
-seeds, median max projection difference over the image) a fixed 0.3 px per unit gave 0.033 px,
-1 px 0.040 px, this rule 0.023 px and mrcal 0.027 px; without a prior k3 runs to -0.6 and the
-image corners are 0.18 px off (13 seeds). The prior's pull is a bias where the views leave a coefficient
-free: on 80 synthetic views over the middle 40 % of a narrow lens's image it leaves the image
-corners 0.19 px off (0.08 at a fixed 0.3 px per unit, 1.3 px without a prior). The pull is
-not knowledge of the lens: the stated uncertainty propagates the prior at no more than
-:data:`STATED_RADIAL_PX` (:func:`stated_weights`, used by
-:attr:`.robust.Problem.stated_normal`), so a coefficient the views leave free keeps the width
-real lenses give it.
+**Its weight.** As mrcal 2.5 weighs its regularisation: the prior's cost, were every coefficient
+of the model :data:`NOMINAL_COEFFICIENT`, is :data:`PRIOR_SHARE` of the corners' cost were each
+1 px off (:func:`coefficient_px`), so it grows with the square root of the corners seen: 0.56 px
+per unit for 30 views of a 7x6 board, 1.8 px for 300 frames of a waved one. The corners'
+information on the combinations they hold grows with their count too, so the prior keeps the
+same small share of every solve (views that span a wide lens's image hold its k3 to 1e-4, and
+the prior moves it by well under a tenth of its sigma), and decides only what the corners leave
+free. On vs_mrcal's moving board through a k3 lens (k1 k2 p1 p2 k3 fitted, 11 seeds, median max
+projection difference over the image) a fixed 0.3 px per unit gave 0.033 px, 1 px 0.040 px, this
+rule 0.023 px and mrcal 0.027 px; without a prior k3 runs to -0.6 and the image corners are 0.18
+px off (13 seeds). The prior's pull is a bias where the views leave a coefficient free: on 80
+synthetic views over the middle 40 % of a narrow lens's image it leaves the image corners 0.19
+px off (0.08 at a fixed 0.3 px per unit, 1.3 px without a prior). The pull is not knowledge of
+the lens: the stated uncertainty propagates the prior at no more than :data:`STATED_RADIAL_PX`
+(:func:`stated_weights`, used by :attr:`.robust.Problem.stated_normal`), so a coefficient the
+views leave free keeps the width real lenses give it.
 
 **The rational model's denominator.** (1 + k1 r^2 + k2 r^4 + k3 r^6) / (1 + k4 r^2 + k5 r^4 +
 k6 r^6) is nearly unchanged when numerator and denominator gain the same factor (1 + a r^2):

@@ -40,6 +40,7 @@ from . import bundle, normal
 from .discs import centroid_shifts
 from .lens import model_of
 from .motion import BlurModel, fit_blur
+from .normal import NormalEquations
 from .options import CalibrationOptions
 from .seed import board_pose, seed_model, seed_state
 
@@ -174,23 +175,16 @@ class Problem:
     order: I64  # view index of each row
 
     @cached_property
-    def stated_normal(self) -> normal.NormalEquations:
-        """The normal equations the stated uncertainty is propagated through: the prior at the
-        width it states (:func:`.prior.stated_weights`), not the solve's pull."""
-        return self.normal.with_prior(self.layout.prior_px, self.layout.stated_prior_px)
+    def stated_normal(self) -> NormalEquations:
+        """The normal equations with the prior at its stated width (:func:`.prior.stated_weights`),
+        not the solve's pull: the stated uncertainty is propagated through them."""
+        layout = self.layout
+        return self.normal.with_prior(layout.prior_px, layout.stated_prior_px,
+                                      layout.prior_residual(self.state))
 
     def at_stated_prior(self) -> bundle.RigState:
-        """The solution with the prior at its stated width instead of the solve's weight
-        (:func:`.prior.stated_weights`): one Gauss-Newton step from this one, which the
-        problem, near linear over so small a change, takes to within a hundredth of its
-        size."""
-        layout, solved, stated = self.layout, self.layout.prior_px, self.layout.stated_prior_px
-        values = np.divide(layout.prior_residual(self.state), solved,
-                           out=np.zeros_like(solved), where=solved > 0)
-        gradient = self.normal.g_global + (stated ** 2 - solved ** 2) * values
-        d_global, d_pose = self.stated_normal.solve(-gradient[:, None],
-                                                    -self.normal.g_pose[:, :, None])
-        return layout.step(self.state, d_global[:, 0], d_pose[:, :, 0])
+        """The solution at the prior's stated width: one Gauss-Newton step from this one."""
+        return self.layout.step(self.state, *self.stated_normal.damped_solve(0.0))
 
     def global_covariance(self) -> F64:
         """Covariance ``(G, G)`` of the global unknowns (intrinsics, rig), board poses
