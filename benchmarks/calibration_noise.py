@@ -3,11 +3,13 @@
 For every case (``benchmarks.calibrate_speed`` flags) and seed of kept recordings, each camera
 prints:
 
-- its worst parameter's error/sigma with the solver's covariance (``sigma^2 (J^T J)^-1``) and
-  with a covariance robust to noise that differs between corners and is shared within a board
-  pose (the cluster sandwich ``S^-1 M S^-1``: ``S`` the information of the global unknowns
-  with the board poses eliminated, ``M`` the sum over board poses of ``s s^T`` for each pose's
-  score ``s = J_global^T r``, plus the share of ``sigma^2 S`` the fit removes from it);
+- its worst parameter's error/sigma with the covariance camlog states (``sigma^2 (J^T J)^-1``,
+  the distortion prior at its stated width, ``Problem.stated_normal``) and with a covariance
+  robust to noise that differs between corners and is shared within a board pose (the cluster
+  sandwich ``S^-1 M S^-1``, through the solve's own equations, the prior at the solve's weight:
+  ``S`` the information of the global unknowns with the board poses eliminated, ``M`` the sum
+  over board poses of ``s s^T`` for each pose's score ``s = J_global^T r``, plus the share of
+  ``sigma^2 S`` the fit removes from it);
 - the fitted residuals' RMS per quintile of distance from the image centre;
 - for chessboards, the refinement's own error: every used view rendered without noise at its
   true pose through the true model (:mod:`.ideal_board`), its corners refined as camlog
