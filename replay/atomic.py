@@ -118,6 +118,9 @@ class _Staged:
                 self.discard()
                 raise OutputError(f"cannot write {self.target}: {err.strerror or err}") \
                     from None
+            except BaseException:  # Ctrl-C while moving into place
+                self.discard()
+                raise
         else:
             self.discard()
 
@@ -232,6 +235,9 @@ def write_bytes_atomic(path: Path, data: bytes, *, overwrite: bool = True,
     except OSError as err:
         output.discard()
         raise OutputError(f"cannot write {path}: {err.strerror or err}") from None
+    except BaseException:  # Ctrl-C: no temporary file stays
+        output.discard()
+        raise
 
 
 def write_text_atomic(path: Path, text: str, *, overwrite: bool = True,

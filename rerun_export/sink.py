@@ -145,21 +145,25 @@ class RecordingSink:
             else:
                 self._url = spawn_viewer(bind=self._bind, port=self._port)
                 self.rec.connect_grpc(self._url)
-        except ViewerError:
-            self._discard()
-            raise
         except Exception as err:  # rerun raises RuntimeError/OSError/ValueError from Rust
             self._discard()
+            if isinstance(err, ViewerError):
+                raise
             raise ViewerError(f"cannot send the recording to {self._where()}: {err}") from None
+        except BaseException:  # Ctrl-C: no output left behind
+            self._discard()
+            raise
         if self._atomic is None and self._blueprint is not None:
             self.rec.send_blueprint(self._blueprint, make_active=True, make_default=True)
         return self
 
     def _discard(self, *, failed: bool = False) -> None:
-        if not any(rec is self.rec for rec in _ABANDONED):  # left behind already
-            _disconnect(self.rec, GIVE_UP_S if failed else STALL_S)
-        if self._atomic is not None:
-            self._atomic.discard()
+        try:
+            if not any(rec is self.rec for rec in _ABANDONED):  # left behind already
+                _disconnect(self.rec, GIVE_UP_S if failed else STALL_S)
+        finally:  # a Ctrl-C while rerun lets go still removes the file
+            if self._atomic is not None:
+                self._atomic.discard()
 
     def __exit__(self, et: type[BaseException] | None, ev: BaseException | None,
                  tb: TracebackType | None) -> None:
@@ -181,6 +185,9 @@ class RecordingSink:
             reason = err.strerror if isinstance(err, OSError) and err.strerror \
                 else _rerun_failure(err, to_file=self._atomic is not None)
             raise self._failure(reason) from None
+        except BaseException:  # Ctrl-C while the last data is written: no output left
+            self._discard()
+            raise
 
     def _failure(self, reason: str) -> ViewerError:
         if self._atomic is not None:
@@ -275,7 +282,10 @@ class Destination:
         combined = self._atomic.temp / "combined.rrd"
         try:
             combine_recordings(self._parts, combined)
+            self._atomic.commit(combined)
         except ViewerError as err:
             self._atomic.discard()
             raise ViewerError(f"cannot write {self._output}: {err}") from None
-        self._atomic.commit(combined)
+        except BaseException:  # Ctrl-C while combining: no output left
+            self._atomic.discard()
+            raise

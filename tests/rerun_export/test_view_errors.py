@@ -12,6 +12,7 @@ from rerun_export import view_logs
 from rerun_export.errors import ViewerError
 from tests.outputs import temp_outputs
 from tests.recordings import chunked_camera_log, corrupt_middle_chunk
+from tests.rerun_export.test_recordings import T0, camera_log
 from tests.rrd import load_rrd
 
 
@@ -87,3 +88,28 @@ def test_connect_needs_a_listening_viewer(red_log: Path) -> None:
         port = probe.getsockname()[1]
     with pytest.raises(ViewerError, match=f"no rerun viewer is listening at .*:{port}/proxy"):
         view_logs([red_log], connect=f"127.0.0.1:{port}", progress=False)
+
+
+@pytest.mark.parametrize("stage", ["flush_recording", "_disconnect", "combine_recordings"])
+def test_ctrl_c_at_any_stage_of_writing_leaves_no_rrd(
+        red_log: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch, stage: str) -> None:
+    """A Ctrl-C while rerun writes the last data, lets go of the file or the recordings are
+    combined: nothing at the output, no temporary file beside it."""
+    from rerun_export import sink
+
+    real = getattr(sink, stage)
+
+    def interrupted(*args: object, **kwargs: object) -> object:
+        if stage == "_disconnect" and args[1] == sink.GIVE_UP_S:
+            return real(*args, **kwargs)
+        real(*args, **kwargs)  # the work is done, then the signal comes
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(sink, stage, interrupted)
+    logs = [red_log]
+    if stage == "combine_recordings":  # a log of another rig: a recording of its own
+        logs.append(camera_log(tmp_path / "rear.mcap", "/rear", T0))
+    with pytest.raises(KeyboardInterrupt):
+        view_logs(logs, output=tmp_path / "out.rrd", progress=False)
+    assert not (tmp_path / "out.rrd").exists()
+    assert temp_outputs(tmp_path) == []
