@@ -40,7 +40,14 @@ def model_of(distortion_model: str, intrinsics: F64, size: tuple[int, int]) -> C
 
 def project(distortion_model: str, intrinsics: F64, points: F64) -> tuple[F64, F64, F64]:
     """Pixels ``(M, 2)`` of points ``(M, 3)`` in the camera frame, with the derivatives
-    d pixel / d point ``(M, 2, 3)`` and d pixel / d intrinsics ``(M, 2, K)``."""
+    d pixel / d point ``(M, 2, 3)`` and d pixel / d intrinsics ``(M, 2, K)``. A point in the
+    camera's plane (z = 0), which a poor starting pose can put there, has no projection: its
+    rows are NaN (or infinite), without numpy's warnings."""
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        return _project(distortion_model, intrinsics, points)
+
+
+def _project(distortion_model: str, intrinsics: F64, points: F64) -> tuple[F64, F64, F64]:
     distort = DISTORTIONS[canonical_name(distortion_model)]
     normalized, d_point, d_dist = distort(intrinsics[4:], points)
     focal = intrinsics[:2]

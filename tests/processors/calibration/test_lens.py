@@ -97,3 +97,19 @@ def test_rigid_fit_recovers_a_transform_and_the_mean_of_rotations_is_one() -> No
     either = rotation.matrices(np.array([[0.0, 0.0, 0.1], [0.0, 0.0, -0.1]]))
     np.testing.assert_allclose(rotation.nearest_rotation(either.sum(axis=0)), np.eye(3),
                                atol=1e-12)
+
+
+@pytest.mark.parametrize("name", sorted(INTRINSIC_NAMES))
+def test_a_point_in_the_camera_plane_has_no_projection_and_no_warning(name: str) -> None:
+    """A poor starting pose can put board points at z = 0: their rows are not finite (the
+    solver leaves such corners out) and numpy says nothing (pytest turns warnings into
+    errors). The fisheye sees 90 degrees off its axis: only the lens centre itself has no
+    projection there."""
+    intrinsics = np.concatenate([[500.0, 500.0, 319.5, 239.5],
+                                 np.full(len(INTRINSIC_NAMES[name]) - 4, 0.01)])
+    points = np.array([[0.1, -0.05, 0.0], [0.0, 0.0, 0.0], [0.02, 0.01, 0.5]])
+    uv, d_point, d_intrinsics = project(name, intrinsics, points)
+    unprojected = 1 if name == "equidistant" else 2
+    assert not np.isfinite(uv[2 - unprojected:2]).all(axis=1).any()
+    assert np.isfinite(uv[2]).all() and np.isfinite(d_point[2]).all() \
+        and np.isfinite(d_intrinsics[2]).all()
