@@ -22,6 +22,22 @@ from tests.workers import group_by_worker
 REPO_ROOT = Path(__file__).resolve().parents[1]
 
 
+def _one_thread_per_worker() -> None:
+    """When xdist's workers already fill every core, each one (and every process it starts)
+    renders and calibrates on one thread: Mesa's llvmpipe and OpenCV would otherwise start a
+    pool per process and the pools fight over the same cores (a fifth of the suite's CPU time
+    goes to that). The images and numbers are the same on any thread count."""
+    workers = int(os.environ.get("PYTEST_XDIST_WORKER_COUNT", "0"))
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") \
+        else os.cpu_count() or 1
+    if workers >= cores:
+        os.environ.setdefault("LP_NUM_THREADS", "0")  # llvmpipe renders on the calling thread
+        os.environ.setdefault("OPENCV_FOR_THREADS_NUM", "1")
+
+
+_one_thread_per_worker()
+
+
 #: workers ``-n auto`` starts at most: each renders scenes and starts processes of its own
 MAX_WORKERS = 4
 
