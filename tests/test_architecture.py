@@ -104,7 +104,11 @@ def _read_tree() -> dict[str, Module]:
     return _resolve(found)
 
 
-MODULES = _read_tree()
+@pytest.fixture(scope="module")
+def modules() -> dict[str, Module]:
+    """Every module of the packages, read once by the worker that runs these tests (not by
+    every worker at collection)."""
+    return _read_tree()
 
 
 def _top(name: str) -> str:
@@ -349,44 +353,45 @@ def test_the_checks_find_what_they_look_for() -> None:
         "y": "run does not build its GoRequest once"}
 
 
-def test_the_source_tree_is_read() -> None:
+def test_the_source_tree_is_read(modules: dict[str, Module]) -> None:
     assert {"replay.formats.base", "camlog.cli", "processors.registry",
-            "recorder.record"} <= set(MODULES)
-    assert sum(len(m.imports) for m in MODULES.values()) > 300
+            "recorder.record"} <= set(modules)
+    assert sum(len(m.imports) for m in modules.values()) > 300
 
 
-def test_dependencies_point_one_way() -> None:
-    assert wrong_direction(MODULES) == []
+def test_dependencies_point_one_way(modules: dict[str, Module]) -> None:
+    assert wrong_direction(modules) == []
 
 
-def test_no_import_cycles() -> None:
-    assert cycles(MODULES) == []
+def test_no_import_cycles(modules: dict[str, Module]) -> None:
+    assert cycles(modules) == []
 
 
-def test_no_private_names_across_modules() -> None:
-    assert private_uses(MODULES) == []
+def test_no_private_names_across_modules(modules: dict[str, Module]) -> None:
+    assert private_uses(modules) == []
 
 
-def test_one_name_per_concept() -> None:
-    assert twins(MODULES) == {}
+def test_one_name_per_concept(modules: dict[str, Module]) -> None:
+    assert twins(modules) == {}
 
 
-def test_public_functions_take_few_positional_parameters() -> None:
-    assert crowded(MODULES) == []
+def test_public_functions_take_few_positional_parameters(modules: dict[str, Module]) -> None:
+    assert crowded(modules) == []
 
 
-def test_every_command_is_one_request() -> None:
+def test_every_command_is_one_request(modules: dict[str, Module]) -> None:
     from camlog.cli import COMMANDS
 
-    assert command_requests(MODULES, {c: m for c, (_, m) in COMMANDS.items()}) == {}
+    assert command_requests(modules, {c: m for c, (_, m) in COMMANDS.items()}) == {}
 
 
-def test_a_module_holds_one_concept() -> None:
-    assert {m.where: m.lines for m in MODULES.values() if m.lines > MAX_LINES} == {}
+def test_a_module_holds_one_concept(modules: dict[str, Module]) -> None:
+    assert {m.where: m.lines for m in modules.values() if m.lines > MAX_LINES} == {}
 
 
 @pytest.mark.parametrize("package", PACKAGES)
-def test_public_functions_and_classes_say_what_they_are_for(package: str) -> None:
-    mine = {name: m for name, m in MODULES.items() if _top(name) == package}
-    assert [line for line in undocumented(MODULES) if line.startswith(f"{package}/")] == []
+def test_public_functions_and_classes_say_what_they_are_for(package: str,
+                                                           modules: dict[str, Module]) -> None:
+    mine = {name: m for name, m in modules.items() if _top(name) == package}
+    assert [line for line in undocumented(modules) if line.startswith(f"{package}/")] == []
     assert mine

@@ -31,6 +31,7 @@ CONTRIBUTING = ROOT / "CONTRIBUTING.md"
 SKIP = re.compile(r"<!-- docs-test: skip \((?P<reason>[^)]+)\) -->")
 #: docs text -> what the suite runs instead (shorter logs; files instead of a viewer)
 SMALLER = {
+    "--duration 4 --resolution 320x240": "--duration 2 --resolution 320x240",
     "--duration 30": "--duration 4 --resolution 320x240",
     "--duration 10": "--duration 0.1",
     "--duration 2": "--duration 0.5",
@@ -96,10 +97,11 @@ def shell_blocks(text: str, page: str) -> list[Block]:
 
 
 def smaller(command: str) -> str:
-    """The command as the suite runs it (SMALLER applied)."""
-    for docs, suite in SMALLER.items():
-        command = command.replace(docs, suite)
-    return command
+    """The command as the suite runs it (SMALLER applied in one pass, the longest entry first
+    where two start at one place, so that no replacement is replaced again; whole words:
+    ``--duration 2`` leaves ``--duration 20`` alone)."""
+    entries = "|".join(map(re.escape, sorted(SMALLER, key=len, reverse=True)))
+    return re.sub(rf"(?:{entries})(?![\w.])", lambda m: SMALLER[m[0]], command)
 
 
 def outputs_of(command: str) -> list[str]:

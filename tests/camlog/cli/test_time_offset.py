@@ -138,7 +138,7 @@ def test_a_held_board_does_not_show_it(tmp_path: Path,
 
 
 def test_natural_features_of_a_moving_rig_show_it(tmp_path: Path) -> None:
-    log = _record("stereo_moving_rig", tmp_path / "rig.mcap", "--duration", "6",
+    log = _record("stereo_moving_rig", tmp_path / "rig.mcap", "--duration", "4",
                   "--latency", f"right:{LATENCY_MS:g}")
     result = tmp_path / "rig_offset.json"
     _run("resync", str(log), *CAMERAS, "--estimate-offset", "--offset-file", str(result),
