@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Iterator, Sequence
+from dataclasses import dataclass, field
 from functools import partial
 from typing import Protocol
 
@@ -91,18 +92,22 @@ def render_exposure(renderer: SceneRenderer, camera_index: int, camera: CameraSp
 def rendered_shots(
     renderer: SceneRenderer, cameras: Sequence[CameraSpec], targets: Sequence[TargetSpec],
     trajectories: Sequence[PoseSource], shots: Iterable[Shot], *,
-    camera_poses: CameraPoses | None = None,
+    camera_poses: CameraPoses | None = None, every_frame: bool = False,
 ) -> Iterator[tuple[Shot, np.ndarray, list[F64]]]:
     """Each shot with its ideal render and the targets' ``world_from_target`` at its
     exposure (mid-exposure); cameras at one instant share one pose update. A camera is
     where ``camera_poses`` puts it at the shot's exposure (turned by its drifts, for its
-    whole exposure; carried by a moving rig, over its exposure); default: at rest."""
+    whole exposure; carried by a moving rig, over its exposure); default: at rest. A camera
+    whose scene has not changed since its last frame gets that frame's render again (the
+    same array, read-only) unless ``every_frame`` (what rendering costs without that)."""
     outlines = [outline_in_target(t) for t in targets]
     last_t: float | None = None
     poses: list[F64] = []
     drifts = camera_poses.drifts if camera_poses is not None else ()
     moving = camera_poses is not None and camera_poses.moving
     started = [0] * len(cameras)  # drifts each camera is turned by
+    placed = [0] * len(cameras)  # times each camera was moved
+    last = [_LastRender()] * len(cameras)
     for shot in shots:
         camera = cameras[shot.camera_index]
         now = sum(d.camera == camera.name and shot.t_s >= d.start_s for d in drifts)
@@ -110,6 +115,7 @@ def rendered_shots(
             renderer.place_camera(shot.camera_index,
                                   camera_poses.world_from_camera(shot.camera_index, shot.t_s))
             started[shot.camera_index] = now
+            placed[shot.camera_index] += 1
         if camera.exposure_s > 0:
             rendered = render_exposure(renderer, shot.camera_index, camera,
                                        trajectories=trajectories, outlines=outlines,
@@ -121,5 +127,26 @@ def rendered_shots(
                 poses = [trajectory.at(shot.t_s) for trajectory in trajectories]
                 renderer.set_poses(poses)
                 last_t = shot.t_s
-            rendered = renderer.render(shot.camera_index)
+            scene = scene_key(placed[shot.camera_index], poses)
+            if every_frame or last[shot.camera_index].scene != scene:
+                fresh = renderer.render(shot.camera_index)
+                fresh.flags.writeable = False
+                last[shot.camera_index] = _LastRender(scene, fresh)
+            rendered = last[shot.camera_index].rendered
         yield shot, rendered, poses
+
+
+def scene_key(placed: int, world_from_targets: list[F64]) -> tuple[object, ...]:
+    """What one camera's ideal render depends on while the scene is still: how many times
+    the camera was moved, and every target's pose."""
+    return (placed, *(pose.tobytes() for pose in world_from_targets))
+
+
+@dataclass(frozen=True)
+class _LastRender:
+    """A camera's last ideal render and the scene it shows (the camera's placement count and
+    every target's pose): a held pose is rendered once, not once per frame (the same scene
+    renders to the same pixels; the noise is drawn per frame afterwards). Never written to."""
+
+    scene: tuple[object, ...] = ()
+    rendered: np.ndarray = field(default_factory=lambda: np.empty(0, np.uint8))

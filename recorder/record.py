@@ -121,6 +121,10 @@ class _Pipeline:
         self.scenario = scenario
         self.optics = optics
         self.noise = [rng_for(scenario, NOISE_STREAM, i) for i in range(len(optics))]
+        #: per camera, its last render and the image the optics made of it: a held pose's
+        #: render comes again, the same array, for each of its frames (one thread reads this)
+        self._warped: list[tuple[np.ndarray | None, np.ndarray | None]] = \
+            [(None, None)] * len(optics)
         self._log = BackgroundWriter(open_log, max_queued=6)
 
     def put(self, item: tuple[Shot, np.ndarray, list[np.ndarray]]) -> None:
@@ -140,7 +144,13 @@ class _Pipeline:
     ) -> None:
         camera = self.scenario.cameras[shot.camera_index]
         stamp_ns = self.scenario.start_stamp_ns + round(shot.stamp_s * 1e9)
-        pixels = self.optics[shot.camera_index].apply(rendered)
+        last, warped = self._warped[shot.camera_index]
+        if rendered is last and warped is not None:
+            pixels = warped
+        else:
+            pixels = self.optics[shot.camera_index].apply(rendered)
+            pixels.flags.writeable = False
+            self._warped[shot.camera_index] = (rendered, pixels)
         if camera.noise_std > 0:
             rng = self.noise[shot.camera_index]
             noisy = pixels.astype(np.float32)

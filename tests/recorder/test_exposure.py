@@ -5,14 +5,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from pathlib import Path
 
 import cv2
 import numpy as np
 import pytest
 
+from recorder import exposure
 from recorder.errors import ScenarioError
 from recorder.exposure import BLUR_STEP_PX, subframe_count, subframe_times
 from recorder.motion import SmoothTrajectory, plan_trajectory
+from recorder.record import record
+from recorder.render import SceneRenderer
 from recorder.scenario import load_scenario
 from recorder.targets import outline_in_target
 from replay.camera import CameraModel
@@ -128,3 +132,45 @@ def test_blurred_corners_sit_at_the_mid_exposure_truth(blurred: Log) -> None:
     assert len(errors) >= FRAMES // 2
     all_errors = np.concatenate(errors)
     assert np.median(all_errors) < 0.2, np.median(all_errors)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scenario", ["stereo_unsynced", "mono_fisheye"])
+def test_a_held_pose_is_rendered_once_and_logged_as_if_rendered_every_frame(
+        scenario: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Cameras with their own clocks and a fisheye's views: a held board is rendered once per
+    camera and pose, and every message of the log is byte for byte what rendering each frame
+    writes; the noise is still drawn per frame."""
+    overrides = {"duration_s": 1.0, "seed": 3, "noise_std": 2.0}
+    if scenario == "stereo_unsynced":
+        overrides |= {"width": 160, "height": 120}
+    renders = 0
+    render = SceneRenderer.render
+
+    def counted(self: SceneRenderer, camera_index: int) -> np.ndarray:
+        nonlocal renders
+        renders += 1
+        return render(self, camera_index)
+
+    monkeypatch.setattr(SceneRenderer, "render", counted)
+    once = record(load_scenario(scenario, overrides), tmp_path / "once.mcap", progress=False)
+    rendered_once, renders = renders, 0
+    frames = sum(once.frames.values())
+    # every frame a scene of its own: what the recorder did before it kept the last render
+    keys = iter(range(10**9))
+    monkeypatch.setattr(exposure, "scene_key", lambda *_: (next(keys),))
+    record(load_scenario(scenario, overrides), tmp_path / "each.mcap", progress=False)
+    assert renders == frames
+    poses = len(once.frames) * math.ceil(overrides["duration_s"] / 0.5)  # held 0.5 s each
+    assert rendered_once <= poses + len(once.frames) < frames / 4
+    assert _messages(tmp_path / "once.mcap") == _messages(tmp_path / "each.mcap")
+    images = [m for m in _messages(tmp_path / "once.mcap") if m[0].endswith("/image_raw")]
+    assert len({data for _, _, data in images}) == len(images)  # no two frames alike
+
+
+def _messages(path: Path) -> list[tuple[str, int, bytes]]:
+    """Every message of an MCAP file as written: topic, log time, serialized bytes."""
+    from mcap.reader import make_reader
+
+    with path.open("rb") as f:
+        return [(c.topic, m.log_time, m.data) for _, c, m in make_reader(f).iter_messages()]

@@ -258,8 +258,9 @@ def test_a_failure_mid_recording_leaves_no_output_and_no_thread(
     error: BaseException
     if where == "render":
         error = RenderError("GL context lost")
+        # the second render: the board's second held pose, frame 15 of 20
         monkeypatch.setattr(SceneRenderer, "render",
-                            _fail_on_call(5, error, SceneRenderer.render))
+                            _fail_on_call(2, error, SceneRenderer.render))
     else:
         error = OSError("disk full")
         monkeypatch.setattr(_Pipeline, "_write", _fail_on_call(3, error, _Pipeline._write))
