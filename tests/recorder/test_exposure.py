@@ -141,7 +141,7 @@ def test_a_held_pose_is_rendered_once_and_logged_as_if_rendered_every_frame(
     """Cameras with their own clocks and a fisheye's views: a held board is rendered once per
     camera and pose, and every message of the log is byte for byte what rendering each frame
     writes; the noise is still drawn per frame."""
-    overrides = {"duration_s": 1.0, "seed": 3, "noise_std": 2.0}
+    overrides = {"duration_s": 0.7, "seed": 3, "noise_std": 2.0}
     if scenario == "stereo_unsynced":
         overrides |= {"width": 160, "height": 120}
     renders = 0
