@@ -127,7 +127,7 @@ def rendered_shots(
                 poses = [trajectory.at(shot.t_s) for trajectory in trajectories]
                 renderer.set_poses(poses)
                 last_t = shot.t_s
-            scene = scene_key(placed[shot.camera_index], poses)
+            scene = _scene_key(placed[shot.camera_index], poses)
             if every_frame or last[shot.camera_index].scene != scene:
                 fresh = renderer.render(shot.camera_index)
                 fresh.flags.writeable = False
@@ -136,7 +136,7 @@ def rendered_shots(
         yield shot, rendered, poses
 
 
-def scene_key(placed: int, world_from_targets: list[F64]) -> tuple[object, ...]:
+def _scene_key(placed: int, world_from_targets: list[F64]) -> tuple[object, ...]:
     """What one camera's ideal render depends on while the scene is still: how many times
     the camera was moved, and every target's pose."""
     return (placed, *(pose.tobytes() for pose in world_from_targets))

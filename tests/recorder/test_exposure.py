@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from functools import partial
 from pathlib import Path
 
 import cv2
@@ -12,6 +13,7 @@ import numpy as np
 import pytest
 
 from recorder import exposure
+from recorder import record as record_module
 from recorder.errors import ScenarioError
 from recorder.exposure import BLUR_STEP_PX, subframe_count, subframe_times
 from recorder.motion import SmoothTrajectory, plan_trajectory
@@ -134,16 +136,23 @@ def test_blurred_corners_sit_at_the_mid_exposure_truth(blurred: Log) -> None:
     assert np.median(all_errors) < 0.2, np.median(all_errors)
 
 
+#: a held pose's scenes: cameras on their own clocks; the right camera turned mid-pose (its
+#: render must change though no target moved); a fisheye's views
+HELD = {
+    "stereo_unsynced": {"width": 160, "height": 120},
+    "stereo_checkerboard": {"width": 160, "height": 120, "drifts": [
+        {"camera": "right", "axis": "pitch", "degrees": 0.5, "start_s": 0.2}]},
+    "mono_fisheye": {},
+}
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("scenario", ["stereo_unsynced", "mono_fisheye"])
+@pytest.mark.parametrize("scenario", list(HELD))
 def test_a_held_pose_is_rendered_once_and_logged_as_if_rendered_every_frame(
         scenario: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    """Cameras with their own clocks and a fisheye's views: a held board is rendered once per
-    camera and pose, and every message of the log is byte for byte what rendering each frame
-    writes; the noise is still drawn per frame."""
-    overrides = {"duration_s": 0.7, "seed": 3, "noise_std": 2.0}
-    if scenario == "stereo_unsynced":
-        overrides |= {"width": 160, "height": 120}
+    """A held board is rendered once per camera and scene, and every message of the log is
+    byte for byte what rendering each frame writes; the noise is still drawn per frame."""
+    overrides = {"duration_s": 0.7, "seed": 3, "noise_std": 2.0, **HELD[scenario]}
     renders = 0
     render = SceneRenderer.render
 
@@ -156,13 +165,14 @@ def test_a_held_pose_is_rendered_once_and_logged_as_if_rendered_every_frame(
     once = record(load_scenario(scenario, overrides), tmp_path / "once.mcap", progress=False)
     rendered_once, renders = renders, 0
     frames = sum(once.frames.values())
-    # every frame a scene of its own: what the recorder did before it kept the last render
-    keys = iter(range(10**9))
-    monkeypatch.setattr(exposure, "scene_key", lambda *_: (next(keys),))
+    monkeypatch.setattr(record_module, "rendered_shots",
+                        partial(exposure.rendered_shots, every_frame=True))
     record(load_scenario(scenario, overrides), tmp_path / "each.mcap", progress=False)
     assert renders == frames
-    poses = len(once.frames) * math.ceil(overrides["duration_s"] / 0.5)  # held 0.5 s each
-    assert rendered_once <= poses + len(once.frames) < frames / 4
+    cameras = len(once.frames)
+    scenes = cameras * math.ceil(overrides["duration_s"] / 0.5) \
+        + len(overrides.get("drifts", []))  # poses held 0.5 s each, and a turn
+    assert rendered_once <= scenes + cameras < frames / 4
     assert _messages(tmp_path / "once.mcap") == _messages(tmp_path / "each.mcap")
     images = [m for m in _messages(tmp_path / "once.mcap") if m[0].endswith("/image_raw")]
     assert len({data for _, _, data in images}) == len(images)  # no two frames alike
